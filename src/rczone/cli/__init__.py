@@ -1,0 +1,1 @@
+"""The ``rczone`` command-line interface."""

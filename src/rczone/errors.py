@@ -1,0 +1,59 @@
+"""Exceptions raised by rczone, and the helper that suggests close names.
+
+Every error a user can cause is a subclass of a built-in exception (so ``except
+ValueError`` keeps working) and of :class:`RczoneError` (so the CLI can turn it into
+one clear line instead of a traceback).
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+
+class RczoneError(Exception):
+    """Base class of every error rczone raises on purpose."""
+
+
+class NetworkError(RczoneError, ValueError):
+    """An RC network is malformed (undeclared node, floating node, duplicate name...)."""
+
+
+class ParameterError(RczoneError, ValueError):
+    """A parameter name is unknown, a value is out of range or an expression is invalid."""
+
+
+class InputShapeError(RczoneError, ValueError):
+    """An array passed to a simulation or cost has the wrong shape or content."""
+
+
+class DataError(RczoneError, ValueError):
+    """Measured data cannot be used as given (missing column, bad unit, bad timestamps...)."""
+
+
+def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
+    """Return a hint naming the candidates closest to ``name``, or listing them all.
+
+    Parameters
+    ----------
+    name : str
+        The name the user wrote.
+    candidates : iterable of str
+        The names that would have been valid.
+    n : int
+        How many close matches to offer at most.
+
+    Returns
+    -------
+    str
+        ``"did you mean 'Rw'?"`` when close matches exist, else ``"known: a, b, c"``.
+    """
+    pool = sorted(set(candidates))
+    close = difflib.get_close_matches(name, pool, n=n, cutoff=0.5)
+    if not close:
+        lowered = {c.lower(): c for c in pool}
+        close = [lowered[c] for c in difflib.get_close_matches(name.lower(), lowered, n=n, cutoff=0.5)]
+    if close:
+        return "did you mean " + " or ".join(f"'{c}'" for c in close) + "?"
+    shown = ", ".join(pool[:20]) + (" ..." if len(pool) > 20 else "")
+    return f"known names: {shown}" if pool else "none are declared"

@@ -1,0 +1,17 @@
+"""RC networks: declaration, parameters and the bilinear state space built from them."""
+
+from rczone.network.network import CP_AIR, HeatInput, Node, RCNetwork, Resistor, SupplyAir
+from rczone.network.parameters import Parameter
+from rczone.network.statespace import BilinearStateSpace, LinearStateSpace
+
+__all__ = [
+    "CP_AIR",
+    "BilinearStateSpace",
+    "HeatInput",
+    "LinearStateSpace",
+    "Node",
+    "Parameter",
+    "RCNetwork",
+    "Resistor",
+    "SupplyAir",
+]

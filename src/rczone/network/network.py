@@ -1,0 +1,436 @@
+"""Declarative RC networks: nodes, resistors, heat inputs and supply air.
+
+An :class:`RCNetwork` is frozen data describing the topology of a thermal network and
+the names of its parameters. :meth:`RCNetwork.state_space` turns it, for given parameter
+values, into the continuous-time bilinear state space
+
+.. math::
+
+    \\dot x = (A + \\textstyle\\sum_k m_k N_k)\\,x + (B + \\textstyle\\sum_k m_k M_k)\\,u,
+    \\qquad y = C x + D u
+
+where the flows :math:`m_k` (kg/s) are the mass-flow inputs of the supply-air elements.
+
+Conventions
+-----------
+* Temperatures in K or degC (the equations are affine-invariant), heat flows in W,
+  resistances in K/W, capacities in J/K, mass flows in kg/s, time in s.
+* A node with ``capacity=None`` is massless: its energy balance is algebraic and it is
+  eliminated exactly (Kron reduction of the conductance matrix).
+* A supply-air element adds ``m * cp * (T_supply - T_node)`` W to a capacitive node.
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented
+   thermal models of zones in multi-zone buildings", IEEE CDC 2012, eqs. (1)-(4).
+.. [2] F. Doerfler, F. Bullo, "Kron reduction of graphs with applications to electrical
+   networks", IEEE Trans. Circuits Syst. I, 60(1), 2013.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from rczone.errors import NetworkError, ParameterError, did_you_mean
+from rczone.network.parameters import Parameter, check_declarations, resolve
+from rczone.network.statespace import BilinearStateSpace
+
+#: Specific heat of air at constant pressure, J/(kg K), used when none is given.
+CP_AIR = 1005.0
+
+Value = str | float
+
+
+@dataclass(frozen=True)
+class Node:
+    """A temperature node of the network.
+
+    Parameters
+    ----------
+    name : str
+        Node (state) name, e.g. ``"Ti"``.
+    capacity : str or float or None
+        Parameter name or value of the heat capacity (J/K); ``None`` for a massless node.
+    description : str
+        Free text for reports.
+    """
+
+    name: str
+    capacity: Value | None = None
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class Resistor:
+    """A thermal resistance (K/W) between two nodes or a node and a boundary."""
+
+    a: str
+    b: str
+    resistance: Value
+
+
+@dataclass(frozen=True)
+class HeatInput:
+    """A heat-flow input (W) delivered to one or several nodes.
+
+    Parameters
+    ----------
+    name : str
+        Input name, e.g. ``"Q"``.
+    split : mapping of node name to gain
+        Fraction (or any gain; a parameter name or a number) of the input delivered to
+        each node. ``{"Ti": 1.0}`` puts it all on ``Ti``.
+    """
+
+    name: str
+    split: tuple[tuple[str, Value], ...]
+
+    def __init__(self, name: str, split: Mapping[str, Value] | str) -> None:
+        if isinstance(split, str):
+            split = {split: 1.0}
+        object.__setattr__(self, "name", name)
+        object.__setattr__(self, "split", tuple(split.items()))
+
+
+@dataclass(frozen=True)
+class SupplyAir:
+    """Supply air entering ``node``: heat ``flow * cp * (temperature - T_node)`` W.
+
+    Parameters
+    ----------
+    node : str
+        Capacitive node the air is mixed into (the room air).
+    flow : str
+        Name of the mass-flow input (kg/s).
+    temperature : str
+        Name of the supply temperature input; may be a boundary temperature (ventilation
+        with outdoor air) or an input of its own.
+    cp : float or str
+        Specific heat of air, J/(kg K).
+    """
+
+    node: str
+    flow: str = "m"
+    temperature: str = "Ts"
+    cp: Value = CP_AIR
+
+
+def _as_params(parameters: Iterable[Parameter] | Mapping[str, Parameter]) -> dict[str, Parameter]:
+    items = parameters.values() if isinstance(parameters, Mapping) else parameters
+    out: dict[str, Parameter] = {}
+    for p in items:
+        if not isinstance(p, Parameter):
+            raise NetworkError(f"parameters must be Parameter objects, got {type(p).__name__}")
+        if p.name in out:
+            raise NetworkError(f"parameter {p.name!r} is declared twice")
+        out[p.name] = p
+    return out
+
+
+@dataclass(frozen=True)
+class RCNetwork:
+    """A frozen RC-network description from which state spaces are built.
+
+    Parameters
+    ----------
+    name : str
+        Model name for reports.
+    nodes : sequence of Node
+        Temperature nodes; capacitive ones become states in declaration order.
+    boundaries : sequence of str
+        Names of prescribed (input) temperatures, e.g. ``("To", "Tsd")``.
+    resistors : sequence of Resistor
+    parameters : sequence of Parameter
+        Every parameter that elements refer to by name.
+    heat_inputs : sequence of HeatInput
+    supply_air : sequence of SupplyAir
+    outputs : sequence of str
+        Nodes that are measured; default: the first node.
+
+    Examples
+    --------
+    The paper's 2nd-order model (eq. 4) without the supply air:
+
+    >>> from rczone.network import RCNetwork, Node, Resistor, HeatInput, Parameter
+    >>> net = RCNetwork(
+    ...     "2R1C", nodes=[Node("Ti", "Cr"), Node("Tw", "Cw")], boundaries=["To", "Tsd"],
+    ...     resistors=[Resistor("Ti", "To", "Rwin"), Resistor("Ti", "Tw", "R1"),
+    ...                Resistor("Tw", "Tsd", "R2")],
+    ...     heat_inputs=[HeatInput("Q", {"Ti": 1.0})],
+    ...     parameters=[Parameter("Cr", "capacitance", 1e5), Parameter("Cw", "capacitance", 1e7),
+    ...                 Parameter("Rwin", "resistance", 0.1), Parameter("R1", "resistance", 0.01),
+    ...                 Parameter("R2", "resistance", 0.01)])
+    >>> net.state_space().state_names
+    ('Ti', 'Tw')
+    """
+
+    name: str
+    nodes: tuple[Node, ...]
+    boundaries: tuple[str, ...]
+    resistors: tuple[Resistor, ...]
+    parameters: dict[str, Parameter] = field(default_factory=dict)
+    heat_inputs: tuple[HeatInput, ...] = ()
+    supply_air: tuple[SupplyAir, ...] = ()
+    outputs: tuple[str, ...] = ()
+    description: str = ""
+
+    def __init__(
+        self,
+        name: str,
+        nodes: Iterable[Node],
+        boundaries: Iterable[str],
+        resistors: Iterable[Resistor],
+        parameters: Iterable[Parameter] | Mapping[str, Parameter] = (),
+        heat_inputs: Iterable[HeatInput] = (),
+        supply_air: Iterable[SupplyAir] = (),
+        outputs: Iterable[str] | None = None,
+        description: str = "",
+    ) -> None:
+        nodes = tuple(nodes)
+        set_ = object.__setattr__
+        set_(self, "name", name)
+        set_(self, "nodes", nodes)
+        set_(self, "boundaries", tuple(boundaries))
+        set_(self, "resistors", tuple(resistors))
+        set_(self, "parameters", _as_params(parameters))
+        set_(self, "heat_inputs", tuple(heat_inputs))
+        set_(self, "supply_air", tuple(supply_air))
+        set_(self, "outputs", tuple(outputs) if outputs is not None else (nodes[0].name,) if nodes else ())
+        set_(self, "description", description)
+        self._validate()
+
+    def __hash__(self) -> int:  # parameters is a dict; identity hash suffices for caching
+        return id(self)
+
+    # ------------------------------------------------------------------ names
+    @cached_property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the capacitive nodes, i.e. the states, in order."""
+        return tuple(n.name for n in self.nodes if n.capacity is not None)
+
+    @cached_property
+    def massless_names(self) -> tuple[str, ...]:
+        """Names of the massless (eliminated) nodes."""
+        return tuple(n.name for n in self.nodes if n.capacity is None)
+
+    @cached_property
+    def flow_names(self) -> tuple[str, ...]:
+        """Names of the mass-flow inputs, in order of first use."""
+        return tuple(dict.fromkeys(s.flow for s in self.supply_air))
+
+    @cached_property
+    def input_names(self) -> tuple[str, ...]:
+        """Names of the (non-flow) inputs: boundary temperatures, supply temperatures, heat."""
+        temps = list(self.boundaries)
+        temps += [s.temperature for s in self.supply_air if s.temperature not in temps]
+        return tuple(dict.fromkeys(temps)) + tuple(h.name for h in self.heat_inputs)
+
+    @cached_property
+    def _tie_order(self) -> tuple[str, ...]:
+        return check_declarations(self.parameters)
+
+    @property
+    def free_parameter_names(self) -> tuple[str, ...]:
+        """Base (untied) parameter names."""
+        return tuple(n for n, p in self.parameters.items() if not p.is_tied)
+
+    # -------------------------------------------------------------- validation
+    def _validate(self) -> None:
+        node_names = [n.name for n in self.nodes]
+        if not node_names:
+            raise NetworkError(f"network {self.name!r} has no nodes")
+        seen: set[str] = set()
+        for nm in (*node_names, *self.boundaries):
+            if nm in seen:
+                raise NetworkError(f"network {self.name!r}: name {nm!r} is declared twice")
+            seen.add(nm)
+        if not self.state_names:
+            raise NetworkError(f"network {self.name!r} has no capacitive node, so no states")
+        known = set(node_names) | set(self.boundaries)
+        params = self.parameters
+
+        def check_value(v: Value | None, where: str, kind: str) -> None:
+            if v is None:
+                return
+            if isinstance(v, str):
+                if v not in params:
+                    raise NetworkError(
+                        f"{where} refers to undeclared parameter {v!r}; " + did_you_mean(v, params)
+                    )
+                if kind and params[v].kind not in (kind, "other"):
+                    raise NetworkError(f"{where} uses {v!r}, declared as a {params[v].kind}, not a {kind}")
+            else:
+                val = float(v)
+                if kind in ("resistance", "capacitance") and not val > 0:
+                    raise ParameterError(f"{where}: a {kind} must be > 0, got {val:g}")
+
+        def check_node(n: str, where: str, allowed: Iterable[str]) -> None:
+            if n not in allowed:
+                raise NetworkError(f"{where} refers to undeclared node {n!r}; " + did_you_mean(n, known))
+
+        for nd in self.nodes:
+            check_value(nd.capacity, f"node {nd.name!r} capacity", "capacitance")
+        for i, r in enumerate(self.resistors):
+            where = f"resistor #{i} ({r.a}-{r.b})"
+            check_node(r.a, where, known)
+            check_node(r.b, where, known)
+            if r.a == r.b:
+                raise NetworkError(f"{where} connects node {r.a!r} to itself")
+            if r.a in self.boundaries and r.b in self.boundaries:
+                raise NetworkError(f"{where} connects two boundary temperatures; it carries no state")
+            check_value(r.resistance, where, "resistance")
+        input_seen = set(self.boundaries)
+        for h in self.heat_inputs:
+            if h.name in input_seen or h.name in node_names:
+                raise NetworkError(f"heat input {h.name!r} reuses a node or input name")
+            input_seen.add(h.name)
+            if not h.split:
+                raise NetworkError(f"heat input {h.name!r} is delivered to no node")
+            for nd, g in h.split:
+                check_node(nd, f"heat input {h.name!r}", node_names)
+                check_value(g, f"heat input {h.name!r} gain", "")
+        for s in self.supply_air:
+            check_node(s.node, f"supply air ({s.flow})", node_names)
+            if s.node in self.massless_names:
+                raise NetworkError(
+                    f"supply air {s.flow!r} enters massless node {s.node!r}; the bilinear form needs"
+                    " a capacitive node there (give the air node its capacity)"
+                )
+            if s.flow in known or s.flow in {h.name for h in self.heat_inputs}:
+                raise NetworkError(f"flow name {s.flow!r} clashes with a node or input name")
+            if s.temperature in node_names:
+                raise NetworkError(f"supply temperature {s.temperature!r} is a node, not an input")
+            check_value(s.cp, f"supply air {s.flow!r} cp", "")
+        for o in self.outputs:
+            check_node(o, "output", node_names)
+        self._check_floating()
+        _ = self._tie_order
+
+    def _check_floating(self) -> None:
+        """Every connected group of nodes must reach a boundary or a supply-air element."""
+        adj: dict[str, set[str]] = {n.name: set() for n in self.nodes}
+        for r in self.resistors:
+            for a, b in ((r.a, r.b), (r.b, r.a)):
+                if a in adj:
+                    adj[a].add(b)
+        anchored = {s.node for s in self.supply_air}
+        unvisited = set(adj)
+        while unvisited:
+            start = unvisited.pop()
+            comp, stack, grounded = {start}, [start], False
+            while stack:
+                cur = stack.pop()
+                grounded |= cur in anchored
+                for nb in adj[cur]:
+                    if nb in self.boundaries:
+                        grounded = True
+                    elif nb not in comp:
+                        comp.add(nb)
+                        stack.append(nb)
+            unvisited -= comp
+            if not grounded:
+                raise NetworkError(
+                    f"node(s) {', '.join(sorted(comp))} are floating: no resistor path to a boundary"
+                    " temperature or supply-air element, so their temperature has no reference"
+                )
+
+    # ------------------------------------------------------------------ build
+    def values(self, theta: Mapping[str, float] | None = None) -> dict[str, float]:
+        """Every parameter's value given base values ``theta`` (defaults for the rest)."""
+        return resolve(self.parameters, theta, self._tie_order)
+
+    def state_space(self, theta: Mapping[str, float] | None = None) -> BilinearStateSpace:
+        """Continuous-time bilinear state space for parameter values ``theta``.
+
+        Pure: the network is not changed. Massless nodes are eliminated exactly.
+
+        Parameters
+        ----------
+        theta : mapping of str to float, optional
+            Base parameter values (SI); omitted ones take their declared default.
+
+        Returns
+        -------
+        BilinearStateSpace
+        """
+        vals = self.values(theta)
+
+        def v(x: Value) -> float:
+            return vals[x] if isinstance(x, str) else float(x)
+
+        names = [n.name for n in self.nodes]
+        idx = {n: i for i, n in enumerate(names)}
+        inputs = self.input_names
+        iidx = {n: i for i, n in enumerate(inputs)}
+        nn, p, nf = len(names), len(inputs), len(self.flow_names)
+        G = np.zeros((nn, nn))  # conductance (Laplacian) among nodes
+        Gb = np.zeros((nn, p))  # conductance from nodes to boundary inputs
+        for r in self.resistors:
+            g = 1.0 / v(r.resistance)
+            for a, b in ((r.a, r.b), (r.b, r.a)):
+                if a in idx:
+                    G[idx[a], idx[a]] += g
+                    if b in idx:
+                        G[idx[a], idx[b]] -= g
+                    else:
+                        Gb[idx[a], iidx[b]] += g
+        for h in self.heat_inputs:
+            for nd, gain in h.split:
+                Gb[idx[nd], iidx[h.name]] += v(gain)
+        Nf = np.zeros((nf, nn, nn))
+        Mf = np.zeros((nf, nn, p))
+        fidx = {f: k for k, f in enumerate(self.flow_names)}
+        for s in self.supply_air:
+            k, i, cp = fidx[s.flow], idx[s.node], v(s.cp)
+            Nf[k, i, i] -= cp
+            Mf[k, i, iidx[s.temperature]] += cp
+        xs = [idx[n] for n in self.state_names]
+        zs = [idx[n] for n in self.massless_names]
+        # energy balance: Cap dT/dt = -G T + Gb u + sum_k m_k (Nf_k T + Mf_k u)
+        Axx, Bx = -G[np.ix_(xs, xs)], Gb[xs]
+        out = [idx[o] for o in self.outputs]
+        Cfull = np.zeros((len(out), nn))
+        Cfull[np.arange(len(out)), out] = 1.0
+        C, D = Cfull[:, xs], np.zeros((len(out), p))
+        if zs:
+            Gzz = G[np.ix_(zs, zs)]
+            try:
+                # z = Kz x + Lz u  from  0 = -G_zx x - G_zz z + Gb_z u
+                Kz = np.linalg.solve(Gzz, -G[np.ix_(zs, xs)])
+                Lz = np.linalg.solve(Gzz, Gb[zs])
+            except np.linalg.LinAlgError:  # pragma: no cover - excluded by _check_floating
+                raise NetworkError(f"network {self.name!r}: massless nodes cannot be eliminated") from None
+            Axz = -G[np.ix_(xs, zs)]
+            Axx = Axx + Axz @ Kz
+            Bx = Bx + Axz @ Lz
+            C = C + Cfull[:, zs] @ Kz
+            D = D + Cfull[:, zs] @ Lz
+        cap = np.array([v(self.nodes[i].capacity) for i in xs])  # type: ignore[arg-type]
+        inv = (1.0 / cap)[:, None]
+        return BilinearStateSpace(
+            A=Axx * inv,
+            N=Nf[:, xs][:, :, xs] * inv[None],
+            B=Bx * inv,
+            M=Mf[:, xs] * inv[None],
+            C=C,
+            D=D,
+            state_names=self.state_names,
+            input_names=inputs,
+            flow_names=self.flow_names,
+            output_names=self.outputs,
+            capacities=cap,
+        )
+
+    def replace_parameters(self, parameters: Iterable[Parameter]) -> RCNetwork:
+        """A copy of the network with some parameter declarations replaced or added."""
+        params = dict(self.parameters)
+        for p in parameters:
+            params[p.name] = p
+        return RCNetwork(
+            self.name, self.nodes, self.boundaries, self.resistors, params.values(),
+            self.heat_inputs, self.supply_air, self.outputs, self.description,
+        )
