@@ -100,6 +100,7 @@ def gain_error(
     if reference.freq_hz.shape != other.freq_hz.shape or not np.allclose(reference.freq_hz, other.freq_hz):
         raise InputShapeError("both responses must be on the same frequency grid")
     return {
-        name: np.abs(np.abs(reference.to_input(name, output)) - np.abs(other.to_input(name, output))) * float(d)
+        name: np.abs(np.abs(reference.to_input(name, output)) - np.abs(other.to_input(name, output)))
+        * float(d)
         for name, d in du.items()
     }

@@ -21,6 +21,7 @@ app = typer.Typer(
     add_completion=False,
 )
 
+
 @app.callback()
 def _root() -> None:
     """Grey-box RC thermal models of building zones."""

@@ -334,7 +334,7 @@ class RCNetwork:
             unvisited -= comp
             if not grounded:
                 raise NetworkError(
-                    f"node(s) {', '.join(sorted(comp))} are floating: no resistor path to a boundary"
+                    f"node(s) {', '.join(repr(c) for c in sorted(comp))} are floating: no resistor path to a boundary"
                     " temperature or supply-air element, so their temperature has no reference"
                 )
 
@@ -431,6 +431,13 @@ class RCNetwork:
         for p in parameters:
             params[p.name] = p
         return RCNetwork(
-            self.name, self.nodes, self.boundaries, self.resistors, params.values(),
-            self.heat_inputs, self.supply_air, self.outputs, self.description,
+            self.name,
+            self.nodes,
+            self.boundaries,
+            self.resistors,
+            params.values(),
+            self.heat_inputs,
+            self.supply_air,
+            self.outputs,
+            self.description,
         )

@@ -70,9 +70,7 @@ class Parameter:
             object.__setattr__(self, "unit", _UNITS[self.kind])
         if self.expr is not None:
             if self.value is not None:
-                raise ParameterError(
-                    f"parameter {self.name!r} has both a value and an expression; give one"
-                )
+                raise ParameterError(f"parameter {self.name!r} has both a value and an expression; give one")
             expression_names(self.expr)  # syntax check now, not at first use
         if self.value is not None:
             object.__setattr__(self, "value", float(self.value))
@@ -212,9 +210,7 @@ def resolve(
         elif p.value is not None:
             v = p.value
         else:
-            raise ParameterError(
-                f"parameter {name!r} has no value: give it in theta or declare a default"
-            )
+            raise ParameterError(f"parameter {name!r} has no value: give it in theta or declare a default")
         values[name] = v
     for name in order if order is not None else check_declarations(params):
         v = _evaluate(params[name].expr, values)  # type: ignore[arg-type]

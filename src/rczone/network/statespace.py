@@ -62,7 +62,9 @@ class LinearStateSpace:
         try:
             return self.input_names.index(name)
         except ValueError:
-            raise InputShapeError(f"unknown input {name!r}; " + did_you_mean(name, self.input_names)) from None
+            raise InputShapeError(
+                f"unknown input {name!r}; " + did_you_mean(name, self.input_names)
+            ) from None
 
 
 @dataclass(frozen=True, eq=False)
