@@ -2,7 +2,7 @@
 
 from rczone.network.network import CP_AIR, HeatInput, Node, RCNetwork, Resistor, SupplyAir
 from rczone.network.parameters import Parameter
-from rczone.network.statespace import BilinearStateSpace, LinearStateSpace
+from rczone.network.statespace import BilinearStateSpace, LinearStateSpace, StateSpaceDerivative
 
 __all__ = [
     "CP_AIR",
@@ -13,5 +13,6 @@ __all__ = [
     "Parameter",
     "RCNetwork",
     "Resistor",
+    "StateSpaceDerivative",
     "SupplyAir",
 ]

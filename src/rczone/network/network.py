@@ -29,15 +29,15 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
 from rczone.errors import NetworkError, ParameterError, did_you_mean
-from rczone.network.parameters import Parameter, check_declarations, resolve
-from rczone.network.statespace import BilinearStateSpace
+from rczone.network.parameters import Parameter, check_declarations, evaluate_ties, resolve
+from rczone.network.statespace import BilinearStateSpace, StateSpaceDerivative
 
 #: Specific heat of air at constant pressure, J/(kg K), used when none is given.
 CP_AIR = 1005.0
@@ -357,73 +357,132 @@ class RCNetwork:
         -------
         BilinearStateSpace
         """
-        vals = self.values(theta)
+        A, N, B, M, C, D, cap = self._assemble(self.values(theta), float)
+        return BilinearStateSpace(
+            A=A,
+            N=N,
+            B=B,
+            M=M,
+            C=C,
+            D=D,
+            state_names=self.state_names,
+            input_names=self.input_names,
+            flow_names=self.flow_names,
+            output_names=self.outputs,
+            capacities=cap,
+        )
 
-        def v(x: Value) -> float:
-            return vals[x] if isinstance(x, str) else float(x)
+    def state_space_derivatives(
+        self, theta: Mapping[str, float] | None, wrt: Sequence[str], log: bool = True
+    ) -> list[StateSpaceDerivative]:
+        """Exact derivatives of the state-space matrices with respect to base parameters.
 
+        Computed by complex-step differentiation through the network assembly (including
+        tied parameters and the elimination of massless nodes), which is exact to rounding
+        error because no difference of nearly equal numbers is formed [1]_.
+
+        Parameters
+        ----------
+        theta : mapping, optional
+            Base parameter values at which to differentiate.
+        wrt : sequence of str
+            Base parameter names.
+        log : bool
+            If True, derivatives with respect to ``log(theta_j)`` (i.e. ``theta_j d/dtheta_j``).
+
+        Returns
+        -------
+        list of StateSpaceDerivative
+            One per name in ``wrt``: ``(dA, dN, dB, dM, dC, dD)``.
+
+        References
+        ----------
+        .. [1] J. R. R. A. Martins, P. Sturdza, J. J. Alonso, "The complex-step derivative
+           approximation", ACM Trans. Math. Software 29(3), 2003.
+        """
+        base = self.values(theta)
+        out = []
+        h = 1e-30
+        for name in wrt:
+            if name not in self.parameters:
+                raise ParameterError(f"unknown parameter {name!r}; " + did_you_mean(name, self.parameters))
+            if self.parameters[name].is_tied:
+                raise ParameterError(f"parameter {name!r} is tied; differentiate with respect to its base")
+            vals: dict[str, complex] = {k: v for k, v in base.items() if not self.parameters[k].is_tied}
+            step = h * (vals[name] if log else 1.0)
+            vals[name] = vals[name] + 1j * step
+            vals = evaluate_ties(self.parameters, vals, self._tie_order)
+            mats = self._assemble(vals, complex)[:6]
+            out.append(StateSpaceDerivative(*(np.imag(m_) / h for m_ in mats)))
+        return out
+
+    @cached_property
+    def _structure(self) -> dict:
         names = [n.name for n in self.nodes]
         idx = {n: i for i, n in enumerate(names)}
-        inputs = self.input_names
-        iidx = {n: i for i, n in enumerate(inputs)}
-        nn, p, nf = len(names), len(inputs), len(self.flow_names)
-        G = np.zeros((nn, nn))  # conductance (Laplacian) among nodes
-        Gb = np.zeros((nn, p))  # conductance from nodes to boundary inputs
-        for r in self.resistors:
-            g = 1.0 / v(r.resistance)
-            for a, b in ((r.a, r.b), (r.b, r.a)):
-                if a in idx:
-                    G[idx[a], idx[a]] += g
-                    if b in idx:
-                        G[idx[a], idx[b]] -= g
-                    else:
-                        Gb[idx[a], iidx[b]] += g
-        for h in self.heat_inputs:
-            for nd, gain in h.split:
-                Gb[idx[nd], iidx[h.name]] += v(gain)
-        Nf = np.zeros((nf, nn, nn))
-        Mf = np.zeros((nf, nn, p))
+        iidx = {n: i for i, n in enumerate(self.input_names)}
         fidx = {f: k for k, f in enumerate(self.flow_names)}
-        for s in self.supply_air:
-            k, i, cp = fidx[s.flow], idx[s.node], v(s.cp)
-            Nf[k, i, i] -= cp
-            Mf[k, i, iidx[s.temperature]] += cp
-        xs = [idx[n] for n in self.state_names]
-        zs = [idx[n] for n in self.massless_names]
+        return {
+            "nn": len(names),
+            "res": [
+                (idx.get(r.a, -1), idx.get(r.b, -1), iidx.get(r.a, iidx.get(r.b, -1)), r.resistance)
+                for r in self.resistors
+            ],
+            "heat": [(idx[nd], iidx[h.name], g) for h in self.heat_inputs for nd, g in h.split],
+            "air": [(fidx[s.flow], idx[s.node], iidx[s.temperature], s.cp) for s in self.supply_air],
+            "xs": [idx[n] for n in self.state_names],
+            "zs": [idx[n] for n in self.massless_names],
+            "out": [idx[o] for o in self.outputs],
+            "cap": [nd.capacity for nd in self.nodes if nd.capacity is not None],
+        }
+
+    def _assemble(self, vals: Mapping[str, float | complex], dtype: type) -> tuple[np.ndarray, ...]:
+        """Matrices ``(A, N, B, M, C, D, capacities)`` from resolved parameter values."""
+        st = self._structure
+
+        def v(x: Value) -> float | complex:
+            return vals[x] if isinstance(x, str) else float(x)
+
+        nn, p, nf = st["nn"], len(self.input_names), len(self.flow_names)
+        G = np.zeros((nn, nn), dtype)  # conductance (Laplacian) among nodes
+        Gb = np.zeros((nn, p), dtype)  # from nodes to inputs (boundary conductances, heat gains)
+        for ia, ib, ii, r in st["res"]:
+            g = 1.0 / v(r)
+            if ia >= 0 and ib >= 0:
+                G[ia, ia] += g
+                G[ib, ib] += g
+                G[ia, ib] -= g
+                G[ib, ia] -= g
+            else:
+                i = ia if ia >= 0 else ib
+                G[i, i] += g
+                Gb[i, ii] += g
+        for i, j, g in st["heat"]:
+            Gb[i, j] += v(g)
+        Nf = np.zeros((nf, nn, nn), dtype)
+        Mf = np.zeros((nf, nn, p), dtype)
+        for k, i, j, cp in st["air"]:
+            Nf[k, i, i] -= v(cp)
+            Mf[k, i, j] += v(cp)
+        xs, zs, out = st["xs"], st["zs"], st["out"]
         # energy balance: Cap dT/dt = -G T + Gb u + sum_k m_k (Nf_k T + Mf_k u)
         Axx, Bx = -G[np.ix_(xs, xs)], Gb[xs]
-        out = [idx[o] for o in self.outputs]
         Cfull = np.zeros((len(out), nn))
         Cfull[np.arange(len(out)), out] = 1.0
-        C, D = Cfull[:, xs], np.zeros((len(out), p))
+        C, D = Cfull[:, xs].astype(dtype), np.zeros((len(out), p), dtype)
         if zs:
+            # Kron reduction: z = Kz x + Lz u  from  0 = -G_zx x - G_zz z + Gb_z u
             Gzz = G[np.ix_(zs, zs)]
-            try:
-                # z = Kz x + Lz u  from  0 = -G_zx x - G_zz z + Gb_z u
-                Kz = np.linalg.solve(Gzz, -G[np.ix_(zs, xs)])
-                Lz = np.linalg.solve(Gzz, Gb[zs])
-            except np.linalg.LinAlgError:  # pragma: no cover - excluded by _check_floating
-                raise NetworkError(f"network {self.name!r}: massless nodes cannot be eliminated") from None
+            Kz = np.linalg.solve(Gzz, -G[np.ix_(zs, xs)])
+            Lz = np.linalg.solve(Gzz, Gb[zs])
             Axz = -G[np.ix_(xs, zs)]
             Axx = Axx + Axz @ Kz
             Bx = Bx + Axz @ Lz
             C = C + Cfull[:, zs] @ Kz
             D = D + Cfull[:, zs] @ Lz
-        cap = np.array([v(self.nodes[i].capacity) for i in xs])  # type: ignore[arg-type]
+        cap = np.array([v(c) for c in st["cap"]], dtype)
         inv = (1.0 / cap)[:, None]
-        return BilinearStateSpace(
-            A=Axx * inv,
-            N=Nf[:, xs][:, :, xs] * inv[None],
-            B=Bx * inv,
-            M=Mf[:, xs] * inv[None],
-            C=C,
-            D=D,
-            state_names=self.state_names,
-            input_names=inputs,
-            flow_names=self.flow_names,
-            output_names=self.outputs,
-            capacities=cap,
-        )
+        return (Axx * inv, Nf[:, xs][:, :, xs] * inv[None], Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
 
     def replace_parameters(self, parameters: Iterable[Parameter]) -> RCNetwork:
         """A copy of the network with some parameter declarations replaced or added."""

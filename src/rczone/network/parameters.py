@@ -118,8 +118,8 @@ def expression_names(expr: str) -> tuple[str, ...]:
     return tuple(dict.fromkeys(names))
 
 
-def _evaluate(expr: str, values: Mapping[str, float]) -> float:
-    def ev(node: ast.AST) -> float:
+def _evaluate(expr: str, values: Mapping[str, float | complex]) -> float | complex:
+    def ev(node: ast.AST) -> float | complex:
         if isinstance(node, ast.Expression):
             return ev(node.body)
         if isinstance(node, ast.Constant):
@@ -212,8 +212,21 @@ def resolve(
         else:
             raise ParameterError(f"parameter {name!r} has no value: give it in theta or declare a default")
         values[name] = v
+    values = evaluate_ties(params, values, order)
+    for name, p in params.items():
+        if p.is_tied:
+            _check_value(p, values[name])
+    return values
+
+
+def evaluate_ties(
+    params: Mapping[str, Parameter], base: Mapping[str, float | complex], order: tuple[str, ...] | None = None
+) -> dict:
+    """Add the values of tied parameters to ``base`` (no range checks; complex values allowed).
+
+    Used directly for complex-step differentiation; :func:`resolve` checks the results.
+    """
+    values = dict(base)
     for name in order if order is not None else check_declarations(params):
-        v = _evaluate(params[name].expr, values)  # type: ignore[arg-type]
-        _check_value(params[name], v)
-        values[name] = v
+        values[name] = _evaluate(params[name].expr, values)  # type: ignore[arg-type]
     return values

@@ -13,10 +13,22 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from rczone.errors import InputShapeError
+
+
+class StateSpaceDerivative(NamedTuple):
+    """Derivatives of the bilinear state-space matrices with respect to one parameter."""
+
+    dA: np.ndarray
+    dN: np.ndarray
+    dB: np.ndarray
+    dM: np.ndarray
+    dC: np.ndarray
+    dD: np.ndarray
 
 
 def _flows(m: float | Sequence[float] | np.ndarray, nf: int) -> np.ndarray:
