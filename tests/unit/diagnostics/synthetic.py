@@ -1,0 +1,42 @@
+"""Synthetic nights from the paper's reduced 2nd-order model: closed-loop and forced response."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from rczone.models import get_model
+from rczone.simulation import zoh
+
+
+def night(mode: str, seed: int = 0, hours: float = 12.0, theta: dict | None = None) -> pd.DataFrame:
+    """One night sampled every minute.
+
+    ``closed-loop``: a thermostat (P control of Ts at constant flow) holds the room at 22 degC while
+    the neighbours are held at 22 degC by their own controllers (small drift). ``forced``: Ts
+    alternates between 12 and 35 degC every 2 h at the largest flow; neighbours at 22 degC.
+    """
+    rng = np.random.default_rng(seed)
+    net = get_model("second-order-paper")
+    ss = net.state_space(theta)
+    t = np.arange(0, hours * 3600 + 1, 60.0)
+    n = t.size
+    To = 20 + 4 * np.cos(2 * np.pi * (t / 86400 + 0.25)) + 0.1 * rng.standard_normal(n)
+    Tsd = 22 + 0.3 * np.sin(2 * np.pi * t / (5 * 3600) + rng.uniform(0, 6)) + 0.05 * rng.standard_normal(n)
+    Q = np.full(n, 50.0)
+    m = np.full(n, 0.05 if mode == "closed-loop" else 0.12)
+    Ts = np.empty(n)
+    x = np.array([22.0, 22.0])
+    Ti = np.empty(n)
+    for k in range(n):
+        Ti[k] = x[0]
+        if mode == "closed-loop":
+            Ts[k] = np.clip(22 + 8.0 * (22.0 - x[0]) + (To[k] - 22) * 0.5, 12, 35)
+        else:
+            Ts[k] = 35.0 if (t[k] // 7200) % 2 == 0 else 12.0
+        if k + 1 < n:
+            A, B = ss.matrices(m[k])
+            Phi, G = zoh(A, B, 60.0)
+            x = Phi @ x + G @ np.array([To[k], Tsd[k], Ts[k], Q[k]])
+    Ti_meas = Ti + 0.03 * rng.standard_normal(n)
+    return pd.DataFrame({"time": t, "Ti": Ti_meas, "To": To, "Tsd": Tsd, "Ts": Ts, "m": m, "Q": Q})
