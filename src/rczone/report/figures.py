@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+import pandas as pd
 from matplotlib.figure import Figure
 
 from rczone.comparison import FrequencyComparison, TimeComparison
@@ -69,5 +70,42 @@ def gain_errors(fc: FrequencyComparison, inputs: Sequence[str] = ("Ts", "Tsd")) 
         ax.grid(alpha=0.3, which="both")
     axes[0].set_ylabel("error (K)")
     axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def data_overview(frame: pd.DataFrame, title: str = "") -> Figure:
+    """Room, surrounding, outdoor and supply temperatures, and the supply flow, over time."""
+    fig = Figure(figsize=(8.5, 5.2))
+    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1.2, 1]})
+    h = _hours(frame["time"].to_numpy(float))
+    ax1.plot(h, frame["Ti"], color="black", lw=1.2, label="Ti (room)")
+    for c, col in (
+        ("Tf", "#805ad5"),
+        ("Tc", "#d53f8c"),
+        ("Tn1", "#dd6b20"),
+        ("Tn2", "#38a169"),
+        ("Thw", "#3182ce"),
+    ):
+        if c in frame:
+            ax1.plot(h, frame[c], color=col, lw=0.8, alpha=0.8, label=c)
+    if "Tsd" in frame and "Tf" not in frame:
+        ax1.plot(h, frame["Tsd"], color="#3182ce", lw=0.9, label="Tsd")
+    ax1.set_ylabel("°C")
+    ax1.legend(fontsize=7, ncol=6, loc="best")
+    ax1.grid(alpha=0.3)
+    for c, col in (("Ts", "#c53030"), ("To", "#718096")):
+        if c in frame:
+            ax2.plot(h, frame[c], color=col, lw=1.0, label=c)
+    ax2.set_ylabel("°C")
+    ax2.legend(fontsize=7, ncol=2)
+    ax2.grid(alpha=0.3)
+    if "m" in frame:
+        ax3.step(h, frame["m"], where="post", color="#2b6cb0", lw=1.0)
+    ax3.set_ylabel("m (kg/s)")
+    ax3.set_xlabel("hours from start")
+    ax3.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
     fig.tight_layout()
     return fig
