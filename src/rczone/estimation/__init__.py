@@ -1,0 +1,25 @@
+"""Identification of R, C and noise parameters from data (SPEC section 5).
+
+``fit(network, data, free=[...], method="ls"|"ml"|"map")`` is the entry point; the
+modules hold the pieces: :mod:`parameters` (free set, bounds, theta/eta), :mod:`kalman`
+(filter likelihood), :mod:`costs`, :mod:`optimize`, :mod:`uncertainty`, :mod:`result`,
+:mod:`validation` and a minimal :mod:`data` set.
+"""
+
+from rczone.estimation.costs import Objective, ls_cost, ml_cost
+from rczone.estimation.data import Dataset
+from rczone.estimation.fit import fit
+from rczone.estimation.parameters import ParameterSpec, make_spec, noise_parameter_names
+from rczone.estimation.result import FitResult
+
+__all__ = [
+    "Dataset",
+    "FitResult",
+    "Objective",
+    "ParameterSpec",
+    "fit",
+    "ls_cost",
+    "make_spec",
+    "ml_cost",
+    "noise_parameter_names",
+]

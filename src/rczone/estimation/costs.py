@@ -1,0 +1,250 @@
+"""Identification costs: output-error least squares, Kalman likelihood, and MAP.
+
+* ``J_LS`` (SPEC eq. 8): the integral over time of the squared open-loop output error,
+  ``int (y - y_hat)^2 dt``, evaluated by the trapezoid rule over the sample times, so
+  irregular sampling is weighted correctly. An interval enters only when both of its
+  end samples are measured: a gap (NaN in ``y``) removes the intervals touching it, i.e.
+  the integral is split at the gap. Units K^2 s.
+* ``J_ML`` (SPEC eq. 9): ``-log L`` of the continuous-discrete stochastic model, by the
+  Kalman filter (:mod:`rczone.estimation.kalman`).
+* ``J_MAP = J_ML + sum_i 0.5 ((log theta_i - log theta_i,construction) / s)^2`` over the
+  free resistances and capacitances: a log-normal prior centred on the construction
+  value with spread ``s`` (default ``log 2``: a factor 2 is one standard deviation).
+
+Initial state
+-------------
+``x0_<state>`` values given (fixed or free) are used. The others default to
+:func:`auto_initial_state`: measured states start at their first measurement and the
+unmeasured ones at the steady state given it and the first inputs (e.g. the wall at
+steady state with the measured room temperature). Without a first measurement, the
+full steady state is used.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from rczone.errors import ParameterError
+from rczone.estimation.data import Dataset
+from rczone.estimation.kalman import (
+    FilterOutput,
+    input_drive,
+    kalman_filter_arrays,
+    kalman_nll_fast,
+    stochastic_matrices,
+)
+from rczone.estimation.parameters import ParameterSpec
+from rczone.network import BilinearStateSpace, RCNetwork
+from rczone.simulation.simulate import transition_matrices
+
+#: Default spread of the MAP log-normal prior: a factor 2 is one standard deviation.
+PRIOR_SPREAD = math.log(2.0)
+
+METHODS = ("ls", "ml", "map")
+
+
+def measured_states(ss: BilinearStateSpace) -> dict[int, int]:
+    """Map state index -> output index for outputs that read one state directly (C row = e_i, D row = 0)."""
+    out: dict[int, int] = {}
+    for j in range(ss.C.shape[0]):
+        row = ss.C[j]
+        nz = np.flatnonzero(row)
+        if nz.size == 1 and row[nz[0]] == 1.0 and not np.any(ss.D[j]):
+            out.setdefault(int(nz[0]), j)
+    return out
+
+
+def auto_initial_state(ss: BilinearStateSpace, u0: np.ndarray, m0: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """Measured states at their first measurement, the others at the conditional steady state.
+
+    Parameters
+    ----------
+    ss : BilinearStateSpace
+    u0 : ndarray, shape (p,)
+    m0 : ndarray, shape (n_flows,)
+    y0 : ndarray, shape (ny,)
+        First measurement (NaN entries are treated as unmeasured).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    A, B = ss.matrices(m0) if ss.n_flows else (ss.A, ss.B)
+    meas = {i: j for i, j in measured_states(ss).items() if np.isfinite(y0[j])}
+    x = np.zeros(ss.n_states)
+    fixed = np.array(sorted(meas), dtype=int)
+    free = np.array([i for i in range(ss.n_states) if i not in meas], dtype=int)
+    x[fixed] = [y0[meas[i]] for i in fixed]
+    if free.size:
+        rhs = -(B[free] @ u0) - A[np.ix_(free, fixed)] @ x[fixed]
+        x[free] = np.linalg.solve(A[np.ix_(free, free)], rhs)
+    return x
+
+
+def initial_state(ss: BilinearStateSpace, values: Mapping[str, float], data: Dataset) -> np.ndarray:
+    """Initial state from ``x0_<state>`` values where given, else :func:`auto_initial_state`."""
+    names = [f"x0_{s}" for s in ss.state_names]
+    if all(n in values for n in names):
+        return np.array([values[n] for n in names])
+    x = auto_initial_state(ss, data.u[0], data.m[0], data.y[0])
+    for i, n in enumerate(names):
+        if n in values:
+            x[i] = values[n]
+    return x
+
+
+def network_theta(network: RCNetwork, values: Mapping[str, float]) -> dict[str, float]:
+    """The network's base parameter values out of a full value mapping."""
+    return {n: values[n] for n in network.free_parameter_names if n in values}
+
+
+def trapezoid_sse(t: np.ndarray, e: np.ndarray) -> float:
+    """``int e(t)^2 dt`` by the trapezoid rule, skipping intervals with a missing end.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+    e : ndarray, shape (N, ny)
+        Errors; NaN where the measurement is missing. Outputs are summed.
+    """
+    sq = e * e
+    seg = 0.5 * (sq[:-1] + sq[1:]) * np.diff(t)[:, None]
+    return float(np.sum(seg[np.isfinite(seg)]))
+
+
+def _propagate_loop(Phi: np.ndarray, which: np.ndarray, drive: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """``x[k+1] = Phi[which[k]] x[k] + drive[k]`` with explicit loops (compiled by numba)."""
+    N, n = drive.shape[0] + 1, x0.shape[0]
+    x = np.empty((N, n))
+    x[0] = x0
+    for k in range(N - 1):
+        w = which[k]
+        for i in range(n):
+            acc = drive[k, i]
+            for j in range(n):
+                acc += Phi[w, i, j] * x[k, j]
+            x[k + 1, i] = acc
+    return x
+
+
+try:  # numba is a declared dependency; the loop stays usable without it
+    import numba
+
+    _propagate_compiled = numba.njit(cache=True)(_propagate_loop)
+except ImportError:  # pragma: no cover
+    _propagate_compiled = _propagate_loop
+
+
+def simulate_output(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop states and outputs, shapes (N, n) and (N, ny)."""
+    ss = network.state_space(network_theta(network, values))
+    x0 = initial_state(ss, values, data)
+    Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
+    drive = input_drive(G0, G1, which, data.u)
+    x = _propagate_compiled(
+        Phi, np.ascontiguousarray(which, dtype=np.int64), drive, np.asarray(x0, dtype=float)
+    )
+    return x, x @ ss.C.T + data.u @ ss.D.T
+
+
+def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> float:
+    """``J_LS = int (y - y_hat)^2 dt`` (K^2 s) of the open-loop simulation; see the module notes."""
+    _, yhat = simulate_output(network, values, data, hold)
+    return trapezoid_sse(data.t, data.y - yhat)
+
+
+def filter_arrays(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> tuple:
+    """The argument tuple of :func:`~rczone.estimation.kalman.kalman_filter_arrays` for ``values``."""
+    ss = network.state_space(network_theta(network, values))
+    s = ss.state_names
+    try:
+        sw = np.array([values[f"sigma_w_{n}"] for n in s])
+        sx = np.array([values[f"sigma_x0_{n}"] for n in s])
+        sv = values["sigma_v"]
+    except KeyError as exc:
+        raise ParameterError(f"noise parameter {exc.args[0]!r} has no value; fix it or free it") from None
+    for nm, v in (("sigma_v", [sv]), ("sigma_w_*", sw), ("sigma_x0_*", sx)):
+        if np.any(np.asarray(v) < 0) or not np.all(np.isfinite(v)):
+            raise ParameterError(f"{nm} must be finite and >= 0, got {v}")
+    x0 = initial_state(ss, values, data)
+    Phi, G0, G1, Qd, which = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2), hold)
+    ny = ss.C.shape[0]
+    return (Phi, G0, G1, Qd, which, data.u, data.y, x0, np.diag(sx**2), ss.C, ss.D, sv**2 * np.eye(ny))
+
+
+def run_filter(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> FilterOutput:
+    """Kalman filter (reference implementation) of the stochastic model with the noise in ``values``."""
+    return kalman_filter_arrays(*filter_arrays(network, values, data, hold))
+
+
+def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> float:
+    """``J_ML = -log L`` including ``0.5 n log(2 pi)`` (compiled filter loop for one output)."""
+    return kalman_nll_fast(*filter_arrays(network, values, data, hold))
+
+
+def log_prior_penalty(spec: ParameterSpec, theta: np.ndarray, spread: float = PRIOR_SPREAD) -> float:
+    """``sum 0.5 ((log theta - log theta_c) / s)^2`` over free resistances and capacitances."""
+    sel = np.array([k in ("resistance", "capacitance") for k in spec.kinds]) & np.isfinite(spec.construction)
+    if not sel.any():
+        return 0.0
+    d = (np.log(theta[sel]) - np.log(spec.construction[sel])) / spread
+    return float(0.5 * d @ d)
+
+
+@dataclass(frozen=True, eq=False)
+class Objective:
+    """The cost of one estimation problem as a function of the free parameters.
+
+    Calling it never mutates the network, the data or the spec. Invalid parameter
+    values (e.g. a non-positive resistance from a non-log parameter) return ``inf``
+    instead of raising, so direct search can step back.
+
+    Attributes
+    ----------
+    network : RCNetwork
+    data : Dataset
+    spec : ParameterSpec
+    method : {"ls", "ml", "map"}
+    hold : {"zoh", "foh"}
+    prior_spread : float
+        ``s`` of the MAP prior (log units).
+    """
+
+    network: RCNetwork
+    data: Dataset
+    spec: ParameterSpec
+    method: str = "ls"
+    hold: str = "zoh"
+    prior_spread: float = PRIOR_SPREAD
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ParameterError(f"method must be one of {METHODS}, got {self.method!r}")
+        if not self.prior_spread > 0:
+            raise ParameterError(f"prior_spread must be > 0, got {self.prior_spread!r}")
+
+    def theta_cost(self, theta: np.ndarray) -> float:
+        """Cost at physical values ``theta`` (order of ``spec.names``)."""
+        values = self.spec.values(theta)
+        try:
+            if self.method == "ls":
+                return ls_cost(self.network, values, self.data, self.hold)
+            j = ml_cost(self.network, values, self.data, self.hold)
+        except (ParameterError, np.linalg.LinAlgError):
+            return math.inf
+        if self.method == "map":
+            j += log_prior_penalty(self.spec, np.asarray(theta, dtype=float), self.prior_spread)
+        return j
+
+    def __call__(self, eta: np.ndarray) -> float:
+        """Cost at optimizer values ``eta``."""
+        c = self.theta_cost(self.spec.to_theta(eta))
+        return c if math.isfinite(c) else math.inf

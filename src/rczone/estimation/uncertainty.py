@@ -1,0 +1,230 @@
+"""Uncertainty of estimates: Hessian, standard errors, correlations, profile likelihood.
+
+The Hessian of the cost is taken in ``eta`` (where the cost is closest to quadratic) by
+central finite differences, and mapped to physical units by the delta method:
+``cov_theta = J cov_eta J`` with ``J = diag(d theta / d eta)``.
+
+* For ``J_ML`` and ``J_MAP`` (negative log-likelihood / log-posterior):
+  ``cov_eta = H^{-1}``.
+* For ``J_LS = int e^2 dt`` (not a likelihood) the residuals are treated as white with
+  variance ``sigma^2 = J / tau`` (tau = integrated time) sampled every ``dt_mean``, so
+  ``-log L ~ J / (2 sigma^2 dt_mean)`` and ``cov_eta = 2 sigma^2 dt_mean H^{-1}``. This is
+  approximate: open-loop errors are usually correlated, which makes it optimistic.
+
+References
+----------
+.. [1] Y. Pawitan, *In All Likelihood*, Oxford University Press 2001, sections 2.9
+   (profile likelihood) and 4.7 (delta method).
+.. [2] P. E. Gill, W. Murray, M. H. Wright, *Practical Optimization*, 1981, section
+   8.6 (finite-difference step sizes for second derivatives).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+from scipy.stats import chi2
+
+from rczone.errors import ParameterError
+from rczone.estimation.parameters import ParameterSpec
+
+#: Relative step of the finite-difference Hessian, about eps^(1/4).
+HESSIAN_STEP = 1e-4
+
+
+def hessian(f: Callable[[np.ndarray], float], x: np.ndarray, step: float = HESSIAN_STEP) -> np.ndarray:
+    """Central finite-difference Hessian with steps ``h_i = step * max(1, |x_i|)``.
+
+    Diagonal: ``(f(x+h e_i) - 2 f(x) + f(x-h e_i)) / h^2``; off-diagonal: the four-point
+    formula. Error ``O(h^2)`` from truncation and ``O(eps |f| / h^2)`` from rounding,
+    balanced near ``h ~ eps^(1/4)`` [2]_.
+
+    Returns
+    -------
+    ndarray, shape (d, d), symmetric
+    """
+    x = np.asarray(x, dtype=float)
+    d = x.size
+    h = step * np.maximum(1.0, np.abs(x))
+    f0 = f(x)
+    H = np.empty((d, d))
+
+    def at(*moves: tuple[int, float]) -> float:
+        xx = x.copy()
+        for i, s in moves:
+            xx[i] += s * h[i]
+        return f(xx)
+
+    for i in range(d):
+        H[i, i] = (at((i, 1)) - 2 * f0 + at((i, -1))) / h[i] ** 2
+        for j in range(i):
+            v = (at((i, 1), (j, 1)) - at((i, 1), (j, -1)) - at((i, -1), (j, 1)) + at((i, -1), (j, -1))) / (
+                4 * h[i] * h[j]
+            )
+            H[i, j] = H[j, i] = v
+    return H
+
+
+@dataclass(frozen=True, eq=False)
+class Uncertainty:
+    """Standard errors and correlations of the free parameters.
+
+    Attributes
+    ----------
+    hessian_eta : ndarray, shape (d, d)
+        Hessian of the cost in eta.
+    cov_eta, cov_theta : ndarray, shape (d, d)
+        Covariance in eta and (delta method) in theta; NaN if the Hessian is not
+        positive definite.
+    std_error : ndarray, shape (d,)
+        Standard errors in theta (physical units).
+    correlation : ndarray, shape (d, d)
+    positive_definite : bool
+    """
+
+    hessian_eta: np.ndarray
+    cov_eta: np.ndarray
+    cov_theta: np.ndarray
+    std_error: np.ndarray
+    correlation: np.ndarray
+    positive_definite: bool
+
+
+def covariance(
+    spec: ParameterSpec, theta_hat: np.ndarray, H_eta: np.ndarray, scale: float = 1.0
+) -> Uncertainty:
+    """Covariances from the Hessian of the cost in eta (``cov_eta = scale * H^{-1}``)."""
+    d = spec.n_free
+    try:
+        np.linalg.cholesky(H_eta)
+        pd = True
+    except np.linalg.LinAlgError:
+        pd = False
+    if not pd:
+        nan = np.full((d, d), np.nan)
+        return Uncertainty(H_eta, nan, nan, np.full(d, np.nan), nan, False)
+    cov_eta = scale * np.linalg.inv(H_eta)
+    cov_eta = 0.5 * (cov_eta + cov_eta.T)
+    J = spec.jacobian(spec.to_eta(theta_hat))
+    cov_theta = cov_eta * np.outer(J, J)
+    se = np.sqrt(np.diag(cov_theta))
+    sd_eta = np.sqrt(np.diag(cov_eta))
+    corr = cov_eta / np.outer(sd_eta, sd_eta)
+    return Uncertainty(H_eta, cov_eta, cov_theta, se, corr, True)
+
+
+def fix_parameter(spec: ParameterSpec, name: str, value: float) -> ParameterSpec:
+    """A copy of ``spec`` with ``name`` removed from the free set and fixed at ``value``."""
+    if name not in spec.names:
+        from rczone.errors import did_you_mean
+
+        raise ParameterError(f"{name!r} is not a free parameter; " + did_you_mean(name, spec.names))
+    keep = np.array([n != name for n in spec.names])
+    if not keep.any():
+        raise ParameterError("cannot profile the only free parameter: nothing is left to re-optimize")
+    fixed = dict(spec.fixed)
+    fixed[name] = float(value)
+    return ParameterSpec(
+        names=tuple(n for n in spec.names if n != name),
+        kinds=tuple(k for n, k in zip(spec.names, spec.kinds) if n != name),
+        log=spec.log[keep],
+        start=spec.start[keep],
+        lower=spec.lower[keep],
+        upper=spec.upper[keep],
+        construction=spec.construction[keep],
+        fixed=MappingProxyType(fixed),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Profile:
+    """Profile of the cost along one parameter.
+
+    Attributes
+    ----------
+    name : str
+    values : ndarray, shape (k,)
+        Grid of the profiled parameter (theta).
+    cost : ndarray, shape (k,)
+        Minimum of the cost over the other free parameters at each grid value.
+    others : ndarray, shape (k, d-1)
+        The re-optimized other parameters.
+    interval : tuple of float
+        Where ``cost - min(cost)`` crosses ``chi2(1).ppf(level) / 2`` by linear
+        interpolation (NaN where the grid does not reach it); meaningful for ML/MAP.
+    """
+
+    name: str
+    values: np.ndarray
+    cost: np.ndarray
+    others: np.ndarray
+    interval: tuple[float, float]
+
+
+def profile(
+    objective,
+    theta_hat: np.ndarray,
+    name: str,
+    grid: Sequence[float] | np.ndarray,
+    optimizer: str = "nelder-mead",
+    level: float = 0.95,
+) -> Profile:
+    """Profile likelihood of parameter ``name``: re-optimize the others at each grid value.
+
+    Parameters
+    ----------
+    objective : Objective
+        The cost of the fit (its spec gives the free parameters).
+    theta_hat : ndarray
+        The optimum (start of every re-optimization).
+    name : str
+        Free parameter to profile.
+    grid : array_like
+        Values (theta) of the profiled parameter, inside its bounds.
+    optimizer : str
+    level : float
+        Confidence level of the interval.
+    """
+    from rczone.estimation.optimize import minimize_from
+
+    spec = objective.spec
+    if name not in spec.names:
+        from rczone.errors import did_you_mean
+
+        raise ParameterError(
+            f"cannot profile {name!r}: not a free parameter; " + did_you_mean(name, spec.names)
+        )
+    i = spec.names.index(name)
+    grid = np.asarray(grid, dtype=float)
+    if np.any(grid <= spec.lower[i]) or np.any(grid >= spec.upper[i]):
+        raise ParameterError(
+            f"profile grid of {name!r} must lie inside its bounds ({spec.lower[i]:g}, {spec.upper[i]:g})"
+        )
+    rest = np.delete(np.asarray(theta_hat, dtype=float), i)
+    costs, others = np.empty(grid.size), np.empty((grid.size, spec.n_free - 1))
+    for k, v in enumerate(grid):
+        sub = fix_parameter(spec, name, v)
+        sub_obj = dataclasses.replace(objective, spec=sub)
+        out = minimize_from(sub_obj, sub, rest, optimizer)
+        costs[k], others[k] = out.cost, out.end
+    thr = costs.min() + 0.5 * chi2.ppf(level, 1)
+    return Profile(name, grid, costs, others, _crossings(grid, costs, thr))
+
+
+def _crossings(x: np.ndarray, c: np.ndarray, thr: float) -> tuple[float, float]:
+    k0 = int(np.argmin(c))
+    lo = hi = math.nan
+    for k in range(k0, 0, -1):
+        if c[k - 1] >= thr > c[k] or c[k - 1] > thr >= c[k]:
+            lo = float(np.interp(thr, [c[k], c[k - 1]], [x[k], x[k - 1]]))
+            break
+    for k in range(k0, x.size - 1):
+        if c[k + 1] >= thr > c[k] or c[k + 1] > thr >= c[k]:
+            hi = float(np.interp(thr, [c[k], c[k + 1]], [x[k], x[k + 1]]))
+            break
+    return lo, hi

@@ -1,0 +1,150 @@
+"""Validation of a fitted model on data: open-loop error, k-step prediction, residual whiteness.
+
+All results are data objects; plotting is elsewhere.
+
+References
+----------
+.. [1] G. M. Ljung, G. E. P. Box, "On a measure of lack of fit in time series models",
+   Biometrika 65 (1978) 297-303.
+.. [2] L. Ljung, *System Identification: Theory for the User*, 2nd ed., Prentice Hall
+   1999, section 16.6 (residual analysis) and 7.3 (k-step-ahead predictors).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import chi2
+
+from rczone.errors import ParameterError
+from rczone.estimation.costs import filter_arrays, simulate_output
+from rczone.estimation.data import Dataset
+from rczone.estimation.kalman import input_drive, kalman_filter_arrays
+from rczone.network import RCNetwork
+
+
+@dataclass(frozen=True, eq=False)
+class OpenLoopError:
+    """Open-loop simulation error on a data set.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+    y_hat : ndarray, shape (N, ny)
+    error : ndarray, shape (N, ny)
+        ``y - y_hat`` (NaN where ``y`` is missing).
+    rmse_K, max_abs_K : float
+    """
+
+    t: np.ndarray
+    y_hat: np.ndarray
+    error: np.ndarray
+    rmse_K: float
+    max_abs_K: float
+
+
+def open_loop_error(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> OpenLoopError:
+    """Simulate ``network`` with ``values`` (base parameters, optional ``x0_*``) on ``data``."""
+    data.check_against(network)
+    _, yhat = simulate_output(network, values, data, hold)
+    e = data.y - yhat
+    return OpenLoopError(data.t, yhat, e, float(np.sqrt(np.nanmean(e**2))), float(np.nanmax(np.abs(e))))
+
+
+@dataclass(frozen=True, eq=False)
+class PredictionError:
+    """k-step-ahead prediction errors of the Kalman predictor.
+
+    Attributes
+    ----------
+    k : int
+    error : ndarray, shape (N, ny)
+        ``y[j] - y_hat[j | j-k]``; NaN for the first ``k`` samples and missing ``y``.
+    rmse_K : float
+    """
+
+    k: int
+    error: np.ndarray
+    rmse_K: float
+
+
+def k_step_prediction_error(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int = 1, hold: str = "zoh"
+) -> PredictionError:
+    """Prediction of ``y[j]`` from the filtered state at ``j - k`` and the known inputs.
+
+    ``k = 1`` gives the innovations of the filter (except at the first sample). ``values``
+    must hold the noise parameters (``sigma_v``, ``sigma_w_*``, ``sigma_x0_*``).
+    """
+    if k < 1:
+        raise ParameterError(f"k must be >= 1 (steps ahead), got {k}")
+    data.check_against(network)
+    args = filter_arrays(network, values, data, hold)
+    Phi, G0, G1, _, which, u, y, _, _, C, D, _ = args
+    out = kalman_filter_arrays(*args)
+    N = data.n_samples
+    drive = input_drive(G0, G1, which, u)
+    err = np.full(y.shape, np.nan)
+    for j in range(k, N):
+        x = out.x_filt[j - k]
+        for i in range(j - k, j):
+            x = Phi[which[i]] @ x + drive[i]
+        err[j] = y[j] - (C @ x + D @ u[j])
+    return PredictionError(k, err, float(np.sqrt(np.nanmean(err**2))))
+
+
+@dataclass(frozen=True, eq=False)
+class ResidualTest:
+    """Autocorrelation of residuals and the Ljung-Box portmanteau test.
+
+    Attributes
+    ----------
+    lags : ndarray of int, shape (L,)
+    acf : ndarray, shape (L,)
+        Sample autocorrelation at ``lags``.
+    q_statistic : float
+        ``Q = n (n + 2) sum_k r_k^2 / (n - k)``.
+    p_value : float
+        ``P(chi2(L - dof) > Q)``; small values reject whiteness.
+    white_at_5pct : bool
+    """
+
+    lags: np.ndarray
+    acf: np.ndarray
+    q_statistic: float
+    p_value: float
+    white_at_5pct: bool
+
+
+def ljung_box(residuals: np.ndarray, n_lags: int = 20, dof: int = 0) -> ResidualTest:
+    """Ljung-Box test of whiteness of a residual series (NaNs dropped).
+
+    Parameters
+    ----------
+    residuals : ndarray, shape (N,) or (N, 1)
+    n_lags : int
+        Number of lags ``L``.
+    dof : int
+        Degrees of freedom to subtract (e.g. number of fitted ARMA terms; 0 for
+        Kalman innovations).
+    """
+    r = np.asarray(residuals, dtype=float).reshape(-1)
+    r = r[np.isfinite(r)]
+    n = r.size
+    if not 0 < n_lags < n - 1:
+        raise ParameterError(f"n_lags must be between 1 and n-2 = {n - 2}, got {n_lags}")
+    if not 0 <= dof < n_lags:
+        raise ParameterError(f"dof must be in [0, n_lags), got {dof}")
+    r = r - r.mean()
+    c0 = float(r @ r) / n
+    if c0 == 0:
+        raise ParameterError("the residuals are constant; their autocorrelation is undefined")
+    lags = np.arange(1, n_lags + 1)
+    acf = np.array([float(r[:-k] @ r[k:]) / n / c0 for k in lags])
+    q = float(n * (n + 2) * np.sum(acf**2 / (n - lags)))
+    p = float(chi2.sf(q, n_lags - dof))
+    return ResidualTest(lags, acf, q, p, p > 0.05)

@@ -1,0 +1,76 @@
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from rczone.estimation import Dataset, Objective, ls_cost, make_spec, ml_cost
+from rczone.estimation.costs import auto_initial_state, log_prior_penalty, trapezoid_sse
+
+from .nets import NET1, NET2, data2
+
+
+def test_trapezoid_skips_intervals_touching_a_gap() -> None:
+    t = np.array([0.0, 10.0, 25.0, 30.0, 70.0, 100.0])
+    e = np.full((6, 1), 2.0)
+    assert trapezoid_sse(t, e) == pytest.approx(4.0 * 100.0)
+    e[3] = np.nan  # removes [25, 30] and [30, 70]
+    assert trapezoid_sse(t, e) == pytest.approx(4.0 * (100.0 - 45.0))
+
+
+def test_ls_cost_matches_analytic_integral_of_a_decaying_error() -> None:
+    # 1-state model at rest at 10 degC, model started 3 K too warm: e(t) = 3 exp(-t / tau)
+    R, C = 0.01, 1e6
+    tau = R * C
+    n = 2001
+    t = np.linspace(0.0, 3 * tau, n)
+    u = np.column_stack([np.full(n, 10.0), np.zeros(n)])
+    data = Dataset(t, u, np.zeros((n, 0)), np.full((n, 1), 10.0), NET1.input_names, (), NET1.outputs)
+    J = ls_cost(NET1, {"R": R, "Cr": C, "x0_Ti": 13.0}, data)
+    exact = 9.0 * tau / 2 * (1 - math.exp(-6.0))
+    assert J == pytest.approx(exact, rel=1e-5)
+
+
+def test_ls_cost_is_zero_at_truth_and_positive_elsewhere() -> None:
+    data = data2()
+    assert ls_cost(NET2, {}, data) < 1e-18
+    assert ls_cost(NET2, {"Rw": 0.02}, data) > 1e-2
+
+
+def test_auto_initial_state_puts_wall_at_steady_state_given_measured_room() -> None:
+    ss = NET2.state_space()
+    u0 = np.array([30.0, 20.0, 14.0, 0.0])
+    x0 = auto_initial_state(ss, u0, np.array([0.0]), np.array([24.0]))
+    R1 = R2 = 0.005
+    assert x0[0] == 24.0
+    assert x0[1] == pytest.approx((24.0 / R1 + 20.0 / R2) / (1 / R1 + 1 / R2), rel=1e-12)
+    # without a first measurement: the full steady state, where dx/dt = 0
+    x0 = auto_initial_state(ss, u0, np.array([0.05]), np.array([np.nan]))
+    A, B = ss.matrices([0.05])
+    np.testing.assert_allclose(A @ x0 + B @ u0, 0.0, atol=1e-12)
+
+
+def test_map_adds_log_normal_prior_on_free_r_and_c_only() -> None:
+    data = data2(noise=0.05, rng=np.random.default_rng(3))
+    spec = make_spec(NET2, ["Cr", "Rw", "sigma_v"])
+    theta = np.array([2 * 8e5, 0.01 / 4, 0.07])
+    s = 0.5
+    expect = 0.5 * (math.log(2) / s) ** 2 + 0.5 * (math.log(4) / s) ** 2
+    assert log_prior_penalty(spec, theta, s) == pytest.approx(expect, rel=1e-12)
+    ml = Objective(NET2, data, spec, "ml")
+    mp = Objective(NET2, data, spec, "map", prior_spread=s)
+    eta = spec.to_eta(theta)
+    assert mp(eta) - ml(eta) == pytest.approx(expect, rel=1e-9)
+    assert ml(eta) == pytest.approx(ml_cost(NET2, spec.values(theta), data), rel=1e-12)
+
+
+def test_objective_never_mutates_network_or_data() -> None:
+    data = data2()
+    before = {k: (p.value, p.expr) for k, p in NET2.parameters.items()}
+    y_before = data.y.copy()
+    spec = make_spec(NET2, ["Cr", "Rw"])
+    Objective(NET2, data, spec, "ml")(np.log([1e5, 0.5]))
+    Objective(NET2, data, spec, "ls")(np.log([1e5, 0.5]))
+    assert {k: (p.value, p.expr) for k, p in NET2.parameters.items()} == before
+    np.testing.assert_array_equal(data.y, y_before)

@@ -1,0 +1,129 @@
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rczone.errors import InputShapeError, ParameterError
+from rczone.estimation import Dataset, FitResult, fit
+
+from .nets import NET1, NET2, data1, data2
+
+
+def test_fit_result_to_dict_is_json_ready_and_complete() -> None:
+    data = data2(noise=0.02, rng=np.random.default_rng(0))
+    tiny_process_noise = {"sigma_w_Ti": 1e-6, "sigma_w_Tw": 1e-6}
+    res = fit(
+        NET2,
+        data,
+        ["Cr", "Rw", "sigma_v"],
+        method="ml",
+        optimizer="lbfgs",
+        start={"Rw": 0.02},
+        fixed=tiny_process_noise,
+    )
+    assert isinstance(res, FitResult)
+    d = json.loads(json.dumps(res.to_dict()))
+    p = d["parameters"]["Rw"]
+    assert set(p) == {
+        "estimate",
+        "std_error",
+        "construction",
+        "lower",
+        "upper",
+        "ratio_to_construction",
+        "at_bound",
+    }
+    assert p["construction"] == 0.01 and p["ratio_to_construction"] == pytest.approx(p["estimate"] / 0.01)
+    assert p["std_error"] > 0 and p["at_bound"] is False
+    assert d["parameters"]["sigma_v"]["construction"] is None  # noise has no construction value
+    assert d["method"] == "ml" and d["rmse_kind"] == "one-step" and d["converged"] is True
+    # the noise std estimate is close to the truth (0.02 K) and so is the one-step RMSE
+    assert res.estimates["sigma_v"] == pytest.approx(0.02, rel=0.2)
+    assert res.rmse_K == pytest.approx(0.02, rel=0.2)
+    assert d["correlation"]["Cr"]["Cr"] == pytest.approx(1.0)
+
+
+def test_multistart_keeps_every_start_and_reports_the_winner() -> None:
+    data = data1()
+    res = fit(NET1, data, ["Cr", "R"], n_starts=4, rng=np.random.default_rng(42), uncertainty=False)
+    assert len(res.starts) == 4 and res.n_evals == sum(s.n_evals for s in res.starts)
+    costs = [s.cost for s in res.starts]
+    assert res.cost == min(costs) == costs[res.best_start]
+    np.testing.assert_allclose(res.starts[0].start, [1e6, 0.01])  # first start: construction values
+    rows = res.starts_table()
+    assert sum(r["winner"] for r in rows) == 1 and "end_Cr" in rows[0]
+    assert res.estimates["Cr"] == pytest.approx(1e6, rel=1e-4)
+
+
+def test_fit_does_not_mutate_the_network() -> None:
+    before = {k: (p.value, p.expr) for k, p in NET1.parameters.items()}
+    fit(NET1, data1(), ["Cr", "R"], start={"Cr": 3e6}, uncertainty=False)
+    assert {k: (p.value, p.expr) for k, p in NET1.parameters.items()} == before
+
+
+def test_estimate_at_a_bound_is_flagged() -> None:
+    # truth R = 0.01 lies above the upper bound: the estimate must stop at the bound and say so
+    res = fit(
+        NET1,
+        data1(),
+        ["Cr", "R"],
+        bounds={"R": (1e-3, 5e-3)},
+        start={"R": 2e-3},
+        optimizer="lbfgs",
+        uncertainty=False,
+    )
+    assert res.at_bound["R"] and not res.at_bound["Cr"]
+    assert any("R is at a bound" in f for f in res.flags)
+    assert res.estimates["R"] == pytest.approx(5e-3, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "err", "match"),
+    [
+        ({"free": ["Cx"]}, ParameterError, r"unknown free parameter 'Cx'; did you mean .*'Cr'"),
+        ({"method": "ols"}, ParameterError, "method must be one of"),
+        ({"optimizer": "bfgs"}, ParameterError, "optimizer must be one of"),
+        ({"n_starts": 3}, ParameterError, "needs rng"),
+        ({"hold": "linear"}, ParameterError, "hold must be one of"),
+        ({"free": ["Cr", "sigma_v"]}, ParameterError, "cannot be estimated by least squares"),
+        ({"bounds": {"Cr": (2e6, 1e6)}}, ParameterError, "must be < upper"),
+        ({"bounds": {"Cr": (2e6, 3e6)}}, ParameterError, "outside its bounds"),
+        ({"data": "data1"}, InputShapeError, "do not match network"),
+        ({"data": np.zeros((3, 3))}, ParameterError, "must be an rczone Dataset"),
+    ],
+)
+def test_bad_fit_inputs_raise(kwargs, err, match) -> None:
+    args = {"network": NET2, "data": data2(n=20), "free": ["Cr", "Rw"], **kwargs}
+    if isinstance(args["data"], str):
+        args["data"] = data1(n=20)
+    with pytest.raises(err, match=match):
+        fit(**args)
+
+
+def test_data_shape_mismatch_with_network_is_reported() -> None:
+    d = data2(n=20)
+    short = Dataset(d.t, d.u[:, :3], d.m, d.y, d.input_names[:3], d.flow_names, d.output_names)
+    with pytest.raises(InputShapeError, match=r"data inputs \['To', 'Tsd', 'Ts'\] do not match"):
+        fit(NET2, short, ["Cr"])
+
+
+def test_map_prior_pulls_towards_construction_by_its_spread() -> None:
+    # data from Rw = 0.02 while the network declares (construction) Rw = 0.01
+    from rczone.network import Parameter
+    from rczone.simulation import simulate
+
+    d = data2()
+    truth = NET2.replace_parameters([Parameter("Rw", "resistance", 0.02)])
+    y = simulate(truth.state_space(), d.t, d.u, d.m).y + 0.02 * np.random.default_rng(4).standard_normal(
+        d.y.shape
+    )
+    data = Dataset(d.t, d.u, d.m, y, d.input_names, d.flow_names, d.output_names)
+    kw = {"optimizer": "lbfgs", "uncertainty": False, "fixed": {"sigma_v": 0.02}}
+    ml = fit(NET2, data, ["Rw"], method="ml", **kw).estimates["Rw"]
+    tight = fit(NET2, data, ["Rw"], method="map", prior_spread=1e-4, **kw).estimates["Rw"]
+    loose = fit(NET2, data, ["Rw"], method="map", **kw).estimates["Rw"]
+    assert ml == pytest.approx(0.02, rel=0.03)
+    assert tight == pytest.approx(0.01, rel=1e-3)
+    assert 0.01 < loose < ml

@@ -1,0 +1,69 @@
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rczone.errors import ParameterError
+from rczone.estimation import Dataset
+from rczone.estimation.costs import run_filter
+from rczone.estimation.validation import k_step_prediction_error, ljung_box, open_loop_error
+
+from .nets import NET2, data2
+
+NOISE = {"sigma_v": 0.05, "sigma_w_Ti": 1e-3, "sigma_w_Tw": 1e-4, "sigma_x0_Ti": 0.1, "sigma_x0_Tw": 0.5}
+
+
+def test_open_loop_error_zero_at_truth_and_reports_max() -> None:
+    data = data2()
+    ok = open_loop_error(NET2, {}, data)
+    assert ok.rmse_K < 1e-9
+    off = open_loop_error(NET2, {"Rw": 0.02}, data)
+    assert off.max_abs_K == pytest.approx(np.nanmax(np.abs(data.y - off.y_hat)))
+    assert off.max_abs_K >= off.rmse_K > 0.01
+
+
+def test_one_step_prediction_equals_filter_innovations() -> None:
+    data = data2(noise=0.05, rng=np.random.default_rng(2))
+    p1 = k_step_prediction_error(NET2, NOISE, data, k=1)
+    innov = run_filter(NET2, NOISE, data).innovations
+    np.testing.assert_allclose(p1.error[1:], innov[1:], rtol=1e-10, atol=1e-12)
+    assert np.isnan(p1.error[0]).all()
+    # k steps ahead: undefined for the first k samples, finite afterwards
+    p6 = k_step_prediction_error(NET2, NOISE, data, k=6)
+    assert np.isnan(p6.error[:6]).all() and np.isfinite(p6.error[6:]).all()
+    with pytest.raises(ParameterError, match="k must be >= 1"):
+        k_step_prediction_error(NET2, NOISE, data, k=0)
+
+
+def test_k_step_prediction_error_grows_towards_open_loop_with_a_wrong_model() -> None:
+    d = data2()
+    data = Dataset(d.t, d.u, d.m, d.y, d.input_names, d.flow_names, d.output_names)
+    wrong = {**NOISE, "Rw": 0.03}
+    rm = [k_step_prediction_error(NET2, wrong, data, k=k).rmse_K for k in (1, 3, 12)]
+    assert rm[0] < rm[1] < rm[2]
+
+
+def test_ljung_box_accepts_white_noise_and_rejects_ar1() -> None:
+    rng = np.random.default_rng(0)
+    # under whiteness, Q ~ chi2(L): its mean over many series is L
+    qs = [ljung_box(rng.standard_normal(400), n_lags=10).q_statistic for _ in range(300)]
+    assert np.mean(qs) == pytest.approx(10.0, rel=0.1)
+    e = rng.standard_normal(400)
+    ar = np.empty(400)
+    ar[0] = e[0]
+    for k in range(1, 400):
+        ar[k] = 0.8 * ar[k - 1] + e[k]
+    res = ljung_box(ar, n_lags=10)
+    assert res.p_value < 1e-10 and not res.white_at_5pct
+    assert res.acf[0] == pytest.approx(0.8, abs=0.08)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [({"n_lags": 0}, "n_lags must be between"), ({"n_lags": 5, "dof": 5}, r"dof must be in \[0, n_lags\)")],
+)
+def test_ljung_box_bad_arguments(kwargs, match) -> None:
+    with pytest.raises(ParameterError, match=match):
+        ljung_box(np.random.default_rng(0).standard_normal(50), **kwargs)
+    with pytest.raises(ParameterError, match="constant"):
+        ljung_box(np.ones(50))
