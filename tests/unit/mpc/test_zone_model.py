@@ -1,0 +1,71 @@
+import json
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from rczone.errors import DataError, NetworkError, ParameterError
+from rczone.models import get_model
+from rczone.mpc import ZoneModel
+from rczone.network.serialize import network_from_dict, network_to_dict
+from tests.netfactory import thirteen_state
+
+
+@pytest.mark.parametrize("name", ["full-scale", "second-order", "first-order", "second-order-paper"])
+def test_network_round_trip_preserves_matrices(name):
+    net = get_model(name)
+    back = network_from_dict(json.loads(json.dumps(network_to_dict(net))))
+    a, b = net.state_space(), back.state_space()
+    for x, y in ((a.A, b.A), (a.B, b.B), (a.N, b.N), (a.M, b.M), (a.C, b.C), (a.D, b.D)):
+        np.testing.assert_array_equal(x, y)
+    assert back.input_names == net.input_names and back.parameters.keys() == net.parameters.keys()
+
+
+def test_saved_model_loads_and_simulates_identically(tmp_path):
+    rng = np.random.default_rng(4)
+    net = thirteen_state(rng)
+    zm = ZoneModel(net, {"Cr": 3.3e5, "Rwin": 0.2}, {"method": "ml", "data": "C"})
+    path = zm.save(tmp_path / "model.json")
+    back = ZoneModel.load(path)
+    assert back.provenance == {"method": "ml", "data": "C"}
+    t = np.arange(0, 7200.0, 60)
+    u = 20 + rng.standard_normal((t.size, 8))
+    m = rng.uniform(0, 0.12, (t.size, 1))
+    np.testing.assert_array_equal(zm.simulate(t, u, m).y, back.simulate(t, u, m).y)
+
+
+def test_discrete_matrices_are_the_exact_exponential():
+    zm = ZoneModel(get_model("second-order-paper"), {"Rw": 0.01})
+    d = zm.discrete(300.0, m=0.12)
+    c = zm.continuous(0.12)
+    np.testing.assert_allclose(d.Ad, expm(c.A * 300.0), rtol=1e-12)
+    # ZOH input matrix: A^{-1} (Ad - I) B for an invertible A
+    np.testing.assert_allclose(d.Bd, np.linalg.solve(c.A, (d.Ad - np.eye(2)) @ c.B), rtol=1e-9, atol=1e-15)
+    arr = zm.arrays(0.12)
+    np.testing.assert_allclose(arr["A"], c.A)
+    assert d.input_names == ("To", "Tsd", "Ts", "Q")
+
+
+@pytest.mark.parametrize(
+    ("call", "exc", "match"),
+    [
+        (lambda p: ZoneModel.load(p / "missing.json"), DataError, "does not exist"),
+        (lambda p: ZoneModel.load(_write(p, "{not json")), DataError, "not valid JSON"),
+        (lambda p: ZoneModel.load(_write(p, '{"format": "other"}')), DataError, "not an rczone model file"),
+        (
+            lambda p: network_from_dict({"format": "rczone-network/1", "name": "x"}),
+            NetworkError,
+            "incomplete",
+        ),
+        (lambda p: ZoneModel(get_model("first-order"), {"Rww": 1.0}), ParameterError, "did you mean 'Rw'"),
+    ],
+)
+def test_bad_model_files(tmp_path, call, exc, match):
+    with pytest.raises(exc, match=match):
+        call(tmp_path)
+
+
+def _write(folder, text):
+    p = folder / "m.json"
+    p.write_text(text)
+    return p
