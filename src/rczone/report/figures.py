@@ -109,3 +109,41 @@ def data_overview(frame: pd.DataFrame, title: str = "") -> Figure:
         fig.suptitle(title)
     fig.tight_layout()
     return fig
+
+
+def fit_overview(t: np.ndarray, measured: np.ndarray, predicted: np.ndarray, title: str = "") -> Figure:
+    """Measured and open-loop predicted room temperature, and the error."""
+    fig = Figure(figsize=(8.5, 4.2))
+    ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
+    h = _hours(t)
+    ax1.plot(h, measured, color="black", lw=1.0, label="measured")
+    ax1.plot(h, predicted, color="#dd6b20", lw=1.4, label="model (open loop)")
+    ax1.set_ylabel("Ti (°C)")
+    ax1.legend(fontsize=8)
+    ax1.grid(alpha=0.3)
+    ax2.plot(h, measured - predicted, color="#c53030", lw=0.9)
+    ax2.axhline(0, color="black", lw=0.6)
+    ax2.set_ylabel("error (K)")
+    ax2.set_xlabel("hours from start")
+    ax2.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def residual_acf(lags: np.ndarray, acf: np.ndarray, n: int, title: str = "") -> Figure:
+    """Sample autocorrelation of residuals with the 95 % band of white noise."""
+    fig = Figure(figsize=(6.0, 2.8))
+    ax = fig.subplots()
+    ax.bar(lags, acf, color="#2b6cb0", width=0.6)
+    band = 1.96 / np.sqrt(max(n, 1))
+    ax.axhspan(-band, band, color="#a0aec0", alpha=0.3, label="95 % band of white noise")
+    ax.set_xlabel("lag (samples)")
+    ax.set_ylabel("autocorrelation")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    return fig
