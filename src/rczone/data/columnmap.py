@@ -1,0 +1,399 @@
+"""The column map: a small TOML file saying which trend-log column is which model channel.
+
+A building management system (BMS) names its points after the site (``RM241.ZN-T``),
+logs them in its own units and local time. The column map tells rczone which column is
+which channel, in which unit, and how to read the time stamps. Without a map the default
+layout is used (see :func:`default_column_map`).
+
+Format
+------
+Every key is optional except ``[columns]``. Unknown keys are errors (with a suggestion of
+the close name), so a typo never silently drops a setting::
+
+    name = "Pugh Hall 241"        # label used in messages (default: the file name)
+    air_density = 1.2             # kg/m3, turns volume flows (m3/s, L/s, cfm) into kg/s
+    na_values = ["Offline", "---"]  # extra strings meaning "no value" (CSV only)
+    min_samples = 10              # fewer usable samples than this is an error (default 2)
+
+    [time]
+    column = "Timestamp"          # default "time"
+    format = "auto"               # "auto" | "iso" | "seconds"  (seconds = Unix epoch, UTC)
+    timezone = "America/New_York" # IANA zone of naive local stamps and of the night window
+                                  # (default "UTC"; a fixed offset is e.g. "Etc/GMT+5" = UTC-5)
+    ambiguous = "infer"           # repeated local hour at the end of DST:
+                                  #   "infer" (from the order of the rows, default), "first"
+                                  #   (summer time), "second" (standard time), "drop", "raise"
+    nonexistent = "raise"         # skipped local hour at the start of DST:
+                                  #   "raise" (default), "shift_forward", "drop"
+
+    [long]                        # only for long logs: one row per point and time stamp
+    point = "PointName"           # column holding the point name
+    value = "Value"               # column holding the value
+
+    [columns]                     # channel = column (default unit) or a table
+    Ti = { column = "RM241.ZN-T", unit = "degF" }   # room temperature (the output)
+    To = { column = "OA-T", unit = "degF" }         # outdoor temperature
+    Ts = { column = "RM241.SA-T", unit = "degF" }   # supply-air temperature
+    m  = { column = "RM241.SA-F", unit = "cfm" }    # supply-air flow (mass flow inside)
+    Q  = { value = 50, unit = "W" }                 # a constant instead of a column
+    # Tsd = "Tsurr"                                 # either a Tsd column or [surroundings]
+    m2 = { column = "VAV2", unit = "L/s", quantity = "flow" }  # any other channel
+
+    [surroundings]                # temperatures around the zone; Tsd = their mean
+    Tf  = { column = "RM141.ZN-T", unit = "degF" }
+    Tc  = { column = "RM341.ZN-T", unit = "degF" }
+    Tn1 = { column = "RM240.ZN-T", unit = "degF" }
+    Tn2 = { column = "RM242.ZN-T", unit = "degF" }
+    Thw = { column = "HALL2.ZN-T", unit = "degF" }
+
+    [resample]                    # omit to keep the time stamps as given
+    step = 300                    # s, uniform grid aligned to multiples of step (UTC epoch)
+    max_gap = 1800                # s, never interpolate across a longer gap (default: the
+                                  #   larger of 1800 s and 3 median sampling steps of the channel)
+    hold_max_gap = 7200           # s, same for held flows (default: as max_gap)
+
+    [night]                       # night window in local time (default 18:00 to 06:00)
+    start = "18:00"
+    end = "06:00"
+
+Channels ``Ti``, ``To``, ``Ts``, ``Tsd`` (temperatures), ``m`` (flow) and ``Q`` (power)
+are known; any other name in ``[columns]`` needs ``quantity = "temperature" | "flow" |
+"power"``. Default units: degC, kg/s, W. Accepted units are listed in
+:mod:`rczone.data.units`. In a long log ``column`` is the point name.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import tomllib
+import zoneinfo
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from rczone.data.units import DEFAULT_AIR_DENSITY, SI_UNITS, canonical_unit
+from rczone.errors import DataError, did_you_mean
+
+KNOWN_CHANNELS = {
+    "Ti": ("temperature", "room"),
+    "To": ("temperature", "outdoor"),
+    "Ts": ("temperature", "supply"),
+    "Tsd": ("temperature", "room"),
+    "m": ("flow", "flow"),
+    "Q": ("power", "power"),
+}
+"""Channel name -> (quantity, plausibility role) of the channels rczone knows."""
+
+DEFAULT_SURROUNDINGS = ("Tf", "Tc", "Tn1", "Tn2", "Thw")
+"""The paper's five surrounding spaces: floor, ceiling, two neighbours, hallway."""
+
+_ROLE_OF_QUANTITY = {"temperature": "temperature", "flow": "flow", "power": "power"}
+AMBIGUOUS = ("infer", "first", "second", "drop", "raise")
+NONEXISTENT = ("raise", "shift_forward", "drop")
+TIME_FORMATS = ("auto", "iso", "seconds")
+DEFAULT_MAX_GAP = 1800.0
+
+_TOP_KEYS = (
+    "name",
+    "air_density",
+    "na_values",
+    "min_samples",
+    "time",
+    "long",
+    "columns",
+    "surroundings",
+    "resample",
+    "night",
+)
+_SECTION_KEYS = {
+    "time": ("column", "format", "timezone", "ambiguous", "nonexistent"),
+    "long": ("point", "value"),
+    "resample": ("step", "max_gap", "hold_max_gap"),
+    "night": ("start", "end"),
+}
+_CHANNEL_KEYS = ("column", "value", "unit", "quantity")
+
+
+@dataclass(frozen=True)
+class Channel:
+    """One model channel and where it comes from.
+
+    Attributes
+    ----------
+    name : str
+        Channel name used by models (``"Ti"``, ``"Tf"``...).
+    column : str or None
+        Source column (wide log) or point name (long log); None for a constant.
+    value : float or None
+        Constant value in ``unit`` when there is no column.
+    unit : str
+        Declared unit (canonical spelling).
+    quantity : str
+        ``"temperature"``, ``"flow"`` or ``"power"``.
+    role : str
+        Plausibility role, a key of :data:`rczone.data.units.PLAUSIBLE`.
+    """
+
+    name: str
+    column: str | None
+    value: float | None
+    unit: str
+    quantity: str
+    role: str
+
+
+@dataclass(frozen=True)
+class ColumnMap:
+    """Validated column map (see the module docstring for the TOML format)."""
+
+    channels: tuple[Channel, ...]
+    surroundings: tuple[str, ...] = ()
+    time_column: str = "time"
+    time_format: str = "auto"
+    timezone: str = "UTC"
+    ambiguous: str = "infer"
+    nonexistent: str = "raise"
+    long_point: str | None = None
+    long_value: str | None = None
+    air_density: float = DEFAULT_AIR_DENSITY
+    step: float | None = None
+    max_gap: float | None = None
+    hold_max_gap: float | None = None
+    night_start: str = "18:00"
+    night_end: str = "06:00"
+    na_values: tuple[str, ...] = ()
+    min_samples: int = 2
+    name: str = ""
+    source: str = field(default="<defaults>", compare=False)
+
+    @property
+    def is_long(self) -> bool:
+        """True for a long log (one row per point and time stamp)."""
+        return self.long_point is not None
+
+    @property
+    def channel_names(self) -> tuple[str, ...]:
+        """Names of the mapped channels, in order."""
+        return tuple(c.name for c in self.channels)
+
+    def channel(self, name: str) -> Channel:
+        """The channel called ``name``."""
+        for c in self.channels:
+            if c.name == name:
+                return c
+        raise DataError(f"no channel {name!r} in the column map; {did_you_mean(name, self.channel_names)}")
+
+
+def read_column_map(path: str | Path) -> ColumnMap:
+    """Read and validate a TOML column map.
+
+    Raises
+    ------
+    FileNotFoundError
+        If the file does not exist.
+    DataError
+        For invalid TOML or any invalid setting (the message names the key).
+    """
+    path = Path(path)
+    with path.open("rb") as fh:
+        try:
+            doc = tomllib.load(fh)
+        except tomllib.TOMLDecodeError as exc:
+            raise DataError(f"column map {path}: invalid TOML: {exc}") from None
+    return parse_column_map(doc, source=str(path))
+
+
+def _check_keys(table: Mapping, allowed: Sequence[str], where: str, source: str) -> None:
+    if not isinstance(table, Mapping):
+        raise DataError(f"column map {source}: {where} must be a table, got {type(table).__name__}")
+    for key in table:
+        if key not in allowed:
+            raise DataError(
+                f"column map {source}: unknown key {key!r} in {where}; {did_you_mean(key, allowed)}"
+                f" (allowed: {', '.join(allowed)})"
+            )
+
+
+def _number(value, what: str, source: str, positive: bool = True) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise DataError(f"column map {source}: {what} must be a number, got {value!r}")
+    if positive and value <= 0:
+        raise DataError(f"column map {source}: {what} must be > 0, got {value!r}")
+    return float(value)
+
+
+def _text(value, what: str, source: str) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise DataError(f"column map {source}: {what} must be a non-empty string, got {value!r}")
+    return value
+
+
+def _choice(value, choices: Sequence[str], what: str, source: str) -> str:
+    value = _text(value, what, source)
+    if value not in choices:
+        hint = did_you_mean(value, choices)
+        hint = f"; {hint}" if hint.startswith("did you mean") else ""
+        raise DataError(f"column map {source}: {what} = {value!r} is not one of {', '.join(choices)}{hint}")
+    return value
+
+
+def check_timezone(tz: str, source: str = "<defaults>") -> str:
+    """Return ``tz`` if it is a known IANA time zone, else raise :class:`DataError`."""
+    tz = _text(tz, "[time] timezone", source)
+    try:
+        zoneinfo.ZoneInfo(tz)
+    except (zoneinfo.ZoneInfoNotFoundError, ValueError):
+        raise DataError(
+            f"column map {source}: unknown time zone {tz!r}; "
+            f"{did_you_mean(tz, zoneinfo.available_timezones())} (use an IANA name such as"
+            " 'America/New_York', or 'Etc/GMT+5' for a fixed UTC-5)"
+        ) from None
+    return tz
+
+
+_CLOCK = re.compile(r"^([01]?\d|2[0-3]):([0-5]\d)$")
+
+
+def check_clock(text: str, what: str, source: str = "<defaults>") -> str:
+    """Return ``text`` if it is a local clock time ``"HH:MM"``, else raise :class:`DataError`."""
+    if not isinstance(text, str) or not _CLOCK.match(text.strip()):
+        raise DataError(f"column map {source}: {what} must be a clock time 'HH:MM', got {text!r}")
+    return text.strip()
+
+
+def _channel(name: str, spec, source: str, where: str, surrounding: bool) -> Channel:
+    if surrounding:
+        quantity, role = "temperature", "room"
+    else:
+        quantity, role = KNOWN_CHANNELS.get(name, (None, None))
+    if isinstance(spec, str):
+        spec = {"column": spec}
+    _check_keys(spec, _CHANNEL_KEYS, f"{where}.{name}", source)
+    if "quantity" in spec:
+        q = _choice(spec["quantity"], tuple(SI_UNITS), f"{where}.{name}.quantity", source)
+        if quantity is not None and q != quantity:
+            raise DataError(f"column map {source}: {where}.{name} is a {quantity}, not a {q}")
+        quantity, role = q, role or _ROLE_OF_QUANTITY[q]
+    if quantity is None:
+        raise DataError(
+            f"column map {source}: unknown channel {name!r} in {where};"
+            f" {did_you_mean(name, KNOWN_CHANNELS)} (a new channel needs"
+            ' quantity = "temperature" | "flow" | "power")'
+        )
+    has_col, has_val = "column" in spec, "value" in spec
+    if has_col == has_val:
+        raise DataError(f"column map {source}: {where}.{name} needs exactly one of 'column' or 'value'")
+    column = _text(spec["column"], f"{where}.{name}.column", source) if has_col else None
+    value = _number(spec["value"], f"{where}.{name}.value", source, positive=False) if has_val else None
+    unit = spec.get("unit", SI_UNITS[quantity])
+    unit = canonical_unit(_text(unit, f"{where}.{name}.unit", source), quantity, column or name)
+    return Channel(name, column, value, unit, quantity, role)
+
+
+def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
+    """Validate a parsed TOML document (a dict) and build a :class:`ColumnMap`.
+
+    Raises
+    ------
+    DataError
+        Naming the offending key, with a suggestion for a misspelt one.
+    """
+    _check_keys(doc, _TOP_KEYS, "the top level", source)
+    for sec, keys in _SECTION_KEYS.items():
+        _check_keys(doc.get(sec, {}), keys, f"[{sec}]", source)
+    if "columns" not in doc:
+        raise DataError(f"column map {source}: missing the [columns] table naming the channels")
+    cols = doc["columns"]
+    _check_keys(cols, list(cols), "[columns]", source)
+    surr = doc.get("surroundings", {})
+    _check_keys(surr, list(surr), "[surroundings]", source)
+    channels = [_channel(n, s, source, "[columns]", False) for n, s in cols.items()]
+    if not channels:
+        raise DataError(f"column map {source}: [columns] is empty; map at least 'Ti'")
+    for n in surr:
+        if n in cols:
+            raise DataError(f"column map {source}: channel {n!r} is in both [columns] and [surroundings]")
+    if surr and "Tsd" in cols:
+        raise DataError(
+            f"column map {source}: give either Tsd in [columns] or a [surroundings] table (Tsd is"
+            " then their mean), not both"
+        )
+    if "Tsd" in surr:
+        raise DataError(f"column map {source}: 'Tsd' cannot be a surrounding; it is their mean")
+    channels += [_channel(n, s, source, "[surroundings]", True) for n, s in surr.items()]
+
+    time = doc.get("time", {})
+    long = doc.get("long", {})
+    if bool(long) and set(long) != {"point", "value"}:
+        raise DataError(f"column map {source}: [long] needs both 'point' and 'value'")
+    res = doc.get("resample", {})
+    night = doc.get("night", {})
+    na = doc.get("na_values", [])
+    if not isinstance(na, list) or not all(isinstance(v, str) for v in na):
+        raise DataError(f"column map {source}: na_values must be a list of strings, got {na!r}")
+    min_samples = doc.get("min_samples", 2)
+    if isinstance(min_samples, bool) or not isinstance(min_samples, int) or min_samples < 2:
+        raise DataError(f"column map {source}: min_samples must be an integer >= 2, got {min_samples!r}")
+    max_gap = _number(res["max_gap"], "[resample] max_gap", source) if "max_gap" in res else None
+    return ColumnMap(
+        channels=tuple(channels),
+        surroundings=tuple(surr),
+        time_column=_text(time.get("column", "time"), "[time] column", source),
+        time_format=_choice(time.get("format", "auto"), TIME_FORMATS, "[time] format", source),
+        timezone=check_timezone(time.get("timezone", "UTC"), source),
+        ambiguous=_choice(time.get("ambiguous", "infer"), AMBIGUOUS, "[time] ambiguous", source),
+        nonexistent=_choice(time.get("nonexistent", "raise"), NONEXISTENT, "[time] nonexistent", source),
+        long_point=_text(long["point"], "[long] point", source) if long else None,
+        long_value=_text(long["value"], "[long] value", source) if long else None,
+        air_density=_number(doc.get("air_density", DEFAULT_AIR_DENSITY), "air_density", source),
+        step=_number(res["step"], "[resample] step", source) if "step" in res else None,
+        max_gap=max_gap,
+        hold_max_gap=(
+            _number(res["hold_max_gap"], "[resample] hold_max_gap", source) if "hold_max_gap" in res else None
+        ),
+        night_start=check_clock(night.get("start", "18:00"), "[night] start", source),
+        night_end=check_clock(night.get("end", "06:00"), "[night] end", source),
+        na_values=tuple(na),
+        min_samples=min_samples,
+        name=str(doc.get("name", "")),
+        source=source,
+    )
+
+
+def default_column_map(columns: Sequence[str], source: str = "<data>") -> ColumnMap:
+    """The map used when none is given (the CLI's default layout).
+
+    Columns ``time`` (seconds or ISO 8601), ``Ti``, ``To``, ``Ts``, ``m`` (kg/s), ``Q``
+    (W), and either ``Tsd`` or the five ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw``, all
+    temperatures in degC. When ``Tsd`` is present it is used as is and any of the five
+    also present are loaded as plain channels; otherwise Tsd is the mean of the five.
+
+    Raises
+    ------
+    DataError
+        Naming every missing column, with close names from ``columns``.
+    """
+    present = [str(c) for c in columns]
+    required = ["time", "Ti", "To", "Ts", "m", "Q"]
+    if "Tsd" in present:
+        required.append("Tsd")
+    else:
+        required += [s for s in DEFAULT_SURROUNDINGS]
+    missing = [c for c in required if c not in present]
+    if missing:
+        hints = "; ".join(f"{c!r}: {did_you_mean(c, present)}" for c in missing)
+        raise DataError(
+            f"{source}: missing column(s) {', '.join(repr(c) for c in missing)} of the default layout"
+            f" ({hints}); rename them or give a column map"
+        )
+    channels = [
+        Channel(n, n, None, SI_UNITS[q], q, r) for n, (q, r) in KNOWN_CHANNELS.items() if n in present
+    ]
+    if "Tsd" in present:
+        extra = [
+            Channel(n, n, None, "degC", "temperature", "room") for n in DEFAULT_SURROUNDINGS if n in present
+        ]
+        return ColumnMap(channels=tuple(channels + extra), source=source)
+    surround = [Channel(n, n, None, "degC", "temperature", "room") for n in DEFAULT_SURROUNDINGS]
+    return ColumnMap(channels=tuple(channels + surround), surroundings=DEFAULT_SURROUNDINGS, source=source)

@@ -1,0 +1,370 @@
+"""Load building trend logs (CSV or Parquet, wide or long) into :class:`ZoneData`.
+
+The pipeline, each step documented in its own module:
+
+1. read the table (:func:`read_table`): ``.csv``/``.csv.gz``/``.txt`` (comma separated),
+   ``.tsv`` (tab separated), ``.parquet``/``.pq``;
+2. pick the column map (:mod:`rczone.data.columnmap`; without one, the default layout);
+3. time stamps to UTC epoch seconds with explicit daylight-saving policies
+   (:mod:`rczone.data.timestamps`);
+4. wide logs: rows must be strictly increasing in time (duplicates and steps back are
+   errors naming the rows). Long logs (one row per point and time stamp): rows may come
+   in any order, a repeated (point, time) pair is an error, and the points are pivoted
+   onto the union of their time stamps;
+5. every value must be a number (or empty / one of ``na_values``); each channel is
+   converted to SI and checked for plausibility (:mod:`rczone.data.units`); a channel
+   that is entirely empty is an error;
+6. optional resampling onto a uniform grid -- linear for temperatures and heat, hold
+   for flows, NaN across gaps longer than ``max_gap`` (:mod:`rczone.data.resample`).
+   Unless the map sets it, a channel's ``max_gap`` is the larger of 1800 s and three
+   times the median step between its own samples, so an hourly log is not all gaps while
+   a 1-min log still breaks at a half-hour outage;
+7. ``Tsd`` = the mean of the surroundings at each time (NaN if any of them is missing:
+   a mean over fewer rooms would be a different input);
+8. gaps are listed, and suspicious findings (gaps, flat temperatures, irregular
+   sampling, dropped DST rows) become :class:`RczoneWarning` warnings
+   (:mod:`rczone.data.quality`).
+
+Every problem in the data raises :class:`~rczone.errors.DataError` with one line naming
+the column, row or key and what was expected -- never a traceback from pandas.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from rczone.data.columnmap import DEFAULT_MAX_GAP, ColumnMap, default_column_map, read_column_map
+from rczone.data.quality import FLAT_SECONDS, RczoneWarning, find_gaps, longest_flat_run
+from rczone.data.resample import hold_previous, interpolate_linear, uniform_grid
+from rczone.data.timestamps import parse_times, rows_text, to_local
+from rczone.data.units import SI_UNITS, check_plausible, to_si
+from rczone.data.zonedata import ZoneData
+from rczone.errors import DataError, did_you_mean
+
+CSV_SUFFIXES = (".csv", ".csv.gz", ".txt", ".tsv")
+PARQUET_SUFFIXES = (".parquet", ".pq")
+
+
+def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFrame:
+    """Read a CSV or Parquet trend log into a DataFrame, turning reader failures into DataError."""
+    path = Path(path)
+    name = path.name.lower()
+    if not path.exists():
+        raise FileNotFoundError(2, "No such file", str(path))
+    try:
+        if name.endswith(PARQUET_SUFFIXES):
+            return pd.read_parquet(path)
+        if name.endswith(CSV_SUFFIXES):
+            sep = "\t" if name.endswith(".tsv") else ","
+            return pd.read_csv(path, sep=sep, na_values=list(na_values) or None)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError, ValueError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise DataError(f"{path}: cannot read the table: {first}") from None
+    raise DataError(
+        f"{path}: unknown file type; expected one of {', '.join(CSV_SUFFIXES + PARQUET_SUFFIXES)}"
+    )
+
+
+def load_zone_data(
+    path: str | Path,
+    column_map: ColumnMap | str | Path | None = None,
+    *,
+    flat_seconds: float = FLAT_SECONDS,
+) -> ZoneData:
+    """Load a trend log file into SI arrays.
+
+    Parameters
+    ----------
+    path : str or Path
+        CSV or Parquet file.
+    column_map : ColumnMap, path to a TOML file, or None
+        None uses the default layout (:func:`~rczone.data.columnmap.default_column_map`).
+    flat_seconds : float
+        A temperature exactly constant for longer than this (s) is reported as flat.
+
+    Returns
+    -------
+    ZoneData
+
+    Raises
+    ------
+    DataError
+        For any data problem, with one line saying what and where.
+    FileNotFoundError
+        If ``path`` (or the map file) does not exist.
+    """
+    cmap = read_column_map(column_map) if isinstance(column_map, str | Path) else column_map
+    frame = read_table(path, cmap.na_values if cmap is not None else ())
+    return zone_data_from_frame(frame, cmap, source=Path(path).name, flat_seconds=flat_seconds)
+
+
+def _require(columns: list[str], needed: str, what: str, source: str) -> None:
+    if needed not in columns:
+        raise DataError(f"{source}: no {what} {needed!r}; {did_you_mean(needed, columns)}")
+
+
+def _numbers(raw: pd.Series, column: str, rows: np.ndarray, source: str) -> np.ndarray:
+    """Column as float; a non-empty entry that is not a number is an error naming its row."""
+    if pd.api.types.is_bool_dtype(raw.dtype):
+        raise DataError(f"{source}: column {column!r} holds true/false values, expected numbers")
+    x = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
+    bad = np.flatnonzero(np.isnan(x) & raw.notna().to_numpy())
+    if bad.size:
+        raise DataError(
+            f"{source}: column {column!r} has a non-numeric value {raw.iloc[bad[0]]!r} at"
+            f" {rows_text(rows[bad])}; clean it or list it in na_values of the column map"
+        )
+    return x
+
+
+def _check_order(t: np.ndarray, rows: np.ndarray, where: str, source: str) -> None:
+    dt = np.diff(t)
+    bad = np.flatnonzero(dt <= 0)
+    if not bad.size:
+        return
+    k = int(bad[0])
+    a, b = int(rows[k]) + 1, int(rows[k + 1]) + 1
+    stamp = pd.Timestamp(t[k + 1], unit="s", tz="UTC").isoformat()
+    if dt[k] == 0:
+        n = int(np.sum(dt == 0))
+        raise DataError(
+            f"{source}: duplicate time stamp {stamp} in {where} at data rows {a} and {b}"
+            f" ({n} duplicate(s) in all); remove repeated rows"
+        )
+    raise DataError(
+        f"{source}: time stamps in {where} go backwards at data row {b} ({stamp} follows"
+        f" {pd.Timestamp(t[k], unit='s', tz='UTC').isoformat()} at data row {a});"
+        " sort the log by time"
+    )
+
+
+def _samples_wide(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list[str]):
+    cols = [str(c) for c in frame.columns]
+    _require(cols, cmap.time_column, "time column", source)
+    for ch in cmap.channels:
+        if ch.column is not None:
+            _require(cols, ch.column, f"column for channel {ch.name!r}", source)
+    t, keep, dropped = parse_times(
+        frame[cmap.time_column],
+        fmt=cmap.time_format,
+        tz=cmap.timezone,
+        ambiguous=cmap.ambiguous,
+        nonexistent=cmap.nonexistent,
+        column=cmap.time_column,
+    )
+    notes += dropped
+    rows = np.flatnonzero(keep)
+    _check_order(t, rows, f"column {cmap.time_column!r}", source)
+    kept = frame.iloc[rows]
+    samples = {}
+    for ch in cmap.channels:
+        if ch.column is not None:
+            samples[ch.name] = (t, _numbers(kept[ch.column], ch.column, rows, source), rows)
+    return t, samples
+
+
+def _samples_long(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list[str]):
+    cols = [str(c) for c in frame.columns]
+    for needed, what in (
+        (cmap.time_column, "time column"),
+        (cmap.long_point, "point-name column"),
+        (cmap.long_value, "value column"),
+    ):
+        _require(cols, needed, what, source)
+    points = frame[cmap.long_point].astype("string")
+    present = [str(p) for p in points.dropna().unique()]
+    wanted = {ch.column for ch in cmap.channels if ch.column is not None}
+    for ch in cmap.channels:
+        if ch.column is not None and ch.column not in present:
+            raise DataError(
+                f"{source}: no point {ch.column!r} (channel {ch.name!r}) in column {cmap.long_point!r};"
+                f" {did_you_mean(ch.column, present)}"
+            )
+    rows = np.flatnonzero(points.isin(wanted).fillna(False).to_numpy())
+    sub = frame.iloc[rows]
+    t, keep, dropped = parse_times(
+        sub[cmap.time_column],
+        fmt=cmap.time_format,
+        tz=cmap.timezone,
+        ambiguous=cmap.ambiguous,
+        nonexistent=cmap.nonexistent,
+        groups=sub[cmap.long_point].astype(str).to_numpy(),
+        column=cmap.time_column,
+    )
+    notes += dropped
+    rows = rows[keep]
+    sub = frame.iloc[rows]
+    values = _numbers(sub[cmap.long_value], cmap.long_value, rows, source)
+    pts = sub[cmap.long_point].astype(str).to_numpy()
+    by_point = {}
+    for p in wanted:
+        sel = np.flatnonzero(pts == p)
+        order = np.argsort(t[sel], kind="stable")
+        sel = sel[order]
+        _check_order(t[sel], rows[sel], f"column {cmap.time_column!r} for point {p!r}", source)
+        by_point[p] = (t[sel], values[sel], rows[sel])
+    axis = np.unique(t)
+    samples = {ch.name: by_point[ch.column] for ch in cmap.channels if ch.column is not None}
+    return axis, samples
+
+
+def _on_axis(axis: np.ndarray, t: np.ndarray, x: np.ndarray) -> np.ndarray:
+    out = np.full(axis.shape, np.nan)
+    out[np.searchsorted(axis, t)] = x
+    return out
+
+
+def _gap_limit(explicit: float | None, t: np.ndarray, x: np.ndarray) -> float:
+    """The map's max_gap, else max(1800 s, 3 x median step between the channel's finite samples)."""
+    if explicit is not None:
+        return explicit
+    tf = t[np.isfinite(x)]
+    typical = float(np.median(np.diff(tf))) if tf.size > 1 else 0.0
+    return max(DEFAULT_MAX_GAP, 3.0 * typical)
+
+
+def _warn(message: str, collected: list[str]) -> None:
+    collected.append(message)
+    warnings.warn(message, RczoneWarning, stacklevel=4)
+
+
+def _hours(seconds: float) -> str:
+    return f"{seconds / 3600:.3g} h"
+
+
+def zone_data_from_frame(
+    frame: pd.DataFrame,
+    column_map: ColumnMap | None = None,
+    *,
+    source: str = "<frame>",
+    flat_seconds: float = FLAT_SECONDS,
+) -> ZoneData:
+    """Build :class:`ZoneData` from a table already in memory (same rules as :func:`load_zone_data`)."""
+    cmap = column_map if column_map is not None else default_column_map(list(frame.columns), source)
+    if not isinstance(cmap, ColumnMap):
+        raise DataError(f"column_map must be a ColumnMap, a TOML path or None, got {type(cmap).__name__}")
+    if len(frame) == 0:
+        raise DataError(f"{source}: the table has no data rows")
+    if all(ch.column is None for ch in cmap.channels):
+        raise DataError(f"{source}: the column map gives only constants; map at least one column (e.g. Ti)")
+    notes: list[str] = []
+    if cmap.is_long:
+        axis, samples = _samples_long(frame, cmap, source, notes)
+    else:
+        axis, samples = _samples_wide(frame, cmap, source, notes)
+
+    collected: list[str] = []
+    for n in notes:
+        _warn(f"{source}: {n}", collected)
+
+    # Convert to SI and check each channel on its own samples (rows are the file's rows).
+    si_samples = {}
+    for ch in cmap.channels:
+        if ch.column is None:
+            continue
+        t_c, raw, rows = samples[ch.name]
+        if not np.isfinite(raw).any():
+            raise DataError(
+                f"{source}: column {ch.column!r} (channel {ch.name!r}) has no values (all empty/NaN)"
+            )
+        si = to_si(raw, ch.unit, ch.quantity, ch.column, cmap.air_density)
+        check_plausible(si, raw, ch.role, ch.unit, ch.column, cmap.air_density, rows)
+        si_samples[ch.name] = (t_c, si)
+
+    if cmap.step is not None:
+        t_out = uniform_grid(float(axis[0]), float(axis[-1]), cmap.step)
+    else:
+        t_out = axis
+    limits: dict[str, float] = {}
+    columns: dict[str, np.ndarray] = {}
+    for ch in cmap.channels:
+        if ch.column is None:
+            value = to_si([ch.value], ch.unit, ch.quantity, ch.name, cmap.air_density)
+            check_plausible(value, np.array([ch.value]), ch.role, ch.unit, ch.name, cmap.air_density)
+            columns[ch.name] = np.full(t_out.shape, value[0])
+            limits[ch.name] = np.inf
+            continue
+        t_c, si = si_samples[ch.name]
+        explicit = (
+            cmap.hold_max_gap if ch.quantity == "flow" and cmap.hold_max_gap is not None else cmap.max_gap
+        )
+        limits[ch.name] = limit = _gap_limit(explicit, t_c, si)
+        if cmap.step is None:
+            columns[ch.name] = _on_axis(t_out, t_c, si)
+        elif ch.quantity == "flow":
+            columns[ch.name] = hold_previous(t_c, si, t_out, limit)
+        else:
+            columns[ch.name] = interpolate_linear(t_c, si, t_out, limit)
+    quantities = {ch.name: ch.quantity for ch in cmap.channels}
+    units = {ch.name: SI_UNITS[ch.quantity] for ch in cmap.channels}
+    source_units = {ch.name: ch.unit for ch in cmap.channels}
+    if cmap.surroundings:
+        columns["Tsd"] = np.mean(np.column_stack([columns[s] for s in cmap.surroundings]), axis=1)
+        limits["Tsd"] = min(limits[s] for s in cmap.surroundings)
+        quantities["Tsd"], units["Tsd"], source_units["Tsd"] = "temperature", "degC", "derived"
+
+    if t_out.size < cmap.min_samples:
+        raise DataError(
+            f"{source}: only {t_out.size} sample(s) after loading, at least {cmap.min_samples} needed"
+            + (f" (resampling step {cmap.step:g} s)" if cmap.step is not None else "")
+        )
+
+    # Findings that do not stop loading.
+    finite_limits = [v for v in limits.values() if np.isfinite(v)]
+    if cmap.step is None and t_out.size > 2 and finite_limits:
+        dt = np.diff(t_out)
+        dt = dt[dt <= min(finite_limits)]  # longer steps are reported as gaps below
+        if dt.size and np.ptp(dt) > 1e-9 * dt.max():
+            _warn(
+                f"{source}: sampling is irregular (time steps from {dt.min():g} s to {dt.max():g} s);"
+                " set [resample] step in the column map for a uniform grid",
+                collected,
+            )
+    gaps = []
+    for name, x in columns.items():
+        if not np.isfinite(limits[name]):
+            continue  # a constant has no gaps
+        found = find_gaps(t_out, x, name, limits[name])
+        gaps += found
+        if found:
+            worst = max(found, key=lambda g: g.duration)
+            when = to_local(np.array([worst.start, worst.end]), cmap.timezone)
+            _warn(
+                f"{source}: channel {name!r} has {len(found)} gap(s), longest {_hours(worst.duration)}"
+                f" from {when[0].isoformat()} to {when[1].isoformat()}",
+                collected,
+            )
+    for ch in cmap.channels:
+        if ch.quantity != "temperature" or ch.column is None:
+            continue
+        dur, a, _ = longest_flat_run(t_out, columns[ch.name])
+        if dur > flat_seconds:
+            when = to_local(np.array([a]), cmap.timezone)[0].isoformat()
+            _warn(
+                f"{source}: channel {ch.name!r} (column {ch.column!r}) stays exactly at"
+                f" {columns[ch.name][np.searchsorted(t_out, a)]:g} degC for {_hours(dur)} from {when};"
+                " stuck sensor?",
+                collected,
+            )
+
+    names = tuple(columns)
+    return ZoneData(
+        t=t_out,
+        values=np.column_stack([columns[n] for n in names]) if names else np.empty((t_out.size, 0)),
+        channels=names,
+        units=units,
+        source_units=source_units,
+        quantities=quantities,
+        source=cmap.name or source,
+        timezone=cmap.timezone,
+        night=(cmap.night_start, cmap.night_end),
+        step=cmap.step,
+        max_gaps=limits,
+        surroundings=cmap.surroundings,
+        gaps=tuple(sorted(gaps, key=lambda g: (g.start, g.channel))),
+        warnings=tuple(collected),
+    )

@@ -1,0 +1,238 @@
+"""Unit conversion to SI at the data boundary, and plausibility checks after conversion.
+
+Every measured channel is converted once, when it is loaded, to the units used inside
+rczone:
+
+=============  =========================================  ==========
+quantity       accepted units (aliases in brackets)       SI inside
+=============  =========================================  ==========
+temperature    degC [C, °C, celsius], degF [F, °F,        degC
+               fahrenheit], K [kelvin]
+flow           kg/s, m3/s [m^3/s], m3/h [m^3/h], L/s      kg/s
+               [l/s], cfm [ft3/min]
+power          W, kW, Btu/h [BTU/h]                       W
+=============  =========================================  ==========
+
+Temperatures are kept in degrees Celsius rather than kelvin. The RC equations are affine
+in the temperatures (only differences of temperatures and the product m*cp*(Ts - Ti)
+appear), so a constant offset between the two scales cancels and the fitted R and C are
+the same in degC and K; degC keeps the numbers readable for building engineers.
+
+Volume flows are turned into mass flows with an air density ``rho`` (kg/m3, default
+:data:`DEFAULT_AIR_DENSITY` = 1.2, air at about 20 degC and sea level), which the column
+map can override. Exact definitions are used: 1 ft = 0.3048 m, 1 Btu_IT/h = 0.29307107 W.
+
+After conversion each channel is checked against a plausible range for its *role*
+(:data:`PLAUSIBLE`): a room temperature outside [-30, 60] degC, a negative flow, or a
+zone flow above 20 kg/s almost always means a wrong declared unit, so it is an error,
+and the message says which other unit would have made the values plausible.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rczone.errors import DataError, did_you_mean
+
+DEFAULT_AIR_DENSITY = 1.2
+"""Air density (kg/m3) used to turn volume flows into mass flows unless configured."""
+
+FOOT = 0.3048
+"""One international foot in metres (exact)."""
+
+BTU_PER_HOUR = 0.29307107
+"""One Btu_IT per hour in watts."""
+
+SI_UNITS = {"temperature": "degC", "flow": "kg/s", "power": "W"}
+"""The unit each quantity has inside rczone."""
+
+_ALIASES = {
+    "temperature": {
+        "degC": ("degc", "c", "°c", "celsius", "deg c", "degrees c"),
+        "degF": ("degf", "f", "°f", "fahrenheit", "deg f", "degrees f"),
+        "K": ("k", "kelvin"),
+    },
+    "flow": {
+        "kg/s": ("kg/s",),
+        "m3/s": ("m3/s", "m^3/s", "m³/s"),
+        "m3/h": ("m3/h", "m^3/h", "m³/h"),
+        "L/s": ("l/s",),
+        "cfm": ("cfm", "ft3/min", "ft^3/min"),
+    },
+    "power": {
+        "W": ("w",),
+        "kW": ("kw",),
+        "Btu/h": ("btu/h", "btuh", "btu/hr"),
+    },
+}
+
+# Volume-flow units: cubic metres per second per unit.
+_VOLUME_M3S = {"m3/s": 1.0, "m3/h": 1.0 / 3600.0, "L/s": 1e-3, "cfm": FOOT**3 / 60.0}
+_POWER_W = {"W": 1.0, "kW": 1e3, "Btu/h": BTU_PER_HOUR}
+
+
+@dataclass(frozen=True)
+class Plausible:
+    """Plausible range of one role of channel, in SI units.
+
+    Attributes
+    ----------
+    label : str
+        What the channel is, for messages (``"room temperature"``).
+    quantity : str
+        ``"temperature"``, ``"flow"`` or ``"power"``.
+    low, high : float
+        Inclusive bounds in SI units (degC, kg/s, W).
+    """
+
+    label: str
+    quantity: str
+    low: float
+    high: float
+
+
+PLAUSIBLE = {
+    "room": Plausible("room temperature", "temperature", -30.0, 60.0),
+    "outdoor": Plausible("outdoor temperature", "temperature", -60.0, 60.0),
+    "supply": Plausible("supply-air temperature", "temperature", -30.0, 60.0),
+    "flow": Plausible("zone air mass flow", "flow", 0.0, 20.0),
+    "power": Plausible("heat input", "power", -1e6, 1e6),
+    "temperature": Plausible("temperature", "temperature", -60.0, 100.0),
+}
+"""Plausible ranges by role. ``"temperature"`` is the loose default for other temperatures."""
+
+
+def known_units(quantity: str) -> tuple[str, ...]:
+    """Canonical unit names accepted for ``quantity``."""
+    if quantity not in _ALIASES:
+        raise DataError(f"unknown quantity {quantity!r}; {did_you_mean(quantity, _ALIASES)}")
+    return tuple(_ALIASES[quantity])
+
+
+def canonical_unit(unit: str, quantity: str, column: str) -> str:
+    """Return the canonical spelling of ``unit`` for ``quantity``.
+
+    Raises
+    ------
+    DataError
+        If the unit is not known for the quantity; the message names the column, lists
+        the known units and suggests close ones.
+    """
+    known = known_units(quantity)
+    key = str(unit).strip().lower()
+    for canon, aliases in _ALIASES[quantity].items():
+        if key == canon.lower() or key in aliases:
+            return canon
+    spellings = list(known) + [a for al in _ALIASES[quantity].values() for a in al]
+    hint = did_you_mean(str(unit), spellings)
+    hint = "" if hint.startswith("known names") else f"; {hint}"
+    raise DataError(
+        f"column {column!r}: unknown {quantity} unit {unit!r}; known units: {', '.join(known)}{hint}"
+    )
+
+
+def to_si(
+    values: np.ndarray,
+    unit: str,
+    quantity: str,
+    column: str = "?",
+    air_density: float = DEFAULT_AIR_DENSITY,
+) -> np.ndarray:
+    """Convert ``values`` given in ``unit`` to the SI unit of ``quantity``.
+
+    Parameters
+    ----------
+    values : array_like
+        Raw values; NaN stays NaN.
+    unit : str
+        Declared unit (any accepted spelling).
+    quantity : str
+        ``"temperature"`` (to degC), ``"flow"`` (to kg/s) or ``"power"`` (to W).
+    column : str
+        Source column name, used in error messages.
+    air_density : float
+        kg/m3, used only for volume flows.
+
+    Returns
+    -------
+    ndarray of float
+        A new array in SI units.
+    """
+    x = np.array(values, dtype=float)
+    canon = canonical_unit(unit, quantity, column)
+    if quantity == "temperature":
+        if canon == "degF":
+            return (x - 32.0) * (5.0 / 9.0)
+        if canon == "K":
+            return x - 273.15
+        return x
+    if quantity == "flow":
+        if canon == "kg/s":
+            return x
+        if not (np.isfinite(air_density) and air_density > 0):
+            raise DataError(f"air_density must be a positive number of kg/m3, got {air_density!r}")
+        return x * (_VOLUME_M3S[canon] * air_density)
+    return x * _POWER_W[canon]
+
+
+def check_plausible(
+    si_values: np.ndarray,
+    raw_values: np.ndarray,
+    role: str,
+    unit: str,
+    column: str,
+    air_density: float = DEFAULT_AIR_DENSITY,
+    rows: np.ndarray | None = None,
+) -> None:
+    """Raise :class:`DataError` if converted values fall outside the role's plausible range.
+
+    Parameters
+    ----------
+    si_values : ndarray
+        Values after conversion to SI.
+    raw_values : ndarray
+        The same values as read (used to test which other unit would fit).
+    role : str
+        A key of :data:`PLAUSIBLE`.
+    unit : str
+        The declared unit.
+    column : str
+        Source column (for the message).
+    air_density : float
+        kg/m3, to test alternative volume-flow units.
+    rows : ndarray of int, optional
+        0-based data-row number of each value, for the message (default: position).
+    """
+    rng = PLAUSIBLE[role]
+    si = np.asarray(si_values, dtype=float)
+    finite = np.isfinite(si)
+    bad = finite & ((si < rng.low) | (si > rng.high))
+    if not bad.any():
+        return
+    where = np.flatnonzero(bad)
+    first = int(where[0])
+    row = int(rows[first]) if rows is not None else first
+    si_unit = SI_UNITS[rng.quantity]
+    what = (
+        f"column {column!r} ({rng.label}, declared {unit!r}): {where.size} value(s) outside the plausible"
+        f" range [{rng.low:g}, {rng.high:g}] {si_unit} after conversion"
+        f" (first at data row {row + 1}: {float(np.asarray(raw_values, dtype=float)[first]):g} {unit})"
+    )
+    raw = np.asarray(raw_values, dtype=float)
+    fits = []
+    for other in known_units(rng.quantity):
+        if other == canonical_unit(unit, rng.quantity, column):
+            continue
+        alt = to_si(raw, other, rng.quantity, column, air_density)
+        vals = alt[np.isfinite(alt)]
+        if vals.size and np.all((vals >= rng.low) & (vals <= rng.high)):
+            fits.append(other)
+    if fits:
+        hint = f"the values look like {' or '.join(repr(f) for f in fits)}; declare that unit"
+    elif rng.quantity == "flow" and np.nanmin(si) < 0:
+        hint = "flows must be >= 0; check the sign convention or sensor offset"
+    else:
+        hint = "check the declared unit and the sensor"
+    raise DataError(f"{what}; {hint}")
