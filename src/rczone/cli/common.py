@@ -18,16 +18,16 @@ def read_frame(path: Path, column_map: Path | None = None) -> pd.DataFrame:
     ``m``, ``Q`` and ``Tsd`` or the five surroundings), or any trend log described by a TOML
     ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``).
     """
-    from rczone import datasets
+    from rczone.data import load_zone_data
 
-    if not path.exists() and str(path) in datasets.names():
-        return datasets.load(str(path))
     if not path.exists():
+        from rczone import datasets
+
+        if str(path) in datasets.names():
+            return datasets.load(str(path))
         raise DataError(
             f"data file {str(path)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
         )
-    from rczone.data import load_zone_data
-
     return load_zone_data(path, column_map).to_frame()
 
 
