@@ -52,11 +52,16 @@ def model_arrays(
             cols[name] = frame[name].to_numpy(float)
         else:
             raise DataError(
-                f"model {network.name!r} needs input {name!r}, not in the data; " + did_you_mean(name, frame.columns)
+                f"model {network.name!r} needs input {name!r}, not in the data; "
+                + did_you_mean(name, frame.columns)
             )
     t = frame["time"].to_numpy(float)
     u = np.column_stack([cols[n] for n in network.input_names])
-    m = np.column_stack([cols[n] for n in network.flow_names]) if network.flow_names else np.zeros((len(t), 0))
+    m = (
+        np.column_stack([cols[n] for n in network.flow_names])
+        if network.flow_names
+        else np.zeros((len(t), 0))
+    )
     return t, u, m
 
 
@@ -171,7 +176,9 @@ def compare_frequency(
     return FrequencyComparison(f, m, reference, gains, errors, {k: float(v) for k, v in du.items()})
 
 
-def input_variation(frames: Sequence[pd.DataFrame], inputs: Sequence[str] = ("Ts", "Tsd", "To")) -> dict[str, float]:
+def input_variation(
+    frames: Sequence[pd.DataFrame], inputs: Sequence[str] = ("Ts", "Tsd", "To")
+) -> dict[str, float]:
     """Largest variation of each input within any one data set, the paper's ``du`` (eq. 7).
 
     For ``Tsd``, when the frames hold the five surroundings, the largest range of any one of
