@@ -32,12 +32,13 @@ from rczone.errors import ParameterError
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import (
     FilterOutput,
-    input_drive,
     kalman_filter_arrays,
     kalman_nll_fast,
     stochastic_matrices,
 )
 from rczone.estimation.parameters import ParameterSpec
+from rczone.kernels.kalman import kalman_nll_rc2, rc2_applicable
+from rczone.kernels.propagate import propagate
 from rczone.network import BilinearStateSpace, RCNetwork
 from rczone.simulation.simulate import transition_matrices
 
@@ -79,7 +80,10 @@ def auto_initial_state(ss: BilinearStateSpace, u0: np.ndarray, m0: np.ndarray, y
     fixed = np.array(sorted(meas), dtype=int)
     free = np.array([i for i in range(ss.n_states) if i not in meas], dtype=int)
     x[fixed] = [y0[meas[i]] for i in fixed]
-    if free.size:
+    if free.size == 1:  # the common 2-state case, without the LAPACK call
+        f = free[0]
+        x[f] = -(B[f] @ u0 + A[f, fixed] @ x[fixed]) / A[f, f]
+    elif free.size:
         rhs = -(B[free] @ u0) - A[np.ix_(free, fixed)] @ x[fixed]
         x[free] = np.linalg.solve(A[np.ix_(free, free)], rhs)
     return x
@@ -116,29 +120,6 @@ def trapezoid_sse(t: np.ndarray, e: np.ndarray) -> float:
     return float(np.sum(seg[np.isfinite(seg)]))
 
 
-def _propagate_loop(Phi: np.ndarray, which: np.ndarray, drive: np.ndarray, x0: np.ndarray) -> np.ndarray:
-    """``x[k+1] = Phi[which[k]] x[k] + drive[k]`` with explicit loops (compiled by numba)."""
-    N, n = drive.shape[0] + 1, x0.shape[0]
-    x = np.empty((N, n))
-    x[0] = x0
-    for k in range(N - 1):
-        w = which[k]
-        for i in range(n):
-            acc = drive[k, i]
-            for j in range(n):
-                acc += Phi[w, i, j] * x[k, j]
-            x[k + 1, i] = acc
-    return x
-
-
-try:  # numba is a declared dependency; the loop stays usable without it
-    import numba
-
-    _propagate_compiled = numba.njit(cache=True)(_propagate_loop)
-except ImportError:  # pragma: no cover
-    _propagate_compiled = _propagate_loop
-
-
 def simulate_output(
     network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -146,10 +127,7 @@ def simulate_output(
     ss = network.state_space(network_theta(network, values))
     x0 = initial_state(ss, values, data)
     Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
-    drive = input_drive(G0, G1, which, data.u)
-    x = _propagate_compiled(
-        Phi, np.ascontiguousarray(which, dtype=np.int64), drive, np.asarray(x0, dtype=float)
-    )
+    x = propagate(Phi, G0, G1, which, data.u, x0)
     return x, x @ ss.C.T + data.u @ ss.D.T
 
 
@@ -159,9 +137,8 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     return trapezoid_sse(data.t, data.y - yhat)
 
 
-def filter_arrays(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> tuple:
-    """The argument tuple of :func:`~rczone.estimation.kalman.kalman_filter_arrays` for ``values``."""
-    ss = network.state_space(network_theta(network, values))
+def noise_values(ss: BilinearStateSpace, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(sigma_w, sigma_x0, sigma_v)`` from ``values``, validated."""
     s = ss.state_names
     try:
         sw = np.array([values[f"sigma_w_{n}"] for n in s])
@@ -172,6 +149,13 @@ def filter_arrays(network: RCNetwork, values: Mapping[str, float], data: Dataset
     for nm, v in (("sigma_v", [sv]), ("sigma_w_*", sw), ("sigma_x0_*", sx)):
         if np.any(np.asarray(v) < 0) or not np.all(np.isfinite(v)):
             raise ParameterError(f"{nm} must be finite and >= 0, got {v}")
+    return sw, sx, sv
+
+
+def filter_arrays(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> tuple:
+    """The argument tuple of :func:`~rczone.estimation.kalman.kalman_filter_arrays` for ``values``."""
+    ss = network.state_space(network_theta(network, values))
+    sw, sx, sv = noise_values(ss, values)
     x0 = initial_state(ss, values, data)
     Phi, G0, G1, Qd, which = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2), hold)
     ny = ss.C.shape[0]
@@ -186,8 +170,20 @@ def run_filter(
 
 
 def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> float:
-    """``J_ML = -log L`` including ``0.5 n log(2 pi)`` (compiled filter loop for one output)."""
-    return kalman_nll_fast(*filter_arrays(network, values, data, hold))
+    """``J_ML = -log L`` including ``0.5 n log(2 pi)``.
+
+    A 2-state RC model with one output runs the fused compiled kernel (exact closed-form
+    discretization + filter, :func:`rczone.kernels.kalman.kalman_nll_rc2`); other models the
+    compiled filter loop on :func:`stochastic_matrices`.
+    """
+    ss = network.state_space(network_theta(network, values))
+    if not rc2_applicable(ss, data.y.shape[1]):
+        return kalman_nll_fast(*filter_arrays(network, values, data, hold))
+    sw, sx, sv = noise_values(ss, values)
+    x0 = initial_state(ss, values, data)
+    return kalman_nll_rc2(
+        ss, data.t, data.m, data.u, data.y, x0, np.diag(sx**2), np.diag(sw**2), np.array([[sv**2]]), hold
+    )
 
 
 def log_prior_penalty(spec: ParameterSpec, theta: np.ndarray, spread: float = PRIOR_SPREAD) -> float:

@@ -37,7 +37,15 @@ from scipy.linalg import expm
 
 from rczone.errors import InputShapeError
 from rczone.network.statespace import BilinearStateSpace
-from rczone.simulation.discretize import foh, van_loan, zoh
+from rczone.simulation.discretize import (
+    foh,
+    spectral_decomposition,
+    spectral_noise_covariance,
+    spectral_transition,
+    symmetrizing_scale,
+    van_loan,
+    zoh,
+)
 from rczone.simulation.simulate import HOLDS
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
@@ -101,6 +109,15 @@ def stochastic_matrices(
     if hold not in HOLDS:
         raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
     uniq, which = np.unique(np.column_stack([np.diff(t), m[:-1]]), axis=0, return_inverse=True)
+    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+    if scale is not None:
+        # RC network: every matrix in closed form from one symmetric eigen-decomposition per key
+        A = ss.A + np.tensordot(uniq[:, 1:], ss.N, axes=1)
+        B = ss.B + np.tensordot(uniq[:, 1:], ss.M, axes=1)
+        lam, V = spectral_decomposition(A, scale)
+        Phi, G0, G1 = spectral_transition(lam, V, scale, B, uniq[:, 0], hold)
+        Qd = spectral_noise_covariance(lam, V, scale, np.asarray(Qc, dtype=float), uniq[:, 0])
+        return Phi, G0, G1, Qd, which.reshape(-1)
     n, p, K = ss.n_states, ss.n_inputs, uniq.shape[0]
     Phi = np.empty((K, n, n))
     G0 = np.empty((K, n, p))

@@ -9,6 +9,7 @@ checking names, signs and expressions on the way. It never mutates its inputs.
 from __future__ import annotations
 
 import ast
+import functools
 import math
 import operator
 from collections.abc import Mapping
@@ -118,6 +119,12 @@ def expression_names(expr: str) -> tuple[str, ...]:
     return tuple(dict.fromkeys(names))
 
 
+@functools.lru_cache(maxsize=1024)
+def _parsed(expr: str) -> ast.Expression:
+    """The syntax tree of ``expr`` (parsed once per distinct expression; trees are not mutated)."""
+    return ast.parse(expr, mode="eval")
+
+
 def _evaluate(expr: str, values: Mapping[str, float | complex]) -> float | complex:
     def ev(node: ast.AST) -> float | complex:
         if isinstance(node, ast.Expression):
@@ -133,7 +140,7 @@ def _evaluate(expr: str, values: Mapping[str, float | complex]) -> float | compl
         raise ParameterError(f"unsupported expression element in {expr!r}")  # pragma: no cover
 
     try:
-        return ev(ast.parse(expr, mode="eval"))
+        return ev(_parsed(expr))
     except ZeroDivisionError:
         raise ParameterError(f"parameter expression {expr!r} divides by zero") from None
 

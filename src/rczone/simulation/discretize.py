@@ -1,10 +1,16 @@
-"""Exact discretization of LTI state spaces through the matrix exponential.
+"""Exact discretization of LTI state spaces.
 
 * zero-order hold (inputs constant over a sample),
 * first-order hold (inputs linear between samples),
 * the discrete process-noise covariance of a continuous white-noise input (Van Loan).
 
-All functions are pure over arrays.
+:func:`zoh`, :func:`foh` and :func:`van_loan` work for any state space through one block
+matrix exponential. For RC networks the same matrices follow exactly from a symmetric
+eigen-decomposition (:func:`spectral_decomposition`, :func:`spectral_transition`,
+:func:`spectral_noise_covariance`; the identities are in the notes below), in closed form
+for two states, and :func:`rank_one_form` prepares the rank-one structure that the
+compiled simulation of :mod:`rczone.kernels.rankone` exploits. All functions are pure over
+arrays.
 
 References
 ----------
@@ -12,9 +18,13 @@ References
    3rd ed., 1998, sections 6.3 (ZOH) and 6.3.2 (triangle hold / FOH).
 .. [2] C. F. Van Loan, "Computing integrals involving the matrix exponential",
    IEEE Trans. Automatic Control 23(3), 1978.
+.. [3] N. J. Higham, *Functions of Matrices*, SIAM, 2008.
 """
 
 from __future__ import annotations
+
+import math
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm
@@ -86,3 +96,320 @@ def van_loan(A: np.ndarray, Qc: np.ndarray, dt: float) -> np.ndarray:
     Phi_T = E[n:, n:]
     Qd = Phi_T.T @ E[:n, n:]
     return 0.5 * (Qd + Qd.T)
+
+
+# ---------------------------------------------------------------------------
+# Spectral (exact, expm-free) discretization of RC state matrices
+# ---------------------------------------------------------------------------
+#
+# An RC network's energy balance is ``Cap dx/dt = -G x + ...`` with ``Cap`` diagonal
+# positive and ``G`` a symmetric conductance matrix (Kron reduction of massless nodes keeps it
+# symmetric; supply air adds ``m cp`` to a diagonal entry). Hence ``A = Cap^{-1} (-G - m cp e e')``
+# and ``S = Cap^{1/2} A Cap^{-1/2}`` is symmetric: ``S = V diag(lam) V'`` with ``V``
+# orthogonal and ``lam`` real. Every function of ``A`` needed by the discretization then
+# reduces to scalar functions of the eigenvalues:
+#
+#   Phi  = T diag(e^{lam dt}) T^{-1},            T = Cap^{-1/2} V,  T^{-1} = V' Cap^{1/2}
+#   Gamma_zoh = T diag(phi1(lam)) T^{-1} B,      phi1(l) = int_0^dt e^{l s} ds = (e^{l dt} - 1)/l
+#   G1 (FOH)  = T diag(phi2(lam)) T^{-1} B,      phi2(l) = (e^{l dt} - 1 - l dt)/(l^2 dt)
+#   G0 (FOH)  = Gamma_zoh - G1
+#   Qd = T W T',  W_ij = (T^{-1} Qc T^{-T})_ij (e^{(l_i + l_j) dt} - 1)/(l_i + l_j)
+#
+# These are exact identities (no truncation); the scalar functions are evaluated with
+# ``expm1`` and a short series where ``l dt`` is tiny, so they are accurate to rounding for
+# slow and for stiff modes alike (unlike Van Loan's block exponential, which contains
+# ``e^{-A dt}`` and loses everything for stiff models over long steps).
+
+#: Relative asymmetry of ``Cap A`` (and of every ``Cap N_k``) tolerated by :func:`symmetrizing_scale`.
+SYMMETRY_RTOL = 1e-12
+
+
+def symmetrizing_scale(A: np.ndarray, N: np.ndarray, capacities: np.ndarray) -> np.ndarray | None:
+    """``sqrt(capacities)`` if it symmetrizes ``A + sum m_k N_k`` for every ``m``, else None.
+
+    The spectral discretization (:func:`spectral_decomposition`) is valid when
+    ``diag(c) A`` and every ``diag(c) N_k`` are symmetric (an RC network with supply air
+    entering capacitive nodes). This is checked numerically, to a relative tolerance
+    :data:`SYMMETRY_RTOL`, so that a state space of another form (for example the block
+    system of the sensitivity equations) falls back to the general matrix exponential.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    N : ndarray, shape (n_flows, n, n)
+    capacities : ndarray, shape (n,)
+        Heat capacities of the states, J/K.
+
+    Returns
+    -------
+    ndarray, shape (n,), or None
+    """
+    c = np.asarray(capacities, dtype=float)
+    if c.shape != (A.shape[0],) or not np.all(np.isfinite(c)) or np.any(c <= 0):
+        return None
+    CA = c[None, :, None] * np.concatenate([A[None], N])
+    if not np.all(np.isfinite(CA)):
+        return None
+    asym = np.abs(CA - np.swapaxes(CA, 1, 2)).max(axis=(1, 2))
+    if np.any(asym > SYMMETRY_RTOL * np.abs(CA).max(axis=(1, 2))):
+        return None
+    return np.sqrt(c)
+
+
+def spectral_decomposition(A: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigen-decomposition of ``S = diag(scale) A diag(scale)^{-1}`` for a stack of matrices.
+
+    ``S`` is symmetrized (``(S + S')/2``, which removes only rounding) and decomposed by a
+    closed-form Jacobi rotation for ``n <= 2`` and by LAPACK's symmetric solver otherwise.
+
+    Parameters
+    ----------
+    A : ndarray, shape (K, n, n)
+    scale : ndarray, shape (n,)
+        From :func:`symmetrizing_scale`.
+
+    Returns
+    -------
+    lam : ndarray, shape (K, n)
+        Eigenvalues of ``A``, 1/s.
+    V : ndarray, shape (K, n, n)
+        Orthogonal eigenvectors of ``S`` (columns).
+
+    References
+    ----------
+    .. [1] G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., 2013, Algorithm 8.5.1
+       (the symmetric 2-by-2 Schur decomposition).
+    """
+    S = scale[:, None] * A / scale[None, :]
+    S = 0.5 * (S + np.swapaxes(S, -1, -2))
+    n = S.shape[-1]
+    if n == 1:
+        return S[:, :, 0].copy(), np.ones_like(S)
+    if n == 2:
+        return _jacobi2(S[:, 0, 0], S[:, 0, 1], S[:, 1, 1])
+    return np.linalg.eigh(S)
+
+
+def _jacobi2(a: np.ndarray, b: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form eigen-decomposition of symmetric 2x2 matrices ``[[a, b], [b, d]]``.
+
+    The rotation ``J = [[c, s], [-s, c]]`` with ``t = s/c`` the smaller root of
+    ``t^2 + 2 tau t - 1 = 0``, ``tau = (d - a)/(2 b)``, gives ``J' S J = diag(a - t b, d + t b)``
+    without cancellation (Golub & Van Loan, Algorithm 8.5.1).
+    """
+    nz = b != 0.0
+    bb = np.where(nz, b, 1.0)
+    tau = (d - a) / (2.0 * bb)
+    # 1/(|tau| + hypot(1, tau)) stays finite for huge |tau|
+    t = np.where(nz, np.copysign(1.0, tau) / (np.abs(tau) + np.hypot(1.0, tau)), 0.0)
+    c = 1.0 / np.sqrt(1.0 + t * t)
+    s = t * c
+    lam = np.stack([a - t * b, d + t * b], axis=-1)
+    V = np.empty((*a.shape, 2, 2))
+    V[..., 0, 0], V[..., 0, 1], V[..., 1, 0], V[..., 1, 1] = c, s, -s, c
+    return lam, V
+
+
+def phi_weights(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``e^x``, ``(e^x - 1)/x`` and ``(e^x - 1 - x)/x^2`` evaluated without cancellation.
+
+    With ``x = lam dt`` these are ``Phi``'s eigenvalues and ``phi1/dt``, ``phi2/dt`` of the
+    hold integrals. ``exp`` and ``expm1`` keep the first two accurate to rounding for any ``x``. The
+    third uses its Taylor series ``sum_k x^k/(k+2)!`` (k <= 12, truncation below ``1e-19``)
+    for ``|x| < 0.2`` and ``(expm1(x) - x)/x^2`` (relative rounding ``< 2 eps/|x| <= 1e-15``)
+    otherwise.
+    """
+    x = np.asarray(x, dtype=float)
+    em1 = np.expm1(x)
+    zero = x == 0.0
+    w1 = np.where(zero, 1.0, em1 / np.where(zero, 1.0, x))
+    small = np.abs(x) < _SERIES_LIMIT
+    xs = np.where(small, 1.0, x)
+    series = np.full_like(x, _PHI2_SERIES[-1])
+    for c in _PHI2_SERIES[-2::-1]:
+        series = series * x + c
+    w2 = np.where(small, series, (em1 - xs) / (xs * xs))
+    return np.exp(x), w1, w2
+
+
+_SERIES_LIMIT = 0.2
+#: Taylor coefficients 1/(k+2)! of (e^x - 1 - x)/x^2, k = 0..12.
+_PHI2_SERIES = tuple(1.0 / float(np.prod(np.arange(1, k + 3))) for k in range(13))
+
+
+def spectral_transition(
+    lam: np.ndarray, V: np.ndarray, scale: np.ndarray, B: np.ndarray, dt: np.ndarray, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact ZOH/FOH matrices of ``dx/dt = A x + B u`` from the spectral form of ``A``.
+
+    ``Phi = T E T^{-1}``, ``G = T diag(w) T^{-1} B`` with ``T = diag(scale)^{-1} V`` (see the
+    module notes); identical to :func:`zoh` / :func:`foh` up to rounding.
+
+    Parameters
+    ----------
+    lam, V : ndarray, shapes (K, n), (K, n, n)
+        From :func:`spectral_decomposition`.
+    scale : ndarray, shape (n,)
+    B : ndarray, shape (K, n, p)
+    dt : ndarray, shape (K,)
+        Sample intervals, s.
+    hold : {"zoh", "foh"}
+
+    Returns
+    -------
+    Phi : ndarray, shape (K, n, n)
+    G0, G1 : ndarray, shape (K, n, p)
+        ``G1`` is zero for ZOH.
+
+    References
+    ----------
+    .. [1] N. J. Higham, *Functions of Matrices*, SIAM, 2008, section 1.2 (functions of a
+       diagonalizable matrix) and section 10.7.4 (the phi functions of exponential
+       integrators).
+    """
+    dt = np.asarray(dt, dtype=float)
+    e, w1, w2 = phi_weights(lam * dt[:, None])
+    T = V / scale[None, :, None]
+    Ti = np.swapaxes(V, -1, -2) * scale[None, None, :]
+    Phi = (T * e[:, None, :]) @ Ti
+    TiB = Ti @ B
+    if hold == "zoh":
+        G0 = T @ (TiB * (w1 * dt[:, None])[:, :, None])
+        return Phi, G0, np.zeros_like(G0)
+    G1 = T @ (TiB * (w2 * dt[:, None])[:, :, None])
+    G0 = T @ (TiB * ((w1 - w2) * dt[:, None])[:, :, None])
+    return Phi, G0, G1
+
+
+def spectral_noise_covariance(
+    lam: np.ndarray, V: np.ndarray, scale: np.ndarray, Qc: np.ndarray, dt: np.ndarray
+) -> np.ndarray:
+    """``Qd = int_0^dt e^{As} Qc e^{A's} ds`` in closed form from the spectral form of ``A``.
+
+    In the eigenbasis the integrand is elementwise ``W_ij e^{(l_i + l_j) s}``, whose integral is
+    ``W_ij (e^{(l_i + l_j) dt} - 1)/(l_i + l_j)``; every term is evaluated with ``expm1``, so
+    stiff models over long steps are as accurate as slow ones (no ``e^{-A dt}`` is formed).
+
+    Parameters
+    ----------
+    lam, V : ndarray, shapes (K, n), (K, n, n)
+    scale : ndarray, shape (n,)
+    Qc : ndarray, shape (n, n)
+        Continuous noise intensity, K^2/s.
+    dt : ndarray, shape (K,)
+
+    Returns
+    -------
+    Qd : ndarray, shape (K, n, n), symmetric
+
+    References
+    ----------
+    .. [1] C. F. Van Loan, "Computing integrals involving the matrix exponential",
+       IEEE Trans. Automatic Control 23(3), 1978 (the integral being computed).
+    """
+    dt = np.asarray(dt, dtype=float)
+    T = V / scale[None, :, None]
+    Ti = np.swapaxes(V, -1, -2) * scale[None, None, :]
+    W = Ti @ Qc @ np.swapaxes(Ti, -1, -2)
+    x = (lam[:, :, None] + lam[:, None, :]) * dt[:, None, None]
+    _, w1, _ = phi_weights(x)
+    Qd = T @ (W * w1 * dt[:, None, None]) @ np.swapaxes(T, -1, -2)
+    return 0.5 * (Qd + np.swapaxes(Qd, -1, -2))
+
+
+@dataclass(frozen=True)
+class RankOneForm:
+    """``diag(s) (A + m N) diag(s)^{-1} = Q (diag(d) + m sigma z z') Q'`` with deflation done.
+
+    Attributes
+    ----------
+    Q : ndarray, shape (n, n)
+        Orthogonal; columns ordered as the ``r`` active components (``d`` ascending) and then
+        the deflated ones (``z_j = 0``: eigenpairs independent of ``m``).
+    d : ndarray, shape (n,)
+    z : ndarray, shape (r,)
+        Active components of ``Q' w``; every one is non-negligible.
+    sigma : float
+        The one non-zero eigenvalue of ``diag(s) N diag(s)^{-1}`` (``-cp/C`` for supply air).
+    scale : ndarray, shape (n,)
+        ``s = sqrt(capacities)``.
+    """
+
+    Q: np.ndarray
+    d: np.ndarray
+    z: np.ndarray
+    sigma: float
+    scale: np.ndarray
+
+    @property
+    def r(self) -> int:
+        return self.z.shape[0]
+
+
+def rank_one_form(A: np.ndarray, N: np.ndarray, scale: np.ndarray, m_max: float) -> RankOneForm | None:
+    """The rank-one structure of a one-flow RC model, or None when it does not apply.
+
+    ``S(m) = diag(s) (A + m N) diag(s)^{-1} = S0 + m sigma w w'`` when the flow term is of rank
+    one (supply air into one capacitive node). With ``S0 = Q0 diag(d) Q0'``, ``z = Q0' w``.
+    Deflation (once, for all ``|m| <= m_max``): a component with
+    ``|rho_max z_j| |z| <= tol`` is dropped, and two nearly equal ``d`` are rotated so that one
+    ``z`` vanishes when the rotation's off-diagonal ``|(d_j - d_i) c s| <= tol``; here
+    ``tol = 8 eps max(|d|, |rho_max| |z|^2)``. Each deflation perturbs ``S`` by at most ``tol``
+    in norm, i.e. relative ``8 eps``.
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n)
+    N : ndarray, shape (1, n, n)
+    scale : ndarray, shape (n,)
+        From :func:`symmetrizing_scale`.
+    m_max : float
+        Largest ``|m|`` in the data.
+
+    References
+    ----------
+    .. [1] J. J. Dongarra, D. C. Sorensen, "A fully parallel algorithm for the symmetric
+       eigenvalue problem", SIAM J. Sci. Stat. Comput. 8(2) (1987), section 3 (deflation).
+    """
+    if N.shape[0] != 1:
+        return None
+    S0 = scale[:, None] * A / scale[None, :]
+    Sig = scale[:, None] * N[0] / scale[None, :]
+    nz = np.flatnonzero(Sig)
+    if nz.size == 1 and nz[0] % (A.shape[0] + 1) == 0:  # supply air: one diagonal entry
+        i = nz[0] // (A.shape[0] + 1)
+        sigma, w = float(Sig[i, i]), np.eye(A.shape[0])[i]
+    else:
+        ev, W = np.linalg.eigh(0.5 * (Sig + Sig.T))
+        k = int(np.argmax(np.abs(ev)))
+        big = abs(ev[k])
+        if big == 0.0 or np.sum(np.abs(ev) > 1e-13 * big) != 1:
+            return None
+        sigma, w = float(ev[k]), W[:, k]
+    dv, Q = np.linalg.eigh(0.5 * (S0 + S0.T))
+    Q = Q.copy()
+    zv = Q.T @ w
+    d, z = dv.tolist(), zv.tolist()  # scalar work below is faster on Python floats
+    rho = abs(sigma) * float(m_max)
+    tol = 8 * float(np.finfo(float).eps) * max(float(np.max(np.abs(dv))), rho * float(zv @ zv))
+    znorm = math.sqrt(float(zv @ zv))
+    active = [j for j in range(len(d)) if rho * abs(z[j]) * znorm > tol]
+    deflated = [j for j in range(len(d)) if rho * abs(z[j]) * znorm <= tol]
+    keep: list[int] = []
+    for j in active:  # ascending d
+        if keep:
+            i = keep[-1]
+            rr = math.hypot(z[i], z[j])
+            c, s = z[j] / rr, z[i] / rr
+            if abs((d[j] - d[i]) * c * s) <= tol:
+                qi, qj = Q[:, i].copy(), Q[:, j].copy()
+                Q[:, i], Q[:, j] = c * qi - s * qj, s * qi + c * qj
+                d[i], d[j] = c * c * d[i] + s * s * d[j], s * s * d[i] + c * c * d[j]
+                z[i], z[j] = 0.0, rr
+                keep[-1] = j
+                deflated.append(i)
+                continue
+        keep.append(j)
+    order = keep + deflated
+    d, z = np.array(d), np.array(z)
+    return RankOneForm(Q[:, order], d[order], z[keep], sigma, scale)

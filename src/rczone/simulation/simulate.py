@@ -5,6 +5,19 @@ the other inputs are held constant (``hold="zoh"``) or vary linearly (``hold="fo
 Within each interval the model is then LTI and is stepped exactly by the matrix
 exponential. Discretizations are computed once per distinct ``(dt, m)`` pair, which
 makes typical building data (m constant for long stretches, regular sampling) cheap.
+
+For RC networks (``diag(c) (A + m N)`` symmetric, checked at run time) the distinct
+discretizations are computed in one batch by the exact spectral formulas of
+:mod:`rczone.simulation.discretize` (closed form for ``n <= 2``, a symmetric
+eigen-decomposition otherwise) instead of one matrix exponential each; any other state
+space uses the matrix exponential. The sample loop runs compiled
+(:mod:`rczone.kernels.propagate`); :func:`propagate_reference` is its plain twin.
+
+When the flow changes at nearly every sample (more than :data:`FEW_KEYS` distinct
+``(dt, m)``) and the model has one supply-air flow and three or more states,
+:func:`simulate` instead steps the exact rank-one-update eigen-decomposition of
+:mod:`rczone.kernels.rankone`, which costs ``O(n^2)`` per sample. Every path is exact to
+rounding; they differ only in the last few bits.
 """
 
 from __future__ import annotations
@@ -15,9 +28,18 @@ import numpy as np
 
 from rczone.errors import InputShapeError
 from rczone.network.statespace import BilinearStateSpace
-from rczone.simulation.discretize import foh, zoh
+from rczone.simulation.discretize import (
+    foh,
+    rank_one_form,
+    spectral_decomposition,
+    spectral_transition,
+    symmetrizing_scale,
+    zoh,
+)
 
 HOLDS = ("zoh", "foh")
+#: Up to this many distinct ``(dt, m)`` the batched per-key discretization beats per-sample updates.
+FEW_KEYS = 32
 
 
 def check_time(t: np.ndarray) -> np.ndarray:
@@ -26,7 +48,9 @@ def check_time(t: np.ndarray) -> np.ndarray:
     if t.ndim != 1 or t.size < 2:
         raise InputShapeError(f"time must be a 1-D array of at least 2 samples, got shape {t.shape}")
     if not np.all(np.isfinite(t)):
-        raise InputShapeError(f"time has non-finite values at index {int(np.flatnonzero(~np.isfinite(t))[0])}")
+        raise InputShapeError(
+            f"time has non-finite values at index {int(np.flatnonzero(~np.isfinite(t))[0])}"
+        )
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         k = int(bad[0])
@@ -73,7 +97,7 @@ class SimulationResult:
     state_names: tuple[str, ...]
     output_names: tuple[str, ...]
 
-    def to_frame(self):  # noqa: ANN201 - pandas is imported lazily
+    def to_frame(self):
         """States and outputs as a :class:`pandas.DataFrame` indexed by time (s)."""
         import pandas as pd
 
@@ -107,6 +131,24 @@ def transition_matrices(
     dt = np.diff(t)
     key = np.column_stack([dt, m[:-1]])
     uniq, which = np.unique(key, axis=0, return_inverse=True)
+    which = which.reshape(-1)
+    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+    if scale is not None:
+        A = ss.A + np.tensordot(uniq[:, 1:], ss.N, axes=1)
+        B = ss.B + np.tensordot(uniq[:, 1:], ss.M, axes=1)
+        lam, V = spectral_decomposition(A, scale)
+        Phi, G0, G1 = spectral_transition(lam, V, scale, B, uniq[:, 0], hold)
+        return Phi, G0, G1, which
+    return (*transition_matrices_expm(ss, uniq, hold), which)
+
+
+def transition_matrices_expm(
+    ss: BilinearStateSpace, uniq: np.ndarray, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Discretizations by one matrix exponential per row of ``uniq = [dt, m...]`` (the general path).
+
+    Returns ``(Phi, G0, G1)`` with shapes ``(K, n, n), (K, n, p), (K, n, p)``.
+    """
     n, p = ss.n_states, ss.n_inputs
     K = uniq.shape[0]
     Phi = np.empty((K, n, n))
@@ -118,7 +160,7 @@ def transition_matrices(
             Phi[k], G0[k] = zoh(A, B, uniq[k, 0])
         else:
             Phi[k], G0[k], G1[k] = foh(A, B, uniq[k, 0])
-    return Phi, G0, G1, which.reshape(-1)
+    return Phi, G0, G1
 
 
 def propagate(
@@ -126,8 +168,19 @@ def propagate(
 ) -> np.ndarray:
     """Step ``x[k+1] = Phi[w] x[k] + G0[w] u[k] + G1[w] u[k+1]`` with ``w = which[k]``.
 
-    Pure array kernel; returns states of shape ``(N, n)``.
+    Pure array kernel, compiled (:func:`rczone.kernels.propagate.propagate_kernel`);
+    returns states of shape ``(N, n)``.
     """
+    # imported here: loading numba costs ~0.3 s, which commands that never simulate should not pay
+    from rczone.kernels.propagate import propagate as propagate_compiled
+
+    return propagate_compiled(Phi, G0, G1, which, u, x0)
+
+
+def propagate_reference(
+    Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray, x0: np.ndarray
+) -> np.ndarray:
+    """Plain NumPy version of :func:`propagate` (the reference the compiled kernel is tested against)."""
     N = u.shape[0]
     x = np.empty((N, x0.shape[0]))
     x[0] = x0
@@ -135,6 +188,30 @@ def propagate(
         w = which[k]
         x[k + 1] = Phi[w] @ x[k] + G0[w] @ u[k] + G1[w] @ u[k + 1]
     return x
+
+
+def _simulate_rank_one(
+    ss: BilinearStateSpace, t: np.ndarray, u: np.ndarray, m: np.ndarray, x0: np.ndarray, hold: str
+) -> np.ndarray | None:
+    """States by the compiled rank-one path (one flow, RC structure, n >= 3), or None if it does not apply.
+
+    For two states and less the batched closed form is as fast; so it is when there are few
+    distinct ``(dt, m)`` (at most :data:`FEW_KEYS`), each then decomposed once. A state space
+    that is not an RC network, or with several flows, takes the general path.
+    """
+    if ss.n_flows != 1 or ss.n_states < 3 or hold not in HOLDS:
+        return None
+    if np.unique(m[:-1, 0]).size * np.unique(np.diff(t)).size <= FEW_KEYS:
+        return None
+    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+    if scale is None:
+        return None
+    form = rank_one_form(ss.A, ss.N, scale, float(np.max(np.abs(m))))
+    if form is None:
+        return None
+    from rczone.kernels.rankone import simulate_rank_one  # numba loads lazily, see propagate
+
+    return simulate_rank_one(form, ss.B, ss.M[0], t, m[:, 0], u, x0, hold)
 
 
 def simulate(
@@ -179,8 +256,12 @@ def simulate(
     else:
         x0 = np.asarray(x0, dtype=float)
         if x0.shape != (ss.n_states,):
-            raise InputShapeError(f"x0 must have shape ({ss.n_states},) for states {list(ss.state_names)}, got {x0.shape}")
-    Phi, G0, G1, which = transition_matrices(ss, t, m, hold)
-    x = propagate(Phi, G0, G1, which, u, x0)
+            raise InputShapeError(
+                f"x0 must have shape ({ss.n_states},) for states {list(ss.state_names)}, got {x0.shape}"
+            )
+    x = _simulate_rank_one(ss, t, u, m, x0, hold)
+    if x is None:
+        Phi, G0, G1, which = transition_matrices(ss, t, m, hold)
+        x = propagate(Phi, G0, G1, which, u, x0)
     y = x @ ss.C.T + u @ ss.D.T
     return SimulationResult(t, x, y, ss.state_names, ss.output_names)

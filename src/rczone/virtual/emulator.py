@@ -1,0 +1,242 @@
+"""Closed-loop simulation of the virtual building.
+
+Every 60 s the BMS senses the zone temperatures, each zone's controller (or forced
+command schedule) sets its flow and discharge temperature, and these are held over the
+next interval. With the flows fixed the network is linear, so one interval is advanced
+*exactly* with the zero-order-hold transition ``x+ = Phi x + Gamma u`` of
+``ss.matrices(m)`` [1]_; the pair is cached per distinct flow vector. Because the flows
+switch between a few discrete levels and are held for tens of minutes, a night needs a
+few dozen matrix exponentials at most.
+
+The run starts ``warmup`` seconds before 6 pm from the steady state in which every zone
+sits at its occupied heating setpoint under minimum flow and the day's mean outdoor
+temperature (supply temperatures solved for), so the slow wall modes start near their
+daily mean; daytime gains (:data:`DAY_GAIN`) during the warm-up leave the rooms warm at
+6 pm, and the night starts with the building cooling down, as in a real trend log.
+
+References
+----------
+.. [1] G. F. Franklin, J. D. Powell, M. Workman, Digital Control of Dynamic Systems, 3rd
+   ed., 1998, section 4.3.3 (zero-order-hold equivalent).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from rczone.simulation import zoh
+from rczone.virtual.building import VirtualBuilding
+from rczone.virtual.control import CONTROL_DT, FLOW_LEVELS, SEASONS, VAVController, controller_configs
+from rczone.virtual.sensors import sense_temperature
+from rczone.virtual.weather import DIURNAL, check_season, outdoor_temperature
+
+#: Slow drift of the AHU supply temperature: standard deviation (K) and correlation time (s).
+AHU_DRIFT_STD = 0.3
+AHU_DRIFT_TAU = 1800.0
+#: Daytime gains during the warm-up (occupants, lights, equipment, solar through the window), W;
+#: they ramp down linearly over the hour before ``DAY_END`` (6 pm) as people
+#: leave, and leave the walls and furniture warm at 6 pm.
+DAY_GAIN = {"target": 700.0, "n1": 700.0, "n2": 700.0, "hw": 200.0, "f": 700.0, "c": 700.0}
+DAY_END = 0.0
+
+
+@dataclass(frozen=True)
+class Command:
+    """One block of a forced-response schedule from ``start`` (s from 6 pm).
+
+    ``reheat`` is the discharge temperature above the AHU supply temperature, K.
+    """
+
+    start: float
+    m: float
+    reheat: float
+
+
+class ForcedController:
+    """Follows a piecewise-constant command schedule, ignoring the zone temperature.
+
+    Before the first command's start the zone's thermostat (``fallback``) is in charge.
+    The discharge temperature still passes the reheat coil's first-order lag.
+    """
+
+    def __init__(
+        self, commands: tuple[Command, ...], fallback: VAVController, tau_coil: float = 180.0
+    ) -> None:
+        self.commands = commands
+        self.fallback = fallback
+        self.tau_coil = tau_coil
+        self.ts: float | None = None
+
+    def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
+        if t < self.commands[0].start:
+            m, self.ts = self.fallback.step(t, t_sensed, t_ahu)
+            return m, self.ts
+        cmd = self.commands[0]
+        for c in self.commands:
+            if c.start <= t:
+                cmd = c
+        target = t_ahu + cmd.reheat
+        if self.ts is None:
+            self.ts = target
+        else:
+            self.ts += (1.0 - np.exp(-CONTROL_DT / self.tau_coil)) * (target - self.ts)
+        return cmd.m, self.ts
+
+
+@dataclass(frozen=True)
+class EmulatorRun:
+    """A simulated stretch of building operation.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N + 1,)
+        Times of the states, s from 6 pm.
+    x : ndarray, shape (N + 1, n)
+        True states (network order).
+    u : ndarray, shape (N, p)
+        Inputs held over ``[t[k], t[k+1])`` (network input order).
+    m : ndarray, shape (N, nf)
+        Flows held over the same intervals, kg/s.
+    sensed : dict of str to ndarray, shape (N + 1,)
+        Zone air temperatures as the BMS sensed them (what the controllers used), degC.
+    n_discretizations : int
+        Distinct flow vectors met (size of the ZOH cache).
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+    m: np.ndarray
+    sensed: dict[str, np.ndarray]
+    state_names: tuple[str, ...]
+    input_names: tuple[str, ...]
+    flow_names: tuple[str, ...]
+    n_discretizations: int
+
+    def state(self, name: str) -> np.ndarray:
+        """True temperature trajectory of node ``name``, shape (N + 1,)."""
+        return self.x[:, self.state_names.index(name)]
+
+    def input(self, name: str) -> np.ndarray:
+        """Input ``name`` over the intervals, shape (N,)."""
+        return self.u[:, self.input_names.index(name)]
+
+    def flow(self, name: str) -> np.ndarray:
+        """Flow ``name`` over the intervals, shape (N,)."""
+        return self.m[:, self.flow_names.index(name)]
+
+
+def _initial_state(bld: VirtualBuilding, season: str, heat_sp: Mapping[str, float]) -> np.ndarray:
+    ss = bld.network.state_space()
+    m0 = np.full(len(bld.zones), FLOW_LEVELS[0])
+    A, B = ss.matrices(m0)
+    u = np.zeros(len(ss.input_names))
+    u[ss.input_names.index("To")] = DIURNAL[season][0]
+    for z in bld.zones:
+        u[ss.input_names.index(bld.gain_name(z))] = bld.gains[z]
+    # Zone air temperatures are affine in the supply temperatures: solve for setpoints.
+    air_idx = [ss.state_names.index(bld.air_nodes[z]) for z in bld.zones]
+    ts_idx = [ss.input_names.index(bld.supply_name(z)) for z in bld.zones]
+    x_base = np.linalg.solve(A, -B @ u)
+    G = np.linalg.solve(A, -B[:, ts_idx])
+    target = np.array([heat_sp[z] for z in bld.zones])
+    ts = np.linalg.solve(G[air_idx], target - x_base[air_idx])
+    return x_base + G @ ts
+
+
+def run(
+    bld: VirtualBuilding,
+    season: str,
+    rng: np.random.Generator,
+    duration: float = 12 * 3600.0,
+    warmup: float = 6 * 3600.0,
+    forced: Mapping[str, tuple[Command, ...]] | None = None,
+    sense: Callable[[np.ndarray, np.random.Generator], np.ndarray] = sense_temperature,
+) -> EmulatorRun:
+    """Simulate the building in closed loop from ``-warmup`` to ``duration`` s after 6 pm.
+
+    Parameters
+    ----------
+    bld : VirtualBuilding
+    season : {"summer", "winter", "autumn"}
+    rng : numpy.random.Generator
+        Source of all randomness (weather, controller settings, AHU drift, sensors).
+    duration, warmup : float
+        s; multiples of 60 s.
+    forced : mapping of zone to Command tuple, optional
+        Zones that follow a command schedule instead of their thermostat.
+    sense : callable
+        Temperature sensor model used by the controllers.
+
+    Returns
+    -------
+    EmulatorRun
+    """
+    check_season(season)
+    forced = dict(forced or {})
+    g_weather, g_ctrl, g_ahu, g_sense = rng.spawn(4)
+    n_steps = round((duration + warmup) / CONTROL_DT)
+    t = -warmup + CONTROL_DT * np.arange(n_steps + 1)
+    to = outdoor_temperature(season, t, g_weather)
+    s = SEASONS[season]
+    a = np.exp(-CONTROL_DT / AHU_DRIFT_TAU)
+    drift = np.empty(n_steps + 1)
+    drift[0] = g_ahu.normal(0.0, AHU_DRIFT_STD)
+    w = g_ahu.normal(0.0, AHU_DRIFT_STD * np.sqrt(1 - a * a), size=n_steps + 1)
+    for k in range(1, n_steps + 1):
+        drift[k] = a * drift[k - 1] + w[k]
+    t_ahu = s.t_ahu + drift
+
+    cfgs = controller_configs(season, bld.zones, g_ctrl, -warmup)
+    ctrls: dict[str, VAVController | ForcedController] = {
+        z: VAVController(cfgs[z], -warmup) for z in bld.zones
+    }
+    for z, cmds in forced.items():
+        ctrls[z] = ForcedController(cmds, VAVController(cfgs[z], -warmup))
+    ss = bld.network.state_space()
+    n, p, nf = len(ss.state_names), len(ss.input_names), len(ss.flow_names)
+    air_idx = np.array([ss.state_names.index(bld.air_nodes[z]) for z in bld.zones])
+    ts_idx = np.array([ss.input_names.index(bld.supply_name(z)) for z in bld.zones])
+    to_idx = ss.input_names.index("To")
+    u_base = np.zeros(p)
+    for z in bld.zones:
+        u_base[ss.input_names.index(bld.gain_name(z))] = bld.gains[z]
+
+    u_day = np.zeros(p)
+    for z in bld.zones:
+        u_day[ss.input_names.index(bld.gain_name(z))] = DAY_GAIN.get(z, 0.0)
+    x = np.empty((n_steps + 1, n))
+    u = np.empty((n_steps, p))
+    m = np.empty((n_steps, nf))
+    sensed = np.empty((n_steps + 1, len(bld.zones)))
+    x[0] = _initial_state(bld, season, {z: cfgs[z].heat_occ for z in bld.zones})
+    cache: dict[tuple[float, ...], tuple[np.ndarray, np.ndarray]] = {}
+    for k in range(n_steps + 1):
+        sensed[k] = sense(x[k, air_idx], g_sense)
+        if k == n_steps:
+            break
+        uk = u_base + min(max((DAY_END - t[k]) / 3600.0, 0.0), 1.0) * u_day
+        uk[to_idx] = to[k]
+        mk = np.empty(nf)
+        for j, z in enumerate(bld.zones):
+            mk[j], uk[ts_idx[j]] = ctrls[z].step(float(t[k]), float(sensed[k, j]), float(t_ahu[k]))
+        key = tuple(mk)
+        if key not in cache:
+            cache[key] = zoh(*ss.matrices(mk), CONTROL_DT)
+        phi, gam = cache[key]
+        x[k + 1] = phi @ x[k] + gam @ uk
+        u[k], m[k] = uk, mk
+    return EmulatorRun(
+        t=t,
+        x=x,
+        u=u,
+        m=m,
+        sensed={z: sensed[:, j] for j, z in enumerate(bld.zones)},
+        state_names=ss.state_names,
+        input_names=ss.input_names,
+        flow_names=ss.flow_names,
+        n_discretizations=len(cache),
+    )
