@@ -9,11 +9,19 @@ Three pieces of evidence are combined into a verdict per free parameter:
    Q = 50 W). Output errors in buildings are dominated by model error that is correlated over
    tens of minutes, so the information of ``N`` samples is counted as that of
    ``N * dt / correlation_time`` independent ones (documented, configurable).
-2. **Distinguishability** (global): the output change when a parameter is divided or multiplied
+2. **Robustness to model error**: a low-order model never matches a real room exactly (rczone's
+   own model-order study finds 0.2--0.5 K between the 2nd-order and the full-scale model on
+   ordinary nights). Least squares turns a model error ``e(t)`` into a parameter bias
+   ``(S'S)^{-1} S' e``; its worst case over errors of RMS ``model_error_K`` is
+   ``model_error_K * sqrt(N [(S'S)^{-1}]_jj)`` (Cauchy--Schwarz), i.e. the expected standard
+   error rescaled from ``sigma_K`` over ``n_eff`` samples to ``model_error_K`` over one. A
+   parameter the data see only through a signal comparable with that error is not identifiable in
+   practice even when its statistical standard error is small -- the paper's closed-loop nights.
+3. **Distinguishability** (global): the output change when a parameter is divided or multiplied
    by 10, after the nuisances are re-fitted by linear least squares (they enter linearly). If
    the remaining change is below the noise level, the data cannot tell the value from one ten
    times smaller (or larger) -- the paper's failure mode.
-3. **Data indicators** (:mod:`rczone.diagnostics.indicators`) to explain the cause in plain words.
+4. **Data indicators** (:mod:`rczone.diagnostics.indicators`) to explain the cause in plain words.
 
 References
 ----------
@@ -46,6 +54,11 @@ IDENTIFIABLE, WEAK, NOT_IDENTIFIABLE = "identifiable", "weak", "not identifiable
 SE_IDENTIFIABLE = 0.25
 #: ... and above which it is not identifiable at all.
 SE_NOT_IDENTIFIABLE = 1.0
+#: Worst-case relative bias (log space) from a model error of ``model_error_K`` below which a
+#: parameter can be identifiable ...
+BIAS_IDENTIFIABLE = 0.5
+#: ... and above which it is not identifiable.
+BIAS_NOT_IDENTIFIABLE = 1.0
 #: |correlation| above which two parameters are reported as confounded.
 CORR_CONFOUNDED = 0.95
 
@@ -64,6 +77,7 @@ class ParameterVerdict:
     max_abs_correlation: float
     rms_change_tenth_K: float
     rms_change_tenfold_K: float
+    worst_case_bias: float = 0.0
 
     def to_dict(self) -> dict:
         return {k: v for k, v in vars(self).items() if k != "name"}
@@ -167,6 +181,7 @@ def diagnose(
     theta: Mapping[str, float] | None = None,
     sigma_K: float = 0.1,
     correlation_time_s: float = 1800.0,
+    model_error_K: float = 0.2,
     constants: Mapping[str, float] | None = None,
     heat_input: str | None = "Q",
     initial_state_nuisance: bool = True,
@@ -187,6 +202,9 @@ def diagnose(
         Output error level the fit must see through (sensor noise plus model error), K.
     correlation_time_s : float
         Correlation time of that error; information is counted per this many seconds.
+    model_error_K : float
+        RMS structural error the model may have on these data, K; the verdict requires the
+        worst-case bias it can cause to be small (see the module notes). 0 disables the check.
     constants : mapping, optional
         Inputs held constant instead of read from the frame (e.g. ``{"Q": 50.0}``).
     heat_input : str or None
@@ -198,8 +216,11 @@ def diagnose(
     -------
     IdentifiabilityReport
     """
-    if not sigma_K > 0 or not correlation_time_s > 0:
-        raise ParameterError("sigma_K and correlation_time_s must be > 0")
+    if not sigma_K > 0 or not correlation_time_s > 0 or not model_error_K >= 0:
+        raise ParameterError(
+            f"sigma_K and correlation_time_s must be > 0 and model_error_K >= 0, got {sigma_K},"
+            f" {correlation_time_s}, {model_error_K}"
+        )
     if free is None:
         free = [
             n
@@ -240,6 +261,7 @@ def diagnose(
         corr = cov / np.outer(se, se)
     corr[~np.isfinite(corr)] = 0.0
     np.fill_diagonal(corr, 1.0)
+    bias = se * (model_error_K / sigma_K) * np.sqrt(n_eff)
 
     y0 = sens.y[ok, 0]
     ind = data_indicators(frame)
@@ -254,7 +276,17 @@ def diagnose(
         others = [(abs(corr[j, k]), free[k]) for k in range(P) if k != j]
         rho, partner = max(others) if others else (0.0, None)
         verdicts[name] = _verdict(
-            network, name, float(se[j]), rho, partner, changes, sigma_K, ind, vals[name]
+            network,
+            name,
+            float(se[j]),
+            rho,
+            partner,
+            changes,
+            sigma_K,
+            ind,
+            vals[name],
+            float(bias[j]),
+            model_error_K,
         )
     return IdentifiabilityReport(
         verdicts,
@@ -268,6 +300,7 @@ def diagnose(
         ind,
         {
             "correlation_time_s": correlation_time_s,
+            "model_error_K": model_error_K,
             "heat_offset_nuisance": heat_input,
             "constants": dict(constants or {}),
         },
@@ -288,12 +321,19 @@ def _verdict(
     sigma: float,
     ind: DataIndicators,
     value: float,
+    bias: float = 0.0,
+    model_error: float = 0.0,
 ) -> ParameterVerdict:
     tenth, tenfold = changes
     indistinct = min(tenth, tenfold) < sigma
-    if se < SE_IDENTIFIABLE and not indistinct:
+    if se < SE_IDENTIFIABLE and bias < BIAS_IDENTIFIABLE and not indistinct:
         verdict = IDENTIFIABLE
-    elif se >= SE_NOT_IDENTIFIABLE or (indistinct and se >= SE_IDENTIFIABLE) or max(tenth, tenfold) < sigma:
+    elif (
+        se >= SE_NOT_IDENTIFIABLE
+        or bias >= BIAS_NOT_IDENTIFIABLE
+        or (indistinct and se >= SE_IDENTIFIABLE)
+        or max(tenth, tenfold) < sigma
+    ):
         verdict = NOT_IDENTIFIABLE
     else:
         verdict = WEAK
@@ -324,6 +364,12 @@ def _verdict(
                 f"with {name} ten times larger the room temperature changes by only {tenfold:.2f} K RMS once the"
                 f" initial state and heat gain are re-fitted, below the {sigma:.2f} K error level"
             )
+        if bias >= BIAS_IDENTIFIABLE and model_error > 0:
+            reasons.append(
+                f"a model error of {model_error:.1f} K, usual for a low-order model of a real room, could shift"
+                f" the estimate by up to a factor {np.exp(min(bias, 50.0)):.3g}, and the fit would still match"
+                " the data"
+            )
         if rho > CORR_CONFOUNDED and partner:
             reasons.append(
                 f"its effect on the room temperature is almost the same as that of {partner} (correlation"
@@ -341,7 +387,10 @@ def _verdict(
             reasons.append(f"the expected relative standard error is {se:.0%}")
         advice.append("or keep it at its construction value (fixed, or MAP with a prior)")
     else:
-        reasons.append(f"the data determine it to about ±{se:.0%} (expected relative standard error)")
+        reasons.append(
+            f"the data determine it to about ±{se:.0%} (expected relative standard error); even a model"
+            f" error of {model_error:.1f} K could shift it by at most a factor {np.exp(bias):.2f}"
+        )
     return ParameterVerdict(
         name=name,
         verdict=verdict,
@@ -353,4 +402,5 @@ def _verdict(
         max_abs_correlation=float(rho),
         rms_change_tenth_K=float(tenth),
         rms_change_tenfold_K=float(tenfold),
+        worst_case_bias=float(bias),
     )
