@@ -70,6 +70,27 @@ def model_order_study(report: Report, progress: Callable[[str], None]) -> dict[s
     ok2 = max(maxe["second-order"].values()) <= PAPER_SECOND_ORDER_K
     ok1 = max(maxe["first-order"].values()) <= PAPER_FIRST_ORDER_K
     results["frequency_domain"]["agrees_with_paper"] = {"second-order": ok2, "first-order": ok1}
+    # e_i scales with du_i: the same models judged with each night's own input variation
+    per_set = {}
+    for s, f in frames.items():
+        dus = input_variation([f])
+        per_set[s] = {
+            "du_K": dus,
+            "max_error_K": compare_frequency(models, "full-scale", dus, m=0.12).max_errors(),
+        }
+    results["frequency_domain"]["per_data_set"] = per_set
+    # relative gain error: |H_ref - H_k| / |H_ref(0)| (independent of du), and where it peaks
+    rel = {}
+    for k, errs in fc.errors.items():
+        rel[k] = {}
+        for i, e in errs.items():
+            g0 = float(fc.gains["full-scale"][i][0])
+            j = int(e.argmax())
+            rel[k][i] = {
+                "max_relative": float(e[j] / du[i] / g0) if du[i] and g0 else 0.0,
+                "at_hz": float(fc.freq_hz[j]),
+            }
+    results["frequency_domain"]["relative_gain_error"] = rel
 
     report.heading("III. Which model order is enough?")
     report.paragraph(
@@ -106,9 +127,41 @@ def model_order_study(report: Report, progress: Callable[[str], None]) -> dict[s
         "1st order within about 1.7 K = 3 F)",
         digits=3,
     )
+    report.table(
+        [
+            {
+                "data set": s,
+                "du_Ts (K)": per_set[s]["du_K"]["Ts"],
+                "du_Tsd (K)": per_set[s]["du_K"]["Tsd"],
+                **{
+                    f"{k} max e_{i} (K)": per_set[s]["max_error_K"][k][i]
+                    for k in ("second-order", "first-order")
+                    for i in ("Ts", "Tsd")
+                },
+            }
+            for s in SCENARIOS
+        ],
+        "The same errors with each night's own input variation du",
+        digits=3,
+    )
     verdict = (
-        f"The 2nd-order model {'stays' if ok2 else 'does not stay'} within the paper's 1 F of the full-scale "
-        f"model over the band, and the 1st-order model {'stays' if ok1 else 'does not stay'} within 3 F."
+        f"With du taken over all three nights, the 2nd-order model {'stays' if ok2 else 'does not stay'} "
+        f"within the paper's 1 F of the full-scale model over the band, and the 1st-order model "
+        f"{'stays' if ok1 else 'does not stay'} within 3 F. "
+    )
+    r2, r1 = rel["second-order"]["Ts"], rel["first-order"]["Ts"]
+    verdict += (
+        f"The error is largest for the supply air: the low-order models miss the gain from Ts by up to "
+        f"{r2['max_relative']:.0%} (2nd order, at periods near {1 / r2['at_hz'] / 3600:.1f} h) and "
+        f"{r1['max_relative']:.0%} (1st order) of its steady-state value, because the parallel aggregation "
+        "keeps every steady-state gain exactly but lumps six walls with time constants from minutes to days "
+        "into one. e_Ts is that gain error times du_Ts, and du_Ts is large here: the reheat coil swings the "
+        f"supply air by {per_set['B']['du_K']['Ts']:.0f} K on the winter night and the forced-response test by "
+        f"{per_set['C']['du_K']['Ts']:.0f} K, against {per_set['A']['du_K']['Ts']:.0f} K on the summer night. "
+        "On the summer night alone the 2nd-order model meets the paper's 1 F "
+        f"({per_set['A']['max_error_K']['second-order']['Ts']:.2f} K). For the surroundings (Tsd), the input "
+        "the paper finds hardest, both low-order models stay well inside their bounds, because the "
+        "neighbours vary little overnight."
     )
     report.paragraph(verdict, "note")
     return results
@@ -210,7 +263,38 @@ def identification_study(
             fig,
             f"Calibration on {cal_set} and validation (Fig. {6 + int(att)})",
         )
+    report.paragraph(_identification_summary(out), "note")
     return out
+
+
+def _identification_summary(out: dict[str, Any]) -> str:
+    """What the two attempts show, in words, from the numbers in ``out``."""
+    a = out["attempts"]["1"]["methods"]["ls"]
+    c = out["attempts"]["2"]["methods"]["ls"]
+    cml = out["attempts"]["2"]["methods"]["ml"]
+    rw_a, rw_c, rw_cml = (x["parameters"]["Rw"]["estimate"] for x in (a, c, cml))
+    rw0 = a["parameters"]["Rw"]["construction"]
+    rw_true = a["parameters"]["Rw"]["true_equivalent"]
+    text = (
+        f"As in the paper, the fit to the closed-loop night A matches A (RMSE "
+        f"{a['validation']['A']['rmse_K']:.2f} K) and predicts the closed-loop night B "
+        f"({a['validation']['B']['rmse_K']:.2f} K), yet its wall resistance is {rw_a / rw0:.2f} times the "
+        f"construction value and it fails on the forced-response night C (RMSE "
+        f"{a['validation']['C']['rmse_K']:.2f} K, max {a['validation']['C']['max_error_K']:.1f} K): a wrong "
+        "model that closed-loop validation cannot expose. rczone diagnose says so before any fit. The fit to "
+        f"C gives Rw = {rw_c:.3g} K/W by LS and {rw_cml:.3g} K/W by ML ({rw_c / rw0:.2f} and "
+        f"{rw_cml / rw0:.2f} times the construction value; the paper found 0.01 and 0.005 K/W) and predicts "
+        f"A and B to {c['validation']['A']['rmse_K']:.2f} and {c['validation']['B']['rmse_K']:.2f} K RMSE."
+    )
+    if rw_true:
+        text += (
+            f" The virtual building's walls aggregate to Rw = {rw_true:.3g} K/W, so even the forced test "
+            "returns about half of it: the reduced model keeps Cw and Rwin at construction values and lumps six "
+            "walls into one, and the best effective Rw of that structure for hour-scale excitation is not the "
+            "steady-state aggregate. The estimate is precise, agrees between LS and ML and carries over to the other "
+            "nights, which is what MPC needs; read it as an effective parameter of the 2nd-order model, not as a wall property."
+        )
+    return text
 
 
 def run_demo(out: str | os.PathLike, progress: Callable[[str], None] | None = None) -> Path:
