@@ -291,8 +291,9 @@ def _identification_summary(out: dict[str, Any]) -> str:
             f" The virtual building's walls aggregate to Rw = {rw_true:.3g} K/W, so even the forced test "
             "returns about half of it: the reduced model keeps Cw and Rwin at construction values and lumps six "
             "walls into one, and the best effective Rw of that structure for hour-scale excitation is not the "
-            "steady-state aggregate. The estimate is precise, agrees between LS and ML and carries over to the other "
-            "nights, which is what MPC needs; read it as an effective parameter of the 2nd-order model, not as a wall property."
+            "steady-state aggregate. The estimate is precise, agrees between LS and ML and carries over to "
+            "the other nights, which is what MPC needs; read it as an effective parameter of the 2nd-order "
+            "model, not as a wall property."
         )
     return text
 
