@@ -228,7 +228,9 @@ def identification_study(
         "The paper fits the reduced 2nd-order model (free: room capacitance Cr and wall resistance Rw; "
         "R1 = R2 = Rw/2; Cw and Rwin at their construction values; Tsd the mean of the five surroundings) by "
         "output-error least squares (LS) and by Kalman-filter maximum likelihood (ML). rczone adds MAP: ML with a "
-        "log-normal prior around the construction values (spread a factor of 2). Attempt 1 calibrates on the "
+        "log-normal prior around the construction values (spread a factor of 2), with the likelihood counted "
+        "once per 30 minutes because the errors of a low-order model are correlated that long (the "
+        "samples are not independent evidence). Attempt 1 calibrates on the "
         "closed-loop night A and validates on B and C; attempt 2 calibrates on the forced-response night C."
     )
     rows = []
@@ -285,6 +287,15 @@ def _identification_summary(out: dict[str, Any]) -> str:
         f"C gives Rw = {rw_c:.3g} K/W by LS and {rw_cml:.3g} K/W by ML ({rw_c / rw0:.2f} and "
         f"{rw_cml / rw0:.2f} times the construction value; the paper found 0.01 and 0.005 K/W) and predicts "
         f"A and B to {c['validation']['A']['rmse_K']:.2f} and {c['validation']['B']['rmse_K']:.2f} K RMSE."
+    )
+    amap = out["attempts"]["1"]["methods"]["map"]
+    rmap = amap["parameters"]["Rw"]
+    text += (
+        f" MAP on A stays nearer the construction values (Rw = {rmap['estimate']:.3g} K/W, standard error "
+        f"{rmap['std_error'] / rmap['estimate']:.0%}, where LS claims {a['parameters']['Rw']['std_error'] / rw_a:.0%}"
+        f" for a value {rw0 / rw_a:.0f} times too small) and predicts C to {amap['validation']['C']['rmse_K']:.2f} K RMSE, close"
+        f" to the {c['validation']['C']['rmse_K']:.2f} K of the fit to C itself: where the data say little, the"
+        " construction values are the better guess, as the paper concludes."
     )
     if rw_true:
         text += (

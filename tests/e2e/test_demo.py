@@ -3,6 +3,7 @@
 import json
 import re
 
+import numpy as np
 import pytest
 
 from rczone.cli.main import main
@@ -67,3 +68,16 @@ def test_identification_reproduces_the_papers_lesson(demo):
     # the fit to the forced night C carries over to the closed-loop nights
     for s in "AB":
         assert c["ls"]["validation"][s]["rmse_K"] < 0.25
+
+
+def test_map_on_closed_loop_data_stays_near_construction_and_predicts_the_forced_night(demo):
+    _, res = demo
+    a = res["identification"]["attempts"]["1"]["methods"]
+    rw = {m: a[m]["parameters"]["Rw"] for m in ("ls", "ml", "map")}
+    construction = rw["map"]["construction"]
+    assert abs(np.log(rw["map"]["estimate"] / construction)) < abs(
+        np.log(rw["ml"]["estimate"] / construction)
+    )
+    # it admits what it does not know
+    assert rw["map"]["std_error"] / rw["map"]["estimate"] > 3 * rw["ls"]["std_error"] / rw["ls"]["estimate"]
+    assert a["map"]["validation"]["C"]["rmse_K"] < a["ls"]["validation"]["C"]["rmse_K"]

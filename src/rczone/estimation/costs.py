@@ -44,6 +44,10 @@ from rczone.simulation.simulate import transition_matrices
 
 #: Default spread of the MAP log-normal prior: a factor 2 is one standard deviation.
 PRIOR_SPREAD = math.log(2.0)
+#: Correlation time of the output error assumed by MAP, s: the likelihood of N samples
+#: ``dt`` apart counts as that of ``N dt / MAP_CORRELATION_TIME`` independent ones, as in
+#: :func:`rczone.diagnostics.diagnose`.
+MAP_CORRELATION_TIME = 1800.0
 
 METHODS = ("ls", "ml", "map")
 
@@ -212,6 +216,17 @@ class Objective:
     hold : {"zoh", "foh"}
     prior_spread : float
         ``s`` of the MAP prior (log units).
+    likelihood_weight : float
+        MAP only: ``J_MAP = w J_ML + prior``. Residuals of a low-order building model are
+        correlated over tens of minutes, so ``-log L`` of a white-noise model overstates the
+        information in the data by the ratio of that correlation time to the sample time;
+        ``w = dt / t_corr`` counts it once per correlation time (a tempered, or power,
+        likelihood [1]_). The ML optimum of the noise parameters is unchanged by ``w``.
+
+    References
+    ----------
+    .. [1] P. G. Bissiri, C. C. Holmes, S. G. Walker, "A general framework for updating
+       belief distributions", J. R. Stat. Soc. B 78(5), 2016.
     """
 
     network: RCNetwork
@@ -220,12 +235,15 @@ class Objective:
     method: str = "ls"
     hold: str = "zoh"
     prior_spread: float = PRIOR_SPREAD
+    likelihood_weight: float = 1.0
 
     def __post_init__(self) -> None:
         if self.method not in METHODS:
             raise ParameterError(f"method must be one of {METHODS}, got {self.method!r}")
         if not self.prior_spread > 0:
             raise ParameterError(f"prior_spread must be > 0, got {self.prior_spread!r}")
+        if not 0 < self.likelihood_weight <= 1:
+            raise ParameterError(f"likelihood_weight must be in (0, 1], got {self.likelihood_weight!r}")
 
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
@@ -237,7 +255,9 @@ class Objective:
         except (ParameterError, np.linalg.LinAlgError):
             return math.inf
         if self.method == "map":
-            j += log_prior_penalty(self.spec, np.asarray(theta, dtype=float), self.prior_spread)
+            j = self.likelihood_weight * j + log_prior_penalty(
+                self.spec, np.asarray(theta, dtype=float), self.prior_spread
+            )
         return j
 
     def __call__(self, eta: np.ndarray) -> float:

@@ -14,6 +14,7 @@ import numpy as np
 
 from rczone.errors import ParameterError
 from rczone.estimation.costs import (
+    MAP_CORRELATION_TIME,
     METHODS,
     PRIOR_SPREAD,
     Objective,
@@ -52,6 +53,7 @@ def fit(
     fixed: Mapping[str, float] | None = None,
     hold: str = "zoh",
     prior_spread: float = PRIOR_SPREAD,
+    correlation_time_s: float = MAP_CORRELATION_TIME,
     spread: float = 10.0,
     uncertainty: bool = True,
     max_evals: int | None = None,
@@ -84,6 +86,11 @@ def fit(
         Inter-sample behaviour of the inputs.
     prior_spread : float
         Spread (log units) of the MAP prior.
+    correlation_time_s : float
+        MAP only: correlation time of the output error; the likelihood is weighted by
+        ``min(1, dt / correlation_time_s)`` (see :class:`~rczone.estimation.costs.Objective`),
+        so that a night of closed-loop data cannot overrule the construction values with
+        thousands of samples that carry the information of a few dozen.
     spread : float
         Multistart box: factor around the construction values.
     uncertainty : bool
@@ -118,7 +125,10 @@ def fit(
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
     x0_auto = {f"x0_{s}": float(v) for s, v in zip(ss0.state_names, x0a)}
     spec = make_spec(network, free, bounds=bounds, start=start, fixed=fixed, x0_auto=x0_auto)
-    objective = Objective(network, data, spec, method, hold, prior_spread)
+    if not correlation_time_s > 0:
+        raise ParameterError(f"correlation_time_s must be > 0, got {correlation_time_s!r}")
+    weight = min(1.0, float(np.median(np.diff(data.t))) / correlation_time_s) if method == "map" else 1.0
+    objective = Objective(network, data, spec, method, hold, prior_spread, weight)
     starts = latin_hypercube_starts(spec, n_starts, rng, spread) if n_starts > 1 else spec.start[None]
     outcomes = tuple(minimize_from(objective, spec, s, optimizer, max_evals) for s in starts)
     costs = np.array([o.cost for o in outcomes])

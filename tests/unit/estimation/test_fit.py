@@ -127,3 +127,30 @@ def test_map_prior_pulls_towards_construction_by_its_spread() -> None:
     assert ml == pytest.approx(0.02, rel=0.03)
     assert tight == pytest.approx(0.01, rel=1e-3)
     assert 0.01 < loose < ml
+
+
+@pytest.mark.parametrize("correlation_time", [600.0, 18000.0])
+def test_map_mode_is_the_precision_weighted_mean_of_tempered_likelihood_and_prior(correlation_time) -> None:
+    """For a near-Gaussian likelihood in log Rw, the MAP mode is Bayes' rule with the likelihood's
+    precision scaled by w = dt / t_corr (1 when t_corr equals the sample time)."""
+    from rczone.estimation.costs import PRIOR_SPREAD
+    from rczone.network import Parameter
+    from rczone.simulation import simulate
+
+    d = data2()
+    truth = NET2.replace_parameters([Parameter("Rw", "resistance", 0.02)])
+    rng = np.random.default_rng(5)
+    y = simulate(truth.state_space(), d.t, d.u, d.m).y + 1.0 * rng.standard_normal(d.y.shape)
+    data = Dataset(d.t, d.u, d.m, y, d.input_names, d.flow_names, d.output_names)
+    kw = {"optimizer": "lbfgs", "fixed": {"sigma_v": 1.0, "sigma_w_Ti": 1e-6, "sigma_w_Tw": 1e-6}}
+    ml = fit(NET2, data, ["Rw"], method="ml", **kw)
+    se_log = ml.std_errors["Rw"] / ml.estimates["Rw"]  # from the ML Hessian in log space
+    w = min(1.0, float(np.median(np.diff(d.t))) / correlation_time)
+    p_lik, p_prior = w / se_log**2, 1 / PRIOR_SPREAD**2
+    expected = (p_lik * np.log(ml.estimates["Rw"]) + p_prior * np.log(0.01)) / (p_lik + p_prior)
+    mp = fit(NET2, data, ["Rw"], method="map", correlation_time_s=correlation_time, **kw)
+    assert np.log(mp.estimates["Rw"]) == pytest.approx(expected, abs=0.1 * abs(expected - np.log(0.01)))
+    if w < 0.1:  # tempered to the information of 5 samples: the prior holds the estimate back
+        assert abs(np.log(mp.estimates["Rw"] / ml.estimates["Rw"])) > 0.2
+    # and the posterior standard error combines the two precisions
+    assert mp.std_errors["Rw"] / mp.estimates["Rw"] == pytest.approx((p_lik + p_prior) ** -0.5, rel=0.1)
