@@ -79,7 +79,7 @@ def auto_initial_state(ss: BilinearStateSpace, u0: np.ndarray, m0: np.ndarray, y
     ndarray, shape (n,)
     """
     A, B = ss.matrices(m0) if ss.n_flows else (ss.A, ss.B)
-    meas = {i: j for i, j in measured_states(ss).items() if np.isfinite(y0[j])}
+    meas = {i: j for i, j in measured_states(ss).items() if math.isfinite(y0[j])}
     x = np.zeros(ss.n_states)
     fixed = np.array(sorted(meas), dtype=int)
     free = np.array([i for i in range(ss.n_states) if i not in meas], dtype=int)
@@ -150,8 +150,8 @@ def noise_values(ss: BilinearStateSpace, values: Mapping[str, float]) -> tuple[n
         sv = values["sigma_v"]
     except KeyError as exc:
         raise ParameterError(f"noise parameter {exc.args[0]!r} has no value; fix it or free it") from None
-    for nm, v in (("sigma_v", [sv]), ("sigma_w_*", sw), ("sigma_x0_*", sx)):
-        if np.any(np.asarray(v) < 0) or not np.all(np.isfinite(v)):
+    for nm, v in (("sigma_v", (sv,)), ("sigma_w_*", sw), ("sigma_x0_*", sx)):
+        if not all(0.0 <= x < math.inf for x in v):  # also rejects NaN
             raise ParameterError(f"{nm} must be finite and >= 0, got {v}")
     return sw, sx, sv
 

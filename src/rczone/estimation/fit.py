@@ -19,10 +19,11 @@ from rczone.estimation.costs import (
     PRIOR_SPREAD,
     Objective,
     auto_initial_state,
-    run_filter,
+    filter_arrays,
     simulate_output,
 )
 from rczone.estimation.data import Dataset
+from rczone.estimation.kalman import kalman_innovations_fast
 from rczone.estimation.optimize import OPTIMIZERS, latin_hypercube_starts, minimize_from
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.result import FitResult
@@ -36,7 +37,7 @@ def rmse_of(network: RCNetwork, values: Mapping[str, float], data: Dataset, meth
     if method == "ls":
         e = data.y - simulate_output(network, values, data, hold)[1]
     else:
-        e = run_filter(network, values, data, hold).innovations
+        e = kalman_innovations_fast(*filter_arrays(network, values, data, hold))
     return float(np.sqrt(np.nanmean(e**2)))
 
 

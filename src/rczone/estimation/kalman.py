@@ -295,13 +295,16 @@ def _nll_scalar_loop(
     P0: np.ndarray,
     c: np.ndarray,
     r: float,
+    e_out: np.ndarray,
 ) -> float:
     """Scalar-output filter loop with explicit loops, compiled by numba.
 
     Same recursion as :func:`kalman_filter_arrays` (Joseph form, symmetrized) for one
     output; ``yd = y - D u`` with NaN for missing samples. Returns ``-log L`` without
-    the ``0.5 n log 2 pi`` term, and the number of observations.
+    the ``0.5 n log 2 pi`` term, and the number of observations. The innovations are
+    written into ``e_out`` when it has one entry per sample (pass an empty array to skip).
     """
+    keep = e_out.shape[0] == yd.shape[0]
     n = x0.shape[0]
     N = yd.shape[0]
     x = x0.copy()
@@ -346,6 +349,8 @@ def _nll_scalar_loop(
                     P[j, i] = acc
             nll += 0.5 * (np.log(s) + e * e / s)
             n_obs += 1
+            if keep:
+                e_out[k] = e
         if k < N - 1:
             w = which[k]
             for i in range(n):
@@ -396,6 +401,32 @@ def kalman_nll_fast(
     """Same value as :func:`kalman_nll`; compiled loop for one output, reference otherwise."""
     if y.shape[1] != 1:
         return kalman_nll(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R)
+    return _scalar_filter(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, np.empty(0))
+
+
+def kalman_innovations_fast(
+    Phi: np.ndarray,
+    Gamma0: np.ndarray,
+    Gamma1: np.ndarray,
+    Qd: np.ndarray,
+    which: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    x0: np.ndarray,
+    P0: np.ndarray,
+    C: np.ndarray,
+    D: np.ndarray,
+    R: np.ndarray,
+) -> np.ndarray:
+    """One-step-ahead prediction errors, shape (N, ny), NaN where missing (compiled for one output)."""
+    if y.shape[1] != 1:
+        return kalman_filter_arrays(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R).innovations
+    e = np.full(y.shape[0], np.nan)
+    _scalar_filter(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, e)
+    return e[:, None]
+
+
+def _scalar_filter(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, e_out) -> float:
     drive = input_drive(Gamma0, Gamma1, which, u)
     yd = np.ascontiguousarray((y - u @ D.T)[:, 0])
     nll, n_obs = _nll_scalar_compiled(
@@ -408,5 +439,6 @@ def kalman_nll_fast(
         np.ascontiguousarray(P0, dtype=float),
         np.ascontiguousarray(C[0], dtype=float),
         float(R[0, 0]),
+        e_out,
     )
     return float(nll + 0.5 * n_obs * _LOG_2PI)

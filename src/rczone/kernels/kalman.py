@@ -284,6 +284,16 @@ def rc2_applicable(ss: BilinearStateSpace, n_outputs: int) -> bool:
     """Whether :func:`kalman_nll_rc2` handles this model: 2 states, one output, RC-symmetrizable."""
     if ss.n_states != 2 or n_outputs != 1:
         return False
+    c = ss.capacities
+    if c.shape == (2,) and c[0] > 0 and c[1] > 0:
+        # quick scalar form of symmetrizing_scale for 2 states: c0 A01 == c1 A10, likewise for N
+        mats = [ss.A, *ss.N]
+        if all(
+            abs(c[0] * a[0, 1] - c[1] * a[1, 0])
+            <= SYMMETRY_RTOL * max(abs(c[0] * a[0, 1]), abs(c[1] * a[1, 0]))
+            for a in mats
+        ) and all(math.isfinite(x) for a in mats for x in a.flat):
+            return True
     return symmetrizing_scale(ss.A, ss.N, ss.capacities) is not None
 
 

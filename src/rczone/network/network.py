@@ -418,21 +418,44 @@ class RCNetwork:
 
     @cached_property
     def _structure(self) -> dict:
+        """Index arrays for :meth:`_assemble`, computed once per network (it is immutable)."""
         names = [n.name for n in self.nodes]
         idx = {n: i for i, n in enumerate(names)}
         iidx = {n: i for i, n in enumerate(self.input_names)}
         fidx = {f: k for k, f in enumerate(self.flow_names)}
+        nn, p, nr = len(names), len(self.input_names), len(self.resistors)
+        # G = L' diag(g) L (node Laplacian incl. the diagonal terms of boundary resistors) and
+        # Gb = P' diag(g) E (node-to-input conductances), with g the resistor conductances
+        L, P, E = np.zeros((nr, nn)), np.zeros((nr, nn)), np.zeros((nr, p))
+        for k, r in enumerate(self.resistors):
+            ia, ib = idx.get(r.a, -1), idx.get(r.b, -1)
+            if ia >= 0 and ib >= 0:
+                L[k, ia], L[k, ib] = 1.0, -1.0
+            else:
+                i = ia if ia >= 0 else ib
+                L[k, i] = P[k, i] = 1.0
+                E[k, iidx[r.a if ia < 0 else r.b]] = 1.0
+        xs = np.array([idx[n] for n in self.state_names], dtype=int)
+        zs = np.array([idx[n] for n in self.massless_names], dtype=int)
+        out = [idx[o] for o in self.outputs]
+        Cfull = np.zeros((len(out), nn))
+        Cfull[np.arange(len(out)), out] = 1.0
         return {
-            "nn": len(names),
-            "res": [
-                (idx.get(r.a, -1), idx.get(r.b, -1), iidx.get(r.a, iidx.get(r.b, -1)), r.resistance)
-                for r in self.resistors
-            ],
+            "nn": nn,
+            "L": L,
+            "P": P,
+            "E": E,
+            "res": [r.resistance for r in self.resistors],
             "heat": [(idx[nd], iidx[h.name], g) for h in self.heat_inputs for nd, g in h.split],
             "air": [(fidx[s.flow], idx[s.node], iidx[s.temperature], s.cp) for s in self.supply_air],
-            "xs": [idx[n] for n in self.state_names],
-            "zs": [idx[n] for n in self.massless_names],
-            "out": [idx[o] for o in self.outputs],
+            "xs": xs,
+            "zs": zs,
+            "xx": np.ix_(xs, xs),
+            "zz": np.ix_(zs, zs),
+            "zx": np.ix_(zs, xs),
+            "xz": np.ix_(xs, zs),
+            "Cx": Cfull[:, xs],
+            "Cz": Cfull[:, zs],
             "cap": [nd.capacity for nd in self.nodes if nd.capacity is not None],
         }
 
@@ -444,42 +467,32 @@ class RCNetwork:
             return vals[x] if isinstance(x, str) else float(x)
 
         nn, p, nf = st["nn"], len(self.input_names), len(self.flow_names)
-        G = np.zeros((nn, nn), dtype)  # conductance (Laplacian) among nodes
-        Gb = np.zeros((nn, p), dtype)  # from nodes to inputs (boundary conductances, heat gains)
-        for ia, ib, ii, r in st["res"]:
-            g = 1.0 / v(r)
-            if ia >= 0 and ib >= 0:
-                G[ia, ia] += g
-                G[ib, ib] += g
-                G[ia, ib] -= g
-                G[ib, ia] -= g
-            else:
-                i = ia if ia >= 0 else ib
-                G[i, i] += g
-                Gb[i, ii] += g
-        for i, j, g in st["heat"]:
-            Gb[i, j] += v(g)
+        g = 1.0 / np.array([v(r) for r in st["res"]], dtype)
+        G = st["L"].T @ (g[:, None] * st["L"])  # conductance (Laplacian) among nodes
+        Gb = st["P"].T @ (g[:, None] * st["E"])  # from nodes to inputs (boundary conductances, heat gains)
+        if Gb.dtype != dtype:
+            G, Gb = G.astype(dtype), Gb.astype(dtype)
+        for i, j, gain in st["heat"]:
+            Gb[i, j] += v(gain)
         Nf = np.zeros((nf, nn, nn), dtype)
         Mf = np.zeros((nf, nn, p), dtype)
         for k, i, j, cp in st["air"]:
             Nf[k, i, i] -= v(cp)
             Mf[k, i, j] += v(cp)
-        xs, zs, out = st["xs"], st["zs"], st["out"]
+        xs, zs = st["xs"], st["zs"]
         # energy balance: Cap dT/dt = -G T + Gb u + sum_k m_k (Nf_k T + Mf_k u)
-        Axx, Bx = -G[np.ix_(xs, xs)], Gb[xs]
-        Cfull = np.zeros((len(out), nn))
-        Cfull[np.arange(len(out)), out] = 1.0
-        C, D = Cfull[:, xs].astype(dtype), np.zeros((len(out), p), dtype)
-        if zs:
+        Axx, Bx = -G[st["xx"]], Gb[xs]
+        C, D = st["Cx"].astype(dtype), np.zeros((st["Cx"].shape[0], p), dtype)
+        if zs.size:
             # Kron reduction: z = Kz x + Lz u  from  0 = -G_zx x - G_zz z + Gb_z u
-            Gzz = G[np.ix_(zs, zs)]
-            Kz = np.linalg.solve(Gzz, -G[np.ix_(zs, xs)])
-            Lz = np.linalg.solve(Gzz, Gb[zs])
-            Axz = -G[np.ix_(xs, zs)]
+            Gzz = G[st["zz"]]
+            KL = np.linalg.solve(Gzz, np.concatenate([-G[st["zx"]], Gb[zs]], axis=1))
+            Kz, Lz = KL[:, : xs.size], KL[:, xs.size :]
+            Axz = -G[st["xz"]]
             Axx = Axx + Axz @ Kz
             Bx = Bx + Axz @ Lz
-            C = C + Cfull[:, zs] @ Kz
-            D = D + Cfull[:, zs] @ Lz
+            C = C + st["Cz"] @ Kz
+            D = D + st["Cz"] @ Lz
         cap = np.array([v(c) for c in st["cap"]], dtype)
         inv = (1.0 / cap)[:, None]
         return (Axx * inv, Nf[:, xs][:, :, xs] * inv[None], Bx * inv, Mf[:, xs] * inv[None], C, D, cap)

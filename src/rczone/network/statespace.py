@@ -128,6 +128,8 @@ class BilinearStateSpace:
         if self.n_flows == 0:
             return self.A, self.B
         mk = _flows(m, self.n_flows)
+        if mk.shape[0] == 1:  # one flow (the usual zone): no tensordot overhead
+            return self.A + mk[0] * self.N[0], self.B + mk[0] * self.M[0]
         return (
             self.A + np.tensordot(mk, self.N, axes=1),
             self.B + np.tensordot(mk, self.M, axes=1),

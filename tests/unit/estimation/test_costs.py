@@ -6,7 +6,14 @@ import numpy as np
 import pytest
 
 from rczone.estimation import Dataset, Objective, ls_cost, make_spec, ml_cost
-from rczone.estimation.costs import auto_initial_state, log_prior_penalty, trapezoid_sse
+from rczone.estimation.costs import (
+    auto_initial_state,
+    filter_arrays,
+    log_prior_penalty,
+    run_filter,
+    trapezoid_sse,
+)
+from rczone.estimation.kalman import kalman_innovations_fast
 
 from .nets import NET1, NET2, data2
 
@@ -74,3 +81,17 @@ def test_objective_never_mutates_network_or_data() -> None:
     Objective(NET2, data, spec, "ls")(np.log([1e5, 0.5]))
     assert {k: (p.value, p.expr) for k, p in NET2.parameters.items()} == before
     np.testing.assert_array_equal(data.y, y_before)
+
+
+def test_compiled_innovations_equal_the_reference_filter() -> None:
+    rng = np.random.default_rng(3)
+    data = data2(noise=0.05, rng=rng)
+    y = data.y.copy()
+    y[[5, 40, 41]] = np.nan  # missing samples skip the update and stay NaN
+    data = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+    values = {**NET2.values(), "sigma_v": 0.05, "sigma_w_Ti": 1e-3, "sigma_w_Tw": 1e-4}
+    values |= {"sigma_x0_Ti": 0.1, "sigma_x0_Tw": 1.0}
+    ref = run_filter(NET2, values, data).innovations
+    got = kalman_innovations_fast(*filter_arrays(NET2, values, data))
+    np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
+    assert np.isnan(got[[5, 40, 41]]).all() and np.isfinite(got[:5]).all()
