@@ -42,6 +42,20 @@ def fit(
     report_dir: Annotated[
         Path | None, typer.Option("--report", help="Folder for report.html and figures.")
     ] = None,
+    check_on: Annotated[
+        str | None,
+        typer.Option(
+            "--check-on",
+            help="Comma-separated other data (files or A, B, C): fit them too, compare the estimates and"
+            " predict them with this fit.",
+        ),
+    ] = None,
+    profiles: Annotated[
+        bool,
+        typer.Option(
+            help="Profile each R and C over a factor of 10 (with --json or --report; a few seconds)."
+        ),
+    ] = True,
 ) -> None:
     """Identify the model's R and C from DATA."""
     from rczone.calibrate import calibrate
@@ -83,6 +97,22 @@ def fit(
     )
     for f in r.flags:
         out.print(f"[yellow]warning:[/] {f}")
+    others = {p: read_frame(Path(p), column_map) for p in _split(check_on) or []}
+    checks = None
+    if report_dir or json_out or others:
+        checks = _post_fit_checks(
+            net, frame, cal, data, others, profiles, method, _split(free), optimizer, console
+        )
+        for d in checks["disagreements"]:
+            if d["disagree"]:
+                out.print(
+                    f"[yellow]warning:[/] {d['name']} fitted to {d['data_a']} ({d['estimate_a']:.3g}) and to"
+                    f" {d['data_b']} ({d['estimate_b']:.3g}) disagree beyond their standard errors"
+                )
+        for name, v in checks["profiles"].items():
+            if v["flat_low"] or v["flat_high"]:
+                side = "ten times smaller" if v["flat_low"] else "ten times larger"
+                out.print(f"[yellow]warning:[/] a value of {name} {side} fits these data about as well")
     diag = None
     if report_dir or json_out:
         from rczone.diagnostics import diagnose
@@ -103,6 +133,7 @@ def fit(
             }
             if diag
             else {},
+            checks=checks,
         )
         write_json_atomic(json_out, payload)
     if save_model:
@@ -111,8 +142,36 @@ def fit(
     if report_dir:
         from rczone.report.fit import fit_report
 
-        fit_report(cal, frame, str(data), model_name, diag).write(report_dir)
+        fit_report(cal, frame, str(data), model_name, diag, checks).write(report_dir)
         out.print(f"report written to [bold]{report_dir / 'report.html'}[/]")
+
+
+def _post_fit_checks(net, frame, cal, data, others, profiles, method, free, optimizer, console) -> dict:
+    """Profiles, estimates at bounds or far from construction, and fits to the other data sets."""
+    from rczone.calibrate import calibrate, predict
+    from rczone.diagnostics.postfit import compare_fits, far_from_construction, profile_checks
+
+    r = cal.result
+    constants = cal.model.provenance.get("constants")
+    prof = {}
+    if profiles:
+        with console.status("profiling the estimates"):
+            prof = {k: v.to_dict() for k, v in profile_checks(net, frame, r, constants=constants).items()}
+    fits = {str(data): r}
+    validation = {}
+    for name, f in others.items():
+        with console.status(f"fitting {name} for comparison"):
+            fits[name] = calibrate(net, f, method, free, optimizer).result
+        ol = predict(cal.model, f)
+        validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}
+    return {
+        "profiles": prof,
+        "at_bound": [n for n in r.names if r.at_bound[n]],
+        "far_from_construction": far_from_construction(r),
+        "other_fits": {k: {n: v.estimates[n] for n in v.names} for k, v in fits.items() if k != str(data)},
+        "disagreements": [{"name": d.name, **d.to_dict()} for d in compare_fits(fits)],
+        "validation": validation,
+    }
 
 
 @app.command()

@@ -36,9 +36,14 @@ def parameter_rows(cal: Calibration) -> list[dict[str, object]]:
 
 
 def fit_report(
-    cal: Calibration, frame: pd.DataFrame, data_name: str, model_name: str, diag: IdentifiabilityReport | None
+    cal: Calibration,
+    frame: pd.DataFrame,
+    data_name: str,
+    model_name: str,
+    diag: IdentifiabilityReport | None,
+    checks: dict | None = None,
 ) -> Report:
-    """A full report for one fit."""
+    """A full report for one fit (``checks``: the JSON-ready post-fit checks of ``rczone fit``)."""
     r = cal.result
     rep = Report(f"Fit of {model_name} to {data_name} ({r.method.upper()})")
     rep.paragraph(
@@ -85,4 +90,83 @@ def fit_report(
                 " model fits: a grossly different value would fit about as well.",
                 "warn",
             )
+    if checks:
+        add_checks(rep, cal, checks)
     return rep
+
+
+def add_checks(rep: Report, cal: Calibration, checks: dict) -> None:
+    """The section "Can the estimates be trusted?" from the post-fit checks."""
+    r = cal.result
+    rep.heading("After the fit: can the estimates be trusted?")
+    rows = []
+    for n in r.names:
+        ratio = r.ratio_to_construction(n)
+        prof = checks["profiles"].get(n)
+        if prof:
+            lo, hi = prof["interval"]
+            shape = (
+                "flat: a value ten times smaller fits as well"
+                if prof["flat_low"]
+                else "flat: a value ten times larger fits as well"
+                if prof["flat_high"]
+                else "curved"
+            )
+            interval = f"{_fmt(lo)} to {_fmt(hi)}"
+        else:
+            shape = interval = ""
+        rows.append(
+            {
+                "parameter": n,
+                "estimate": r.estimates[n],
+                "estimate / construction": ratio if math.isfinite(ratio) else None,
+                "far from construction": "yes" if n in checks["far_from_construction"] else "",
+                "at bound": "yes" if n in checks["at_bound"] else "",
+                "profile": shape,
+                "95% profile interval": interval,
+            }
+        )
+    rep.table(rows, "Checks per parameter (profiles counted per 30 min of correlated error)", digits=3)
+    if checks["disagreements"]:
+        rep.table(
+            [
+                {
+                    "parameter": d["name"],
+                    "data": f"{d['data_a']} vs {d['data_b']}",
+                    "estimates": f"{d['estimate_a']:.3g} vs {d['estimate_b']:.3g}",
+                    "z": d["z"],
+                    "verdict": "DISAGREE" if d["disagree"] else "agree",
+                }
+                for d in checks["disagreements"]
+            ],
+            "The same model fitted to other data sets",
+            digits=2,
+        )
+    if checks["validation"]:
+        rep.table(
+            [
+                {"data": k, "RMSE (K)": v["rmse_K"], "max error (K)": v["max_error_K"]}
+                for k, v in checks["validation"].items()
+            ],
+            "This fit predicting the other data sets open loop",
+            digits=3,
+        )
+    worry = sorted(
+        {d["name"] for d in checks["disagreements"] if d["disagree"]}
+        | set(checks["far_from_construction"])
+        | set(checks["at_bound"])
+        | {n for n, p in checks["profiles"].items() if p["flat_low"] or p["flat_high"]}
+    )
+    if worry:
+        rep.paragraph(
+            "Treat "
+            + html.escape(", ".join(worry))
+            + " with suspicion: a parameter the data pin down is not at"
+            " a bound, not far from what the construction suggests without a reason, has a curved profile, and"
+            " comes out the same on other data.",
+            "warn",
+        )
+
+
+def _fmt(x: float) -> str:
+    return "open" if not math.isfinite(x) else f"{x:.3g}"

@@ -1,0 +1,248 @@
+"""Checks after a fit: is the estimate one the data actually pin down?
+
+A fit always returns numbers. These checks say which of them to believe:
+
+* **profile flatness**: the cost re-minimized over the other parameters with one parameter
+  held at values from ten times smaller to ten times larger. The rise is counted in
+  log-likelihood units of *effective* independent samples (one per error correlation time, as
+  in :func:`rczone.diagnostics.diagnose`); if it stays below ``chi2(1, 0.95) / 2 = 1.92`` at
+  either end, the data cannot rule out a value ten times off;
+* **estimates at a bound** of the search box;
+* **estimates far from the construction values** (more than a factor ``far`` off);
+* **disagreement between fits to different data sets**: two estimates whose log-ratio exceeds
+  twice its standard error and a factor ``tolerance``.
+
+References
+----------
+.. [1] A. Raue et al., "Structural and practical identifiability analysis of partially observed
+   dynamical models by exploiting the profile likelihood", Bioinformatics 25(15), 2009.
+.. [2] Lin, Middelkoop, Barooah, IEEE CDC 2012, section IV (a fit to closed-loop data that
+   fits yet is grossly wrong).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.stats import chi2
+
+from rczone.errors import ParameterError
+from rczone.estimation import FitResult
+from rczone.estimation.costs import MAP_CORRELATION_TIME, Objective, auto_initial_state
+from rczone.estimation.parameters import make_spec
+from rczone.estimation.uncertainty import profile
+from rczone.network import RCNetwork
+
+#: Rise of the tempered negative log-likelihood that a 95 % profile interval allows.
+PROFILE_THRESHOLD = 0.5 * float(chi2.ppf(0.95, 1))
+
+
+@dataclass(frozen=True)
+class ProfileCheck:
+    """The profile of one parameter and what it says.
+
+    Attributes
+    ----------
+    name : str
+    values : ndarray
+        Grid of the parameter (SI).
+    rise : ndarray
+        Rise of the tempered negative log-likelihood above its minimum along the grid.
+    interval : tuple of float
+        95 % profile interval (NaN where the grid does not reach the threshold: open).
+    flat_low, flat_high : bool
+        The profile stays below the threshold down to ``estimate / factor`` (up to
+        ``estimate * factor``).
+    """
+
+    name: str
+    values: np.ndarray
+    rise: np.ndarray
+    interval: tuple[float, float]
+    flat_low: bool
+    flat_high: bool
+
+    @property
+    def flat(self) -> bool:
+        return self.flat_low or self.flat_high
+
+    def to_dict(self) -> dict:
+        return {
+            "values": self.values.tolist(),
+            "rise": self.rise.tolist(),
+            "interval": list(self.interval),
+            "flat_low": self.flat_low,
+            "flat_high": self.flat_high,
+        }
+
+
+@dataclass(frozen=True)
+class Disagreement:
+    """One parameter estimated on two data sets."""
+
+    name: str
+    data_a: str
+    data_b: str
+    estimate_a: float
+    estimate_b: float
+    z: float
+    disagree: bool
+
+    def to_dict(self) -> dict:
+        return {k: v for k, v in vars(self).items() if k != "name"}
+
+
+def _objective(network: RCNetwork, frame: pd.DataFrame, res: FitResult, constants) -> tuple[Objective, float]:
+    from rczone.calibrate import dataset
+
+    data = dataset(network, frame, constants)
+    ss0 = network.state_space()
+    x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
+    x0_auto = {f"x0_{s}": float(v) for s, v in zip(ss0.state_names, x0a)}
+    fixed = {
+        k: v for k, v in res.fixed.items() if k not in network.parameters or not network.parameters[k].is_tied
+    }
+    spec = make_spec(
+        network,
+        res.names,
+        bounds={n: (res.lower[n], res.upper[n]) for n in res.names},
+        start=res.estimates,
+        fixed=fixed,
+        x0_auto=x0_auto,
+    )
+    dt = float(np.median(np.diff(data.t)))
+    w = min(1.0, dt / MAP_CORRELATION_TIME)
+    obj = Objective(
+        network, data, spec, res.method, res.hold, likelihood_weight=w if res.method == "map" else 1.0
+    )
+    return obj, w
+
+
+def profile_checks(
+    network: RCNetwork,
+    frame: pd.DataFrame,
+    res: FitResult,
+    names: Sequence[str] | None = None,
+    factor: float = 10.0,
+    n_points: int = 9,
+    constants: Mapping[str, float] | None = None,
+) -> dict[str, ProfileCheck]:
+    """Profile each free resistance and capacitance of a fit over ``[est / factor, est * factor]``.
+
+    Parameters
+    ----------
+    network : RCNetwork
+        The fitted structure (as passed to the fit).
+    frame : DataFrame
+        The calibration data.
+    res : FitResult
+    names : sequence of str, optional
+        Parameters to profile; default every free resistance and capacitance.
+    factor : float
+        Half-width of the grid as a factor around the estimate.
+    n_points : int
+        Grid points (odd, so the estimate is one of them).
+    constants : mapping, optional
+        Constant inputs, as in the fit.
+
+    Returns
+    -------
+    dict of str to ProfileCheck
+    """
+    if not factor > 1 or n_points < 3:
+        raise ParameterError(f"profile needs factor > 1 and n_points >= 3, got {factor}, {n_points}")
+    if names is None:
+        names = [
+            n
+            for n in res.names
+            if n in network.parameters and network.parameters[n].kind in ("resistance", "capacitance")
+        ]
+    obj, w = _objective(network, frame, res, constants)
+    theta_hat = np.array([res.estimates[n] for n in obj.spec.names])
+    n_eff = (obj.data.t[-1] - obj.data.t[0]) / MAP_CORRELATION_TIME
+    out = {}
+    for name in names:
+        est = res.estimates[name]
+        grid = est * factor ** np.linspace(-1.0, 1.0, n_points)
+        lo, hi = res.lower[name], res.upper[name]
+        grid = grid[(grid > lo) & (grid < hi)]
+        if grid.size < 2:
+            continue
+        pr = profile(obj, theta_hat, name, grid, optimizer="nelder-mead")
+        if res.method == "ls":  # Gaussian errors, variance concentrated out, n_eff samples
+            rise = 0.5 * max(n_eff, 1.0) * np.log(pr.cost / pr.cost.min())
+        elif res.method == "ml":
+            rise = w * (pr.cost - pr.cost.min())
+        else:  # MAP: the objective is already tempered
+            rise = pr.cost - pr.cost.min()
+        interval = _interval(grid, rise)
+        # (a grid cut by a bound is flat if it stays low all the way to the bound)
+        flat_low, flat_high = bool(rise[0] < PROFILE_THRESHOLD), bool(rise[-1] < PROFILE_THRESHOLD)
+        out[name] = ProfileCheck(name, grid, rise, interval, flat_low, flat_high)
+    return out
+
+
+def _interval(x: np.ndarray, rise: np.ndarray) -> tuple[float, float]:
+    k0 = int(np.argmin(rise))
+    lo = hi = math.nan
+    for k in range(k0, 0, -1):
+        if rise[k - 1] >= PROFILE_THRESHOLD > rise[k]:
+            lo = float(np.exp(np.interp(PROFILE_THRESHOLD, [rise[k], rise[k - 1]], np.log([x[k], x[k - 1]]))))
+            break
+    for k in range(k0, x.size - 1):
+        if rise[k + 1] >= PROFILE_THRESHOLD > rise[k]:
+            hi = float(np.exp(np.interp(PROFILE_THRESHOLD, [rise[k], rise[k + 1]], np.log([x[k], x[k + 1]]))))
+            break
+    return lo, hi
+
+
+def compare_fits(
+    fits: Mapping[str, FitResult], names: Sequence[str] | None = None, tolerance: float = 1.5
+) -> list[Disagreement]:
+    """Compare the estimates of the same parameters fitted to different data sets.
+
+    Two estimates disagree when ``|log(a / b)|`` exceeds both twice its standard error (from
+    the fits' standard errors, in log space) and ``log(tolerance)``.
+
+    Parameters
+    ----------
+    fits : mapping of data-set name to FitResult
+    names : sequence of str, optional
+        Parameters to compare; default those free in every fit.
+    tolerance : float
+        Factor below which two estimates are never called different.
+    """
+    if not tolerance >= 1:
+        raise ParameterError(f"tolerance must be >= 1, got {tolerance}")
+    keys = list(fits)
+    if names is None and keys:
+        common = set.intersection(*(set(f.names) for f in fits.values()))
+        names = [n for n in fits[keys[0]].names if n in common and not n.startswith(("sigma_", "x0_"))]
+    out = []
+    for i, a in enumerate(keys):
+        for b in keys[i + 1 :]:
+            fa, fb = fits[a], fits[b]
+            for n in names:
+                ea, eb = fa.estimates[n], fb.estimates[n]
+                lr = math.log(ea / eb)
+                sa, sb = fa.std_errors[n] / ea, fb.std_errors[n] / eb
+                se = math.sqrt(sa * sa + sb * sb) if math.isfinite(sa) and math.isfinite(sb) else math.inf
+                z = abs(lr) / se if se > 0 else math.inf
+                out.append(Disagreement(n, a, b, ea, eb, z, bool(z > 2 and abs(lr) > math.log(tolerance))))
+    return out
+
+
+def far_from_construction(res: FitResult, factor: float = 3.0) -> dict[str, float]:
+    """Free R and C whose estimate is more than ``factor`` away from its construction value (the ratios)."""
+    out = {}
+    for n in res.names:
+        c = res.construction[n]
+        if math.isfinite(c) and c > 0:
+            r = res.estimates[n] / c
+            if r > factor or r < 1 / factor:
+                out[n] = r
+    return out

@@ -1,0 +1,97 @@
+"""Post-fit checks on synthetic nights whose true parameters are known."""
+
+import dataclasses
+import json
+
+import pytest
+
+from rczone.calibrate import calibrate
+from rczone.cli.main import main
+from rczone.diagnostics.postfit import PROFILE_THRESHOLD, compare_fits, far_from_construction, profile_checks
+from rczone.errors import ParameterError
+from rczone.models import get_model
+from tests.unit.diagnostics.synthetic import night
+
+TRUE = {"Rw": 0.012, "Cr": 6e5}
+
+
+@pytest.fixture(scope="module")
+def net():
+    return get_model("second-order-paper")
+
+
+@pytest.fixture(scope="module")
+def forced_fit(net):
+    frame = night("forced", seed=3, hours=6, theta=TRUE)
+    return frame, calibrate(net, frame, method="ls")
+
+
+def test_profiles_of_a_forced_night_are_curved_and_cover_the_truth(net, forced_fit):
+    frame, cal = forced_fit
+    checks = profile_checks(net, frame, cal.result, n_points=7)
+    assert set(checks) == {"Cr", "Rw"}
+    for name, c in checks.items():
+        assert not c.flat
+        lo, hi = c.interval
+        assert lo < TRUE[name] < hi, (name, c.interval)
+        assert c.rise.min() == 0.0 and c.rise.max() > PROFILE_THRESHOLD
+
+
+def test_a_parameter_the_data_cannot_see_has_a_flat_profile(net):
+    # a night at constant Ts equal to the surroundings: the wall resistance hardly matters
+    frame = night("closed-loop", seed=1, hours=3, theta=TRUE)
+    cal = calibrate(net, frame, method="ls")
+    checks = profile_checks(net, frame, cal.result, names=["Rw"], n_points=5)
+    assert checks["Rw"].flat
+
+
+def test_fits_to_two_forced_nights_agree_and_a_shifted_one_does_not(net, forced_fit):
+    _, cal = forced_fit
+    other = calibrate(net, night("forced", seed=4, hours=6, theta=TRUE), method="ls").result
+    assert not any(d.disagree for d in compare_fits({"a": cal.result, "b": other}))
+    shifted = dataclasses.replace(other, estimates={**other.estimates, "Rw": 3 * other.estimates["Rw"]})
+    verdict = {d.name: d.disagree for d in compare_fits({"a": cal.result, "b": shifted})}
+    assert verdict == {"Cr": False, "Rw": True}
+
+
+def test_far_from_construction_reports_the_ratio(forced_fit):
+    _, cal = forced_fit
+    ratios = far_from_construction(cal.result, factor=1.2)  # truth Rw 0.012 vs construction 0.0084
+    assert ratios["Rw"] == pytest.approx(cal.result.estimates["Rw"] / cal.result.construction["Rw"])
+    assert far_from_construction(cal.result, factor=3.0) == {}
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"), [({"factor": 1.0}, "factor > 1"), ({"n_points": 2}, "n_points")]
+)
+def test_bad_profile_arguments(net, forced_fit, kwargs, match):
+    frame, cal = forced_fit
+    with pytest.raises(ParameterError, match=match):
+        profile_checks(net, frame, cal.result, **kwargs)
+
+
+def test_cli_fit_check_on_other_data_writes_checks(tmp_path, capsys):
+    night("forced", seed=3, hours=6, theta=TRUE).to_csv(tmp_path / "a.csv", index=False)
+    night("forced", seed=4, hours=6, theta={"Rw": 0.004, "Cr": 6e5}).to_csv(tmp_path / "b.csv", index=False)
+    out = tmp_path / "fit.json"
+    rc = main(
+        [
+            "fit",
+            str(tmp_path / "a.csv"),
+            "--method",
+            "ls",
+            "--check-on",
+            str(tmp_path / "b.csv"),
+            "--json",
+            str(out),
+            "--report",
+            str(tmp_path / "rep"),
+        ]
+    )
+    assert rc == 0
+    checks = json.loads(out.read_text())["checks"]
+    rw = [d for d in checks["disagreements"] if d["name"] == "Rw"]
+    assert rw and rw[0]["disagree"]  # Rw 0.012 vs 0.004: a real difference is caught
+    assert set(checks["profiles"]) == {"Cr", "Rw"} and str(tmp_path / "b.csv") in checks["validation"]
+    assert "disagree beyond their standard errors" in capsys.readouterr().out
+    assert "can the estimates be trusted?" in (tmp_path / "rep" / "report.html").read_text()
