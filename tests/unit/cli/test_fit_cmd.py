@@ -2,6 +2,7 @@
 
 import json
 
+import pandas as pd
 import pytest
 
 from rczone.cli.main import main
@@ -63,3 +64,31 @@ def test_user_mistakes_exit_2_with_one_line(files, capsys, args, message):
     assert rc == 2
     assert message in err and "Traceback" not in err
     assert len([ln for ln in err.splitlines() if ln.startswith("error:")]) == 1
+
+
+def test_diagnose_builtin_sets_with_report(tmp_path, capsys):
+    """Before any fit: the closed-loop nights A and B cannot identify Rw, the forced night C can."""
+    verdicts = {}
+    for name in "ABC":
+        out = tmp_path / f"{name}.json"
+        args = ["diagnose", name, "--json", str(out)] + (
+            ["--report", str(tmp_path / "rep")] if name == "C" else []
+        )
+        assert main(args) == 0
+        verdicts[name] = json.loads(out.read_text())["parameters"]["Rw"]["verdict"]
+    assert verdicts == {"A": "not identifiable", "B": "not identifiable", "C": "identifiable"}
+    html = (tmp_path / "rep" / "report.html").read_text()
+    assert "identifiable" in html and "<img" in html and (tmp_path / "rep" / "data_overview.png").exists()
+
+
+def test_design_writes_a_playable_schedule(tmp_path, capsys):
+    sched, js = tmp_path / "schedule.csv", tmp_path / "design.json"
+    assert main(["design", "--hours", "6", "--out", str(sched), "--json", str(js)]) == 0
+    s = pd.read_csv(sched)
+    assert list(s.columns) == ["time_s", "Ts_setpoint_degC", "m_setpoint_kg_s"] and len(s) > 1
+    assert s["Ts_setpoint_degC"].between(12, 35).all() and s["m_setpoint_kg_s"].between(0.02, 0.12).all()
+    # every command is held at least the minimum hold time (30 min default)
+    assert (s["time_s"].diff().dropna() >= 1800).all()
+    d = json.loads(js.read_text())
+    assert d["within_band"] and 17 <= d["ti_min_degC"] < d["ti_max_degC"] <= 28
+    assert all(0 < v < 0.25 for v in d["expected_rel_se"].values())
