@@ -247,8 +247,8 @@ def diagnose(
     w = n_eff / ok.sum() / sigma_K**2
     J = np.column_stack([S, nuis])
     scale = np.linalg.norm(J, axis=0)
-    scale[scale == 0] = 1.0
-    sv = np.linalg.svd(J / scale, compute_uv=False)
+    used = scale > 0  # a nuisance column that is identically zero carries no information
+    sv = np.linalg.svd(J[:, used] / scale[used], compute_uv=False)
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
     F_all = w * (J.T @ J)
     P = len(free)

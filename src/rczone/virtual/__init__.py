@@ -4,8 +4,9 @@ Modules: :mod:`~rczone.virtual.walls` (fine RC walls from construction layers),
 :mod:`~rczone.virtual.building` (the floor as one RC network, true construction),
 :mod:`~rczone.virtual.control` (VAV thermostats), :mod:`~rczone.virtual.weather`
 (outdoor temperature), :mod:`~rczone.virtual.sensors` (BMS sensors),
-:mod:`~rczone.virtual.emulator` (exact closed-loop simulation) and
-:mod:`~rczone.virtual.scenarios` (the data sets A, B, C and :func:`generate_night`).
+:mod:`~rczone.virtual.emulator` (exact closed-loop simulation),
+:mod:`~rczone.virtual.scenarios` (the data sets A, B, C and :func:`generate_night`) and
+:mod:`~rczone.virtual.playback` (a designed test schedule played in the building).
 """
 
 from rczone.virtual.building import VirtualBuilding, build_building, true_geometry

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rczone.errors import ParameterError
 from rczone.simulation import zoh
 from rczone.virtual.building import VirtualBuilding
 from rczone.virtual.control import CONTROL_DT, FLOW_LEVELS, SEASONS, VAVController, controller_configs
@@ -47,19 +48,41 @@ DAY_END = 0.0
 class Command:
     """One block of a forced-response schedule from ``start`` (s from 6 pm).
 
-    ``reheat`` is the discharge temperature above the AHU supply temperature, K.
+    ``reheat`` is the discharge temperature above the AHU supply temperature, K. When ``ts``
+    (an absolute discharge-temperature setpoint, degC) is given it replaces ``reheat``: the
+    reheat coil then aims at ``max(ts, T_ahu)``, because it can only heat the AHU's supply air
+    (a setpoint below the AHU supply temperature is met only as far as the AHU allows).
     """
 
     start: float
     m: float
-    reheat: float
+    reheat: float = 0.0
+    ts: float | None = None
+
+    def __post_init__(self) -> None:
+        values = {"start": self.start, "m": self.m, "reheat": self.reheat}
+        if self.ts is not None:
+            values["ts"] = self.ts
+        bad = {k: v for k, v in values.items() if not np.isfinite(v)}
+        if bad:
+            raise ParameterError(f"Command values must be finite, got {bad}; check the schedule")
+        if self.m < 0 or self.reheat < 0:
+            raise ParameterError(
+                f"Command needs m >= 0 kg/s and reheat >= 0 K, got m={self.m!r}, reheat={self.reheat!r};"
+                " a VAV box cannot extract air or cool below the AHU supply"
+            )
+
+    def discharge_target(self, t_ahu: float) -> float:
+        """Discharge temperature the coil aims at when the AHU supplies ``t_ahu`` degC."""
+        return t_ahu + self.reheat if self.ts is None else max(self.ts, t_ahu)
 
 
 class ForcedController:
     """Follows a piecewise-constant command schedule, ignoring the zone temperature.
 
     Before the first command's start the zone's thermostat (``fallback``) is in charge.
-    The discharge temperature still passes the reheat coil's first-order lag.
+    The discharge temperature still passes the reheat coil's first-order lag, towards
+    :meth:`Command.discharge_target` (relative reheat or absolute setpoint).
     """
 
     def __init__(
@@ -78,7 +101,7 @@ class ForcedController:
         for c in self.commands:
             if c.start <= t:
                 cmd = c
-        target = t_ahu + cmd.reheat
+        target = cmd.discharge_target(t_ahu)
         if self.ts is None:
             self.ts = target
         else:

@@ -88,6 +88,7 @@ def generate_night(
     seed: int = 0,
     zone: str = "target",
     warmup: float = 6 * 3600.0,
+    commands: tuple[Command, ...] | None = None,
 ) -> pd.DataFrame:
     """Generate one 6 pm to 6 am night of BMS data for the target office.
 
@@ -103,6 +104,11 @@ def generate_night(
         surroundings) is supported.
     warmup : float
         Simulated time before 6 pm, s.
+    commands : tuple of Command, optional
+        Forced mode only: the target's command schedule instead of the seeded
+        :func:`forced_schedule` (used by :func:`rczone.virtual.playback.play_schedule`). The
+        weather, the neighbours' controllers and the sensor noise depend on ``seed`` alone,
+        so the same seed with and without ``commands`` gives a paired comparison.
 
     Returns
     -------
@@ -119,9 +125,14 @@ def generate_night(
         )
     if not warmup >= 0 or warmup % SAMPLE:
         raise ParameterError(f"warmup must be a non-negative multiple of 60 s, got {warmup!r}")
+    if commands is not None and mode != "forced":
+        raise ParameterError(f"commands are played in mode 'forced' only, got mode {mode!r}")
+    if commands is not None and (not commands or any(not isinstance(c, Command) for c in commands)):
+        raise ParameterError("commands must be a non-empty tuple of rczone.virtual.emulator.Command")
     bld = build_building()
     g_run, g_meas, g_sched = np.random.default_rng(seed).spawn(3)
-    forced = {zone: forced_schedule(g_sched)} if mode == "forced" else None
+    seeded = forced_schedule(g_sched)
+    forced = {zone: tuple(commands) if commands is not None else seeded} if mode == "forced" else None
     r = run(bld, season, g_run, duration=NIGHT, warmup=warmup, forced=forced)
     n = round(NIGHT / SAMPLE)
     k0 = round(warmup / SAMPLE)
@@ -158,6 +169,8 @@ def generate_night(
     )
     if forced:
         df.attrs["forced_schedule"] = [(c.start, c.m, c.reheat) for c in forced[zone]]
+        if any(c.ts is not None for c in forced[zone]):
+            df.attrs["forced_ts_setpoints"] = [c.ts for c in forced[zone]]
     return df
 
 

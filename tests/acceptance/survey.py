@@ -1,0 +1,183 @@
+"""Diagnose, then fit, many seeded virtual nights; summarize per regime (used by the acceptance tests).
+
+Run ``python -m tests.acceptance.survey [n_seeds]`` from the repository root to print the
+verdicts-vs-fits table of ``docs/identifiability.md``.
+
+Definitions (the structural-error allowance, see ``docs/identifiability.md``):
+
+* ``u`` (predicted uncertainty of ``ln theta`` on one night) = ``sqrt(se^2 + b^2)``, with ``se`` the
+  expected relative standard error and ``b`` the worst-case relative bias from a 0.2 K model error,
+  both from :func:`rczone.diagnostics.diagnose` *before* the fit.
+* A parameter is **recovered** in a regime when (1) no fit sits at a bound and every fit converged,
+  (2) the night-to-night scatter (sample std of ``ln theta_hat``) is at most ``min(2 u_rms, ln 2)``,
+  (3) every night lies within ``3 u`` of the regime's geometric mean, and (4) that geometric mean is
+  within a factor :data:`STRUCTURAL_FACTOR` of the steady-state true equivalent.
+* It is **not recovered** when any of these fails.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+from rczone.calibrate import calibrate
+from rczone.diagnostics import diagnose
+from rczone.models import get_model
+from rczone.virtual.scenarios import generate_night
+
+FREE = ("Cr", "Rw")
+#: (season, mode) of each regime.
+REGIMES = {
+    "summer closed-loop": ("summer", "closed-loop"),
+    "winter closed-loop": ("winter", "closed-loop"),
+    "autumn forced": ("autumn", "forced"),
+}
+#: Allowed ratio between the forced-test value and the steady-state true equivalent: the reduced
+#: model's structural error (hour-scale vs steady-state wall response, tests/acceptance/truth.py).
+STRUCTURAL_FACTOR = 2.0
+
+
+@dataclass(frozen=True)
+class NightOutcome:
+    """Verdicts and predictions of diagnose, and the LS fit, on one night."""
+
+    regime: str
+    seed: int
+    verdict: dict[str, str]
+    expected_se: dict[str, float]
+    worst_bias: dict[str, float]
+    estimate: dict[str, float]
+    fit_rel_se: dict[str, float]
+    at_bound: dict[str, bool]
+    converged: bool
+    rmse_K: float
+
+    def u(self, name: str) -> float:
+        """Predicted uncertainty of ``ln theta`` (statistical and model-error), before the fit."""
+        return float(np.hypot(self.expected_se[name], self.worst_bias[name]))
+
+
+def night_outcome(regime: str, seed: int) -> NightOutcome:
+    """Generate one night of ``regime``, diagnose it, then fit the reduced model by LS."""
+    season, mode = REGIMES[regime]
+    net = get_model("second-order-paper")
+    frame = generate_night(season, mode, seed)
+    rep = diagnose(net, frame, free=list(FREE))
+    res = calibrate(net, frame, method="ls").result
+    return NightOutcome(
+        regime=regime,
+        seed=seed,
+        verdict={k: rep.parameters[k].verdict for k in FREE},
+        expected_se={k: rep.parameters[k].expected_rel_se for k in FREE},
+        worst_bias={k: rep.parameters[k].worst_case_bias for k in FREE},
+        estimate={k: float(res.estimates[k]) for k in FREE},
+        fit_rel_se={k: float(res.std_errors[k] / res.estimates[k]) for k in FREE},
+        at_bound={k: bool(res.at_bound[k]) for k in FREE},
+        converged=bool(res.converged),
+        rmse_K=float(res.rmse_K),
+    )
+
+
+@dataclass(frozen=True)
+class RegimeSummary:
+    """What the fits of one parameter did over the nights of one regime."""
+
+    regime: str
+    name: str
+    n: int
+    verdicts: dict[str, int]
+    gmean: float
+    ratio_to_truth: float
+    scatter_ln: float
+    u_rms: float
+    se_rms: float
+    bias_rms: float
+    fit_se_median: float
+    max_dev_in_u: float
+    n_at_bound: int
+    all_converged: bool
+    min_estimate: float
+    max_estimate: float
+
+    @property
+    def recovered(self) -> bool:
+        """The criteria of the module docstring."""
+        return (
+            self.n_at_bound == 0
+            and self.all_converged
+            and self.scatter_ln <= min(2 * self.u_rms, np.log(2.0))
+            and self.max_dev_in_u <= 3.0
+            and abs(np.log(self.ratio_to_truth)) <= np.log(STRUCTURAL_FACTOR)
+        )
+
+    @property
+    def consensus(self) -> str:
+        """``"identifiable"`` if every night says so, ``"not identifiable"`` if none does, else ``"mixed"``."""
+        ident = self.verdicts.get("identifiable", 0)
+        return "identifiable" if ident == self.n else ("not identifiable" if ident == 0 else "mixed")
+
+
+def summarize(outcomes: list[NightOutcome], name: str, truth: float) -> RegimeSummary:
+    """Summary of parameter ``name`` over ``outcomes`` (one regime), against ``truth``."""
+    est = np.array([o.estimate[name] for o in outcomes])
+    ln = np.log(est)
+    u = np.array([o.u(name) for o in outcomes])
+    gm = float(np.exp(ln.mean()))
+    verdicts: dict[str, int] = {}
+    for o in outcomes:
+        verdicts[o.verdict[name]] = verdicts.get(o.verdict[name], 0) + 1
+    return RegimeSummary(
+        regime=outcomes[0].regime,
+        name=name,
+        n=len(outcomes),
+        verdicts=verdicts,
+        gmean=gm,
+        ratio_to_truth=gm / truth,
+        scatter_ln=float(ln.std(ddof=1)),
+        u_rms=float(np.sqrt(np.mean(u**2))),
+        se_rms=float(np.sqrt(np.mean([o.expected_se[name] ** 2 for o in outcomes]))),
+        bias_rms=float(np.sqrt(np.mean([o.worst_bias[name] ** 2 for o in outcomes]))),
+        fit_se_median=float(np.median([o.fit_rel_se[name] for o in outcomes])),
+        max_dev_in_u=float(np.max(np.abs(ln - ln.mean()) / u)),
+        n_at_bound=sum(o.at_bound[name] for o in outcomes),
+        all_converged=all(o.converged for o in outcomes),
+        min_estimate=float(est.min()),
+        max_estimate=float(est.max()),
+    )
+
+
+def survey(seeds: Iterable[int], truth: dict[str, float]) -> list[RegimeSummary]:
+    """Every regime x parameter over ``seeds``."""
+    seeds = list(seeds)
+    out = []
+    for regime in REGIMES:
+        outcomes = [night_outcome(regime, s) for s in seeds]
+        out += [summarize(outcomes, k, truth[k]) for k in FREE]
+    return out
+
+
+def markdown(rows: list[RegimeSummary]) -> str:
+    """The verdicts-vs-fits table."""
+    head = (
+        "| regime | param | verdicts | estimates min..max | geo. mean / truth | scatter ln | predicted se"
+        " | predicted u | LS se (median) | at bound | recovered |\n|" + "---|" * 11
+    )
+    lines = [head]
+    for r in rows:
+        v = ", ".join(f"{k} {n}" for k, n in sorted(r.verdicts.items()))
+        lines.append(
+            f"| {r.regime} | {r.name} | {v} | {r.min_estimate:.3g}..{r.max_estimate:.3g} | {r.ratio_to_truth:.2f}"
+            f" | {r.scatter_ln:.3f} | {r.se_rms:.3f} | {r.u_rms:.3f} | {r.fit_se_median:.3f} | {r.n_at_bound}"
+            f" | {'yes' if r.recovered else 'no'} |"
+        )
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":  # pragma: no cover - documentation helper
+    from tests.acceptance.truth import steady_state_equivalent
+
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 30
+    print(markdown(survey(range(200, 200 + n), steady_state_equivalent())))
