@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rczone.errors import ParameterError
+from rczone.errors import InputShapeError, ParameterError
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import (
     FilterOutput,
@@ -54,12 +54,11 @@ METHODS = ("ls", "ml", "map")
 
 def measured_states(ss: BilinearStateSpace) -> dict[int, int]:
     """Map state index -> output index for outputs that read one state directly (C row = e_i, D row = 0)."""
+    C = ss.C
+    direct = ((C != 0).sum(axis=1) == 1) & (C == 1.0).any(axis=1) & ~ss.D.any(axis=1)
     out: dict[int, int] = {}
-    for j in range(ss.C.shape[0]):
-        row = ss.C[j]
-        nz = np.flatnonzero(row)
-        if nz.size == 1 and row[nz[0]] == 1.0 and not np.any(ss.D[j]):
-            out.setdefault(int(nz[0]), j)
+    for j in np.flatnonzero(direct).tolist():
+        out.setdefault(int(C[j].argmax()), j)
     return out
 
 
@@ -181,13 +180,28 @@ def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     compiled filter loop on :func:`stochastic_matrices`.
     """
     ss = network.state_space(network_theta(network, values))
-    if not rc2_applicable(ss, data.y.shape[1]):
-        return kalman_nll_fast(*filter_arrays(network, values, data, hold))
-    sw, sx, sv = noise_values(ss, values)
-    x0 = initial_state(ss, values, data)
-    return kalman_nll_rc2(
-        ss, data.t, data.m, data.u, data.y, x0, np.diag(sx**2), np.diag(sw**2), np.array([[sv**2]]), hold
-    )
+    if ss.n_states == 2 and data.y.shape[1] == 1:
+        # an RC network's state space is symmetrizable by construction (the kernel checks it
+        # and refuses otherwise, which the fallback below then handles)
+        sw, sx, sv = noise_values(ss, values)
+        x0 = initial_state(ss, values, data)
+        try:
+            return kalman_nll_rc2(
+                ss,
+                data.t,
+                data.m,
+                data.u,
+                data.y,
+                x0,
+                np.diag(sx**2),
+                np.diag(sw**2),
+                np.array([[sv**2]]),
+                hold,
+            )
+        except InputShapeError:
+            if rc2_applicable(ss, 1):
+                raise
+    return kalman_nll_fast(*filter_arrays(network, values, data, hold))
 
 
 def log_prior_penalty(spec: ParameterSpec, theta: np.ndarray, spread: float = PRIOR_SPREAD) -> float:

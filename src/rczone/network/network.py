@@ -440,14 +440,30 @@ class RCNetwork:
         out = [idx[o] for o in self.outputs]
         Cfull = np.zeros((len(out), nn))
         Cfull[np.arange(len(out)), out] = 1.0
+        # heat-input gains and supply-air cp given as numbers are assembled once; those given
+        # as parameter names are added per call
+        heat = [(idx[nd], iidx[h.name], g) for h in self.heat_inputs for nd, g in h.split]
+        air = [(fidx[s.flow], idx[s.node], iidx[s.temperature], s.cp) for s in self.supply_air]
+        Gb_const = np.zeros((nn, p))
+        for i, j, g in heat:
+            if not isinstance(g, str):
+                Gb_const[i, j] += float(g)
+        Nf, Mf = np.zeros((len(fidx), nn, nn)), np.zeros((len(fidx), nn, p))
+        for k, i, j, cp in air:
+            if not isinstance(cp, str):
+                Nf[k, i, i] -= float(cp)
+                Mf[k, i, j] += float(cp)
         return {
             "nn": nn,
             "L": L,
             "P": P,
             "E": E,
             "res": [r.resistance for r in self.resistors],
-            "heat": [(idx[nd], iidx[h.name], g) for h in self.heat_inputs for nd, g in h.split],
-            "air": [(fidx[s.flow], idx[s.node], iidx[s.temperature], s.cp) for s in self.supply_air],
+            "heat": [h for h in heat if isinstance(h[2], str)],
+            "air": [a for a in air if isinstance(a[3], str)],
+            "Gb": Gb_const,
+            "Nf": Nf,
+            "Mf": Mf,
             "xs": xs,
             "zs": zs,
             "xx": np.ix_(xs, xs),
@@ -466,23 +482,21 @@ class RCNetwork:
         def v(x: Value) -> float | complex:
             return vals[x] if isinstance(x, str) else float(x)
 
-        nn, p, nf = st["nn"], len(self.input_names), len(self.flow_names)
+        xs, zs = st["xs"], st["zs"]
         g = 1.0 / np.array([v(r) for r in st["res"]], dtype)
         G = st["L"].T @ (g[:, None] * st["L"])  # conductance (Laplacian) among nodes
-        Gb = st["P"].T @ (g[:, None] * st["E"])  # from nodes to inputs (boundary conductances, heat gains)
-        if Gb.dtype != dtype:
-            G, Gb = G.astype(dtype), Gb.astype(dtype)
+        Gb = st["P"].T @ (g[:, None] * st["E"]) + st["Gb"]  # nodes to inputs (conductances, heat gains)
         for i, j, gain in st["heat"]:
             Gb[i, j] += v(gain)
-        Nf = np.zeros((nf, nn, nn), dtype)
-        Mf = np.zeros((nf, nn, p), dtype)
-        for k, i, j, cp in st["air"]:
-            Nf[k, i, i] -= v(cp)
-            Mf[k, i, j] += v(cp)
-        xs, zs = st["xs"], st["zs"]
+        Nf, Mf = st["Nf"], st["Mf"]
+        if st["air"] or dtype is not float:
+            Nf, Mf = Nf.astype(dtype), Mf.astype(dtype)
+            for k, i, j, cp in st["air"]:
+                Nf[k, i, i] -= v(cp)
+                Mf[k, i, j] += v(cp)
         # energy balance: Cap dT/dt = -G T + Gb u + sum_k m_k (Nf_k T + Mf_k u)
         Axx, Bx = -G[st["xx"]], Gb[xs]
-        C, D = st["Cx"].astype(dtype), np.zeros((st["Cx"].shape[0], p), dtype)
+        C, D = st["Cx"].astype(dtype), np.zeros((st["Cx"].shape[0], Gb.shape[1]), dtype)
         if zs.size:
             # Kron reduction: z = Kz x + Lz u  from  0 = -G_zx x - G_zz z + Gb_z u
             Gzz = G[st["zz"]]
@@ -495,7 +509,8 @@ class RCNetwork:
             D = D + st["Cz"] @ Lz
         cap = np.array([v(c) for c in st["cap"]], dtype)
         inv = (1.0 / cap)[:, None]
-        return (Axx * inv, Nf[:, xs][:, :, xs] * inv[None], Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
+        Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
+        return (Axx * inv, Nx, Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
 
     def replace_parameters(self, parameters: Iterable[Parameter]) -> RCNetwork:
         """A copy of the network with some parameter declarations replaced or added."""
