@@ -36,7 +36,13 @@ def version() -> None:
 
 
 # Command modules register themselves on `app` when imported.
-from rczone.cli import commands_demo, commands_diagnose, commands_fit, commands_validate  # noqa: E402, F401
+from rczone.cli import (  # noqa: E402, F401
+    commands_batch,
+    commands_demo,
+    commands_diagnose,
+    commands_fit,
+    commands_validate,
+)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -79,6 +79,7 @@ def nll_rc2_kernel(
     foh: bool,
     phi2: np.ndarray,
     rtol: float,
+    e_out: np.ndarray,
 ) -> tuple[float, int]:
     """``-log L`` without the ``0.5 n log 2 pi`` term, and the number of observations.
 
@@ -108,8 +109,13 @@ def nll_rc2_kernel(
         Taylor coefficients for :func:`_phi2`.
     rtol : float
         Symmetry tolerance.
+    e_out : ndarray, shape (N,) or (0,)
+        Receives the innovations (one-step prediction errors) when it has one entry per
+        sample; entries of missing samples are left as they are. With ``P0 = Qc = 0`` the
+        filter never corrects the state, so these are the open-loop output errors.
     """
     n_t = y.shape[0]
+    keep = e_out.shape[0] == n_t
     nf = N.shape[0]
     p = B0.shape[1]
     if not (cap[0] > 0.0 and cap[1] > 0.0):
@@ -151,6 +157,8 @@ def nll_rc2_kernel(
             innov = y[k] - c[0] * x[0] - c[1] * x[1]
             for j in range(p):
                 innov -= dd[j] * u[k, j]
+            if keep:
+                e_out[k] = innov
             inv_s = 1.0 / s
             k0 = pc0 * inv_s
             k1 = pc1 * inv_s
@@ -308,6 +316,7 @@ def kalman_nll_rc2(
     Qc: np.ndarray,
     R: np.ndarray,
     hold: str = "zoh",
+    innovations: np.ndarray | None = None,
 ) -> float:
     """``-log L`` (including ``0.5 n log 2 pi``) of a 2-state RC model, one output.
 
@@ -331,6 +340,8 @@ def kalman_nll_rc2(
     R : ndarray, shape (1, 1)
         Measurement-noise variance, K^2.
     hold : {"zoh", "foh"}
+    innovations : ndarray, shape (N,), optional
+        Filled with the one-step prediction errors (missing samples untouched).
 
     Returns
     -------
@@ -346,6 +357,12 @@ def kalman_nll_rc2(
     y = np.asarray(y, dtype=np.float64)
     if y.ndim != 2 or y.shape[1] != 1 or ss.C.shape[0] != 1:
         raise InputShapeError(f"kalman_nll_rc2 needs one output, y of shape (N, 1); got {y.shape}")
+    if innovations is not None and (
+        innovations.shape != (y.shape[0],)
+        or innovations.dtype != np.float64
+        or not innovations.flags.c_contiguous
+    ):
+        raise InputShapeError(f"innovations must be a contiguous float64 array of shape ({y.shape[0]},)")
     f = np.ascontiguousarray
     nll, n_obs = nll_rc2_kernel(
         ss.A,
@@ -366,6 +383,7 @@ def kalman_nll_rc2(
         hold == "foh",
         _PHI2,
         SYMMETRY_RTOL,
+        np.empty(0) if innovations is None else innovations,
     )
     if n_obs < 0:
         raise InputShapeError(

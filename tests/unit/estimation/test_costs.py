@@ -95,3 +95,16 @@ def test_compiled_innovations_equal_the_reference_filter() -> None:
     got = kalman_innovations_fast(*filter_arrays(NET2, values, data))
     np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
     assert np.isnan(got[[5, 40, 41]]).all() and np.isfinite(got[:5]).all()
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_ls_cost_fast_path_equals_the_open_loop_simulation(hold) -> None:
+    from rczone.estimation.costs import simulate_output
+
+    data = data2(noise=0.05, rng=np.random.default_rng(8))
+    y = data.y.copy()
+    y[[3, 70]] = np.nan
+    data = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+    values = {**NET2.values(), "Rw": 0.013}
+    _, yhat = simulate_output(NET2, values, data, hold)  # general path: expm-free spectral + propagation
+    assert ls_cost(NET2, values, data, hold) == pytest.approx(trapezoid_sse(data.t, data.y - yhat), rel=1e-12)

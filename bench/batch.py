@@ -1,0 +1,70 @@
+"""Throughput of batch calibration: zone-nights per second with LS and ML, using every core.
+
+Usage::
+
+    python bench/batch.py [--zones 100] [--workers N] [--backend auto|dask|processes]
+
+Nights of the virtual building (autumn forced and summer closed-loop, alternating seeds) are
+generated once and written as Parquet files (timed separately: data generation is not
+calibration), then ``rczone.batch.run_batch`` calibrates the paper's reduced model on every
+night by LS and by ML (one start, uncertainty included, no diagnosis) into a fresh results
+folder. Prints the figures, the time extrapolated to 1,000 zone-nights, and one JSON line
+(``{"batch_1000_zone_nights": {"median_s": ..., ...}}``) that ``bench/results.json`` takes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+from rczone.batch import read_manifest, run_batch
+from rczone.virtual.scenarios import generate_night
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--zones", type=int, default=100)
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--backend", default="auto")
+    args = ap.parse_args(argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        t0 = time.perf_counter()
+        lines = ['methods = ["ls", "ml"]', "diagnose = false"]
+        for i in range(args.zones):
+            season, mode = ("autumn", "forced") if i % 2 == 0 else ("summer", "closed-loop")
+            generate_night(season, mode, i).to_parquet(d / f"z{i}.parquet", index=False)
+            lines += ["[[zone]]", f'id = "z{i}"', f'data = "z{i}.parquet"']
+        gen = time.perf_counter() - t0
+        (d / "m.toml").write_text("\n".join(lines) + "\n")
+        m = read_manifest(d / "m.toml")
+        t0 = time.perf_counter()
+        run = run_batch(m, d / "out", workers=args.workers, backend=args.backend)
+        wall = time.perf_counter() - t0
+    per_zone = wall / args.zones
+    print(
+        f"{args.zones} zone-nights x (LS + ML) on {args.workers} worker(s): {wall:.1f} s "
+        f"({per_zone * 1e3:.0f} ms per zone-night, {run.failed} failed); data generation {gen:.1f} s"
+    )
+    print(f"extrapolated to 1,000 zone-nights: {per_zone * 1000:.0f} s (target 60 s)")
+    print(
+        json.dumps(
+            {
+                "batch_1000_zone_nights": {
+                    "median_s": per_zone * 1000,
+                    "zones_measured": args.zones,
+                    "workers": args.workers,
+                    "ratio_vs_plain": None,
+                }
+            }
+        )
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

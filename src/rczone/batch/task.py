@@ -1,0 +1,105 @@
+"""One batch task: load a zone's data, calibrate one method, diagnose; always return a row.
+
+Runs in a worker process. Whatever goes wrong in one zone (bad data, a failed fit, a bug)
+becomes a row with ``status = "failed"`` and the error, so the batch goes on.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+import traceback
+from pathlib import Path
+
+import pandas as pd
+
+from rczone.batch.manifest import Task
+from rczone.errors import RczoneError
+
+
+def load_task_data(task: Task) -> pd.DataFrame:
+    """The zone's data frame in rczone's default columns."""
+    kind = task.source[0]
+    if kind == "virtual":
+        from rczone.virtual.scenarios import generate_night
+
+        _, season, mode, seed = task.source
+        return generate_night(season, mode, seed)
+    from rczone.cli.common import read_frame
+
+    _, path, columns = task.source
+    return read_frame(Path(path), Path(columns) if columns else None)
+
+
+def source_label(task: Task) -> str:
+    s = task.source
+    return f"virtual:{s[1]}/{s[2]}/{s[3]}" if s[0] == "virtual" else str(s[1])
+
+
+def run_tasks(tasks: list[Task]) -> list[dict]:
+    """Run the tasks of one zone (its methods), loading the data and diagnosing once."""
+    cache: dict = {}
+    return [run_task(t, cache) for t in tasks]
+
+
+def run_task(task: Task, cache: dict | None = None) -> dict:
+    """Calibrate ``task`` and return its result row (never raises for a zone's own problems).
+
+    ``cache`` (a dict) shares the zone's data and verdicts between the methods of one zone.
+    """
+    cache = {} if cache is None else cache
+    t0 = time.perf_counter()
+    row: dict = {
+        "key": task.key,
+        "zone": task.zone,
+        "method": task.method,
+        "model": task.model,
+        "source": source_label(task),
+        "status": "ok",
+        "error": "",
+    }
+    try:
+        from rczone.calibrate import calibrate
+        from rczone.models import get_model
+
+        net = get_model(task.model)
+        if "frame" not in cache:
+            cache["frame"] = load_task_data(task)
+        frame = cache["frame"]
+        constants = dict(task.constants) or None
+        cal = calibrate(
+            net, frame, task.method, task.free, task.optimizer, task.n_starts, constants=constants
+        )
+        r = cal.result
+        row.update(
+            open_loop_rmse_K=cal.open_loop.rmse_K,
+            open_loop_max_K=cal.open_loop.max_abs_K,
+            fit_rmse_K=r.rmse_K,
+            cost=r.cost,
+            converged=bool(r.converged),
+            n_evals=int(r.n_evals),
+            flags="; ".join(r.flags),
+        )
+        for n in r.names:
+            row[n] = r.estimates[n]
+            row[f"{n}_se"] = r.std_errors[n]
+            c = r.construction[n]
+            row[f"{n}_construction"] = c if math.isfinite(c) else None
+            row[f"{n}_at_bound"] = bool(r.at_bound[n])
+        if task.diagnose:
+            from rczone.diagnostics import diagnose
+
+            rc = tuple(n for n in r.names if n in net.parameters)
+            if rc and ("diagnose", rc) not in cache:
+                d = diagnose(net, frame, free=list(rc), constants=cal.model.provenance.get("constants"))
+                cache["diagnose", rc] = {n: v.verdict for n, v in d.parameters.items()}
+            for n, verdict in cache.get(("diagnose", rc), {}).items():
+                row[f"{n}_verdict"] = verdict
+    except RczoneError as exc:
+        row.update(status="failed", error=f"{type(exc).__name__}: {exc}")
+    except Exception as exc:  # a bug or numerical failure in one zone must not stop the batch
+        tb = traceback.extract_tb(exc.__traceback__)
+        where = f" ({tb[-1].filename.rsplit('/', 1)[-1]}:{tb[-1].lineno})" if tb else ""
+        row.update(status="failed", error=f"{type(exc).__name__}: {exc}{where}")
+    row["seconds"] = time.perf_counter() - t0
+    return row

@@ -1,0 +1,127 @@
+"""Running a batch: failures recorded, resume, the Dask path, and a kill in the middle."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+
+from rczone.batch import ResultStore, read_manifest, run_batch, write_summary
+from rczone.cli.main import main
+
+MANIFEST = """
+methods = ["ls"]
+diagnose = false
+
+[[zone]]
+id = "forced"
+virtual = { season = "autumn", mode = "forced", seed = 1 }
+
+[[zone]]
+id = "missing"
+data = "no-such-file.csv"
+
+[[zone]]
+id = "garbage"
+data = "garbage.csv"
+"""
+
+
+@pytest.fixture
+def manifest(tmp_path):
+    (tmp_path / "garbage.csv").write_text("time,Ti,To\n0,20,10\n60,20,10\n")
+    (tmp_path / "m.toml").write_text(MANIFEST)
+    return read_manifest(tmp_path / "m.toml")
+
+
+def test_failing_zones_are_recorded_and_the_batch_goes_on(tmp_path, manifest):
+    run = run_batch(manifest, tmp_path / "out", backend="processes", workers=2)
+    assert (run.total, run.computed, run.failed, run.skipped) == (3, 3, 2, 0)
+    df = pd.read_parquet(run.results).set_index("zone")
+    assert df.loc["forced", "status"] == "ok" and 0.002 < df.loc["forced", "Rw"] < 0.01
+    assert "does not exist" in df.loc["missing", "error"]
+    assert "missing column" in df.loc["garbage", "error"]
+    s = write_summary(df.reset_index(), tmp_path / "out")
+    assert s["ok"] == 1 and s["failed"] == 2 and {f["zone"] for f in s["failures"]} == {"missing", "garbage"}
+    assert (tmp_path / "out" / "report.html").exists() and (tmp_path / "out" / "summary.json").exists()
+    # a rerun computes nothing and keeps every row
+    again = run_batch(manifest, tmp_path / "out", backend="processes")
+    assert (again.computed, again.skipped) == (0, 3)
+    assert len(pd.read_parquet(again.results)) == 3
+
+
+def test_dask_scheduler_address_runs_the_same_code_path(tmp_path, manifest):
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as c:
+        run = run_batch(manifest, tmp_path / "out", scheduler=c.scheduler_address)
+    assert (run.computed, run.failed) == (3, 2)
+    assert set(pd.read_parquet(run.results)["key"]) == {t.key for t in manifest.tasks}
+
+
+def test_scheduler_without_dask_is_a_clear_error(tmp_path, manifest, monkeypatch):
+    import rczone.batch.runner as runner
+
+    monkeypatch.setattr(runner, "have_dask", lambda: False)
+    with pytest.raises(Exception, match=r"pip install 'rczone\[dask\]'"):
+        run_batch(manifest, tmp_path / "out", scheduler="tcp://127.0.0.1:1")
+
+
+def test_killed_batch_reruns_without_losing_or_recomputing(tmp_path):
+    """kill -9 the whole process group midway, rerun: every result once, none computed twice."""
+    n = 16
+    (tmp_path / "m.toml").write_text(
+        f'methods = ["ls"]\ndiagnose = false\n[[generate]]\nprefix = "k"\nseasons = ["autumn"]\n'
+        f'modes = ["forced"]\nseeds = "0..{n - 1}"\n'
+    )
+    out = tmp_path / "out"
+    cmd = [
+        sys.executable,
+        "-m",
+        "rczone.cli",
+        "fit-many",
+        str(tmp_path / "m.toml"),
+        "--out",
+        str(out),
+        "--backend",
+        "processes",
+        "--workers",
+        "2",
+    ]
+    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    parts = out / "parts"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len(list(parts.glob("*.parquet"))) < 3:
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    before = {p.name: p.read_bytes() for p in parts.glob("*.parquet")}
+    assert 3 <= len(before) < n, "the batch must be killed midway"
+    assert not (out / "results.parquet").exists()
+    store = ResultStore(out)
+    done_before = store.done()
+    run = run_batch(read_manifest(tmp_path / "m.toml"), out, backend="processes", workers=2)
+    # none computed twice: the rerun computes exactly the tasks without a stored result
+    assert run.skipped == len(done_before) and run.computed == n - len(done_before)
+    # no result lost: the stored parts are untouched and the table has every task once
+    assert all((parts / name).read_bytes() == data for name, data in before.items())
+    df = pd.read_parquet(run.results)
+    assert sorted(df["key"]) == sorted(f"k-autumn-forced-{i}::ls" for i in range(n))
+    assert (df["status"] == "ok").all()
+
+
+def test_cli_fit_many_prints_summary_and_bad_manifest_is_one_line(tmp_path, manifest, capsys):
+    assert (
+        main(["fit-many", str(tmp_path / "m.toml"), "--out", str(tmp_path / "o"), "--backend", "processes"])
+        == 0
+    )
+    out = capsys.readouterr().out
+    assert "3 computed (2 failed)" in out and "failed missing (ls)" in out
+    (tmp_path / "bad.toml").write_text('[[zone]]\nid = "a"\ndata = "C"\nmethods = ["lsq"]\n')
+    assert main(["fit-many", str(tmp_path / "bad.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "unknown method 'lsq'; did you mean 'ls'" in err and "Traceback" not in err
