@@ -364,20 +364,21 @@ def kalman_nll_rc2(
     ):
         raise InputShapeError(f"innovations must be a contiguous float64 array of shape ({y.shape[0]},)")
     f = np.ascontiguousarray
+    # contiguous float64 everywhere: one compiled specialization serves every caller
     nll, n_obs = nll_rc2_kernel(
-        ss.A,
-        ss.N,
-        ss.B,
-        ss.M,
-        ss.capacities,
+        f(ss.A, dtype=np.float64),
+        f(ss.N, dtype=np.float64),
+        f(ss.B, dtype=np.float64),
+        f(ss.M, dtype=np.float64),
+        f(ss.capacities, dtype=np.float64),
         f(t, dtype=np.float64),
         f(m, dtype=np.float64),
         f(u, dtype=np.float64),
         f(y[:, 0]),
         f(x0, dtype=np.float64),
         f(P0, dtype=np.float64),
-        ss.C[0],
-        ss.D[0],
+        f(ss.C[0], dtype=np.float64),
+        f(ss.D[0], dtype=np.float64),
         float(R[0, 0]),
         f(Qc, dtype=np.float64),
         hold == "foh",
