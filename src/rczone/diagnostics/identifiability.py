@@ -367,7 +367,7 @@ def _verdict(
         if bias >= BIAS_IDENTIFIABLE and model_error > 0:
             reasons.append(
                 f"a model error of {model_error:.1f} K, usual for a low-order model of a real room, could shift"
-                f" the estimate by up to a factor {np.exp(min(bias, 50.0)):.3g}, and the fit would still match"
+                f" the estimate by {_factor(bias)}, and the fit would still match"
                 " the data"
             )
         if rho > CORR_CONFOUNDED and partner:
@@ -388,7 +388,7 @@ def _verdict(
         advice.append("or keep it at its construction value (fixed, or MAP with a prior)")
     else:
         reasons.append(
-            f"the data determine it to about ±{se:.0%} (expected relative standard error); even a model"
+            f"the data determine it to about ±{_percent(se)} (expected relative standard error); even a model"
             f" error of {model_error:.1f} K could shift it by at most a factor {np.exp(bias):.2f}"
         )
     return ParameterVerdict(
@@ -404,3 +404,13 @@ def _verdict(
         rms_change_tenfold_K=float(tenfold),
         worst_case_bias=float(bias),
     )
+
+
+def _factor(log_shift: float) -> str:
+    """A worst-case shift in words: 'up to a factor 2.7', or 'more than a factor 100'."""
+    f = float(np.exp(min(log_shift, 50.0)))
+    return f"up to a factor {f:.2g}" if f < 100 else "more than a factor 100"
+
+
+def _percent(rel: float) -> str:
+    return f"{rel:.0%}" if rel >= 0.01 else "1% or better"
