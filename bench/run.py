@@ -203,7 +203,7 @@ def main(argv: list[str] | None = None) -> int:
             continue
         if case.slow and args.skip_slow:
             continue
-        n_ours, n_plain = (1, 1) if case.slow else (5 if args.quick else 20, 1 if args.quick else 3)
+        n_ours, n_plain = (7, 1) if case.slow else (5 if args.quick else 20, 1 if args.quick else 3)
         ours, out_ours = measure(case.ours, budget, n_ours, warmup=case.warmup)
         theirs, out_plain = measure(
             case.theirs, budget, n_plain, warmup=(lambda: None) if case.slow else None

@@ -37,7 +37,7 @@ from rczone.estimation.kalman import (
     stochastic_matrices,
 )
 from rczone.estimation.parameters import ParameterSpec
-from rczone.kernels.kalman import kalman_nll_rc2, rc2_applicable
+from rczone.kernels.kalman import kalman_nll_rc2, kalman_nll_rc2_values, rc2_applicable
 from rczone.kernels.propagate import propagate
 from rczone.network import BilinearStateSpace, RCNetwork
 from rczone.simulation.simulate import transition_matrices
@@ -141,6 +141,12 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     process noise and no initial uncertainty: its gain is then zero, the state evolves open
     loop, and its innovations are exactly the open-loop output errors.
     """
+    zero = np.zeros((2, 2))
+    if _values_path(network, values, data):
+        e = np.full(data.t.shape[0], np.nan)
+        res, cap = network.conductance_values(network_theta(network, values))
+        kalman_nll_rc2_values(network, res, cap, data.t, data.m, data.u, data.y, zero, zero, 1.0, hold, e)
+        return trapezoid_sse(data.t, e[:, None])
     ss = network.state_space(network_theta(network, values))
     if ss.n_states == 2 and data.y.shape[1] == 1:
         x0 = initial_state(ss, values, data)
@@ -157,9 +163,24 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     return trapezoid_sse(data.t, data.y - yhat)
 
 
+def _values_path(network: RCNetwork, values: Mapping[str, float], data: Dataset) -> bool:
+    """Whether the 2-state likelihood can run straight from parameter values."""
+    return (
+        len(network.state_names) == 2
+        and data.y.shape[1] == 1
+        and len(network.outputs) == 1
+        and network.conductance_form is not None
+        and math.isfinite(data.y[0, 0])
+        and not any(f"x0_{n}" in values for n in network.state_names)
+    )
+
+
 def noise_values(ss: BilinearStateSpace, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, float]:
     """``(sigma_w, sigma_x0, sigma_v)`` from ``values``, validated."""
-    s = ss.state_names
+    return _noise(ss.state_names, values)
+
+
+def _noise(s: tuple[str, ...], values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, float]:
     try:
         sw = np.array([values[f"sigma_w_{n}"] for n in s])
         sx = np.array([values[f"sigma_x0_{n}"] for n in s])
@@ -196,6 +217,13 @@ def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     discretization + filter, :func:`rczone.kernels.kalman.kalman_nll_rc2`); other models the
     compiled filter loop on :func:`stochastic_matrices`.
     """
+    if _values_path(network, values, data):
+        # parameter values to likelihood in one compiled call (assembly, initial state, filter)
+        res, cap = network.conductance_values(network_theta(network, values))
+        sw, sx, sv = _noise(network.state_names, values)
+        return kalman_nll_rc2_values(
+            network, res, cap, data.t, data.m, data.u, data.y, np.diag(sx**2), np.diag(sw**2), sv**2, hold
+        )
     ss = network.state_space(network_theta(network, values))
     if ss.n_states == 2 and data.y.shape[1] == 1:
         # an RC network's state space is symmetrizable by construction (the kernel checks it

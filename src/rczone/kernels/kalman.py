@@ -288,6 +288,132 @@ def nll_rc2_kernel(
     return nll, n_obs
 
 
+@njit(cache=True, error_model="numpy")
+def nll_rc2_from_values(
+    L: np.ndarray,
+    P: np.ndarray,
+    E: np.ndarray,
+    Gb0: np.ndarray,
+    Nf: np.ndarray,
+    Mf: np.ndarray,
+    res: np.ndarray,
+    cap: np.ndarray,
+    iout: int,
+    t: np.ndarray,
+    m: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    P0: np.ndarray,
+    Qc: np.ndarray,
+    r: float,
+    foh: bool,
+    phi2: np.ndarray,
+    rtol: float,
+    e_out: np.ndarray,
+) -> tuple[float, int]:
+    """:func:`nll_rc2_kernel` straight from resistor values and capacities (no Python in between).
+
+    Assembles ``A = -L' diag(1/res) L / cap``, ``B = (P' diag(1/res) E + Gb0) / cap``,
+    ``N = Nf / cap``, ``M = Mf / cap`` (:attr:`rczone.network.RCNetwork.conductance_form`),
+    starts the measured state ``iout`` at ``y[0]`` and the other in steady state given it (as
+    :func:`rczone.estimation.costs.auto_initial_state`), and runs the filter. Output ``y =
+    x[iout]``.
+    """
+    nres = L.shape[0]
+    p = E.shape[1]
+    nf = Nf.shape[0]
+    A0 = np.zeros((2, 2))
+    B0 = np.zeros((2, p))
+    N = np.empty((nf, 2, 2))
+    M = np.empty((nf, 2, p))
+    for k in range(nres):
+        g = 1.0 / res[k]
+        for i in range(2):
+            if L[k, i] != 0.0:
+                for j in range(2):
+                    A0[i, j] -= L[k, i] * g * L[k, j]
+                for j in range(p):
+                    B0[i, j] += P[k, i] * g * E[k, j]
+    for i in range(2):
+        for j in range(2):
+            A0[i, j] /= cap[i]
+        for j in range(p):
+            B0[i, j] = (B0[i, j] + Gb0[i, j]) / cap[i]
+        for f in range(nf):
+            for j in range(2):
+                N[f, i, j] = Nf[f, i, j] / cap[i]
+            for j in range(p):
+                M[f, i, j] = Mf[f, i, j] / cap[i]
+    io = iout
+    fo = 1 - iout
+    x0 = np.empty(2)
+    x0[io] = y[0]
+    a_ff = A0[fo, fo]
+    a_fi = A0[fo, io]
+    for f in range(nf):
+        a_ff += m[0, f] * N[f, fo, fo]
+        a_fi += m[0, f] * N[f, fo, io]
+    bu = 0.0
+    for j in range(p):
+        bj = B0[fo, j]
+        for f in range(nf):
+            bj += m[0, f] * M[f, fo, j]
+        bu += bj * u[0, j]
+    x0[fo] = -(bu + a_fi * y[0]) / a_ff
+    c = np.zeros(2)
+    c[io] = 1.0
+    dd = np.zeros(p)
+    return nll_rc2_kernel(A0, N, B0, M, cap, t, m, u, y, x0, P0, c, dd, r, Qc, foh, phi2, rtol, e_out)
+
+
+def kalman_nll_rc2_values(
+    network,
+    res: np.ndarray,
+    cap: np.ndarray,
+    t: np.ndarray,
+    m: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    P0: np.ndarray,
+    Qc: np.ndarray,
+    R: float,
+    hold: str = "zoh",
+    innovations: np.ndarray | None = None,
+) -> float:
+    """``-log L`` (with ``0.5 n log 2 pi``) from parameter values; see :func:`nll_rc2_from_values`.
+
+    ``y`` is shape (N, 1) with a finite first sample; ``m`` (N, n_flows) and ``u`` (N, p) in
+    the network's orders; contiguous float64 arrays are used as they are.
+    """
+    form = network.conductance_form
+    f = np.ascontiguousarray
+    nll, n_obs = nll_rc2_from_values(
+        form.L,
+        form.P,
+        form.E,
+        form.Gb0,
+        form.Nf,
+        form.Mf,
+        f(res, dtype=np.float64),
+        f(cap, dtype=np.float64),
+        form.output_state[0],
+        f(t, dtype=np.float64),
+        f(m, dtype=np.float64),
+        f(u, dtype=np.float64),
+        f(y[:, 0], dtype=np.float64),
+        f(P0, dtype=np.float64),
+        f(Qc, dtype=np.float64),
+        float(R),
+        hold == "foh",
+        _PHI2,
+        SYMMETRY_RTOL,
+        np.empty(0) if innovations is None else innovations,
+    )
+    if n_obs < 0:
+        raise InputShapeError("the network's state space is not symmetrizable; use the general filter")
+    return float(nll + 0.5 * n_obs * _LOG_2PI)
+
+
 def rc2_applicable(ss: BilinearStateSpace, n_outputs: int) -> bool:
     """Whether :func:`kalman_nll_rc2` handles this model: 2 states, one output, RC-symmetrizable."""
     if ss.n_states != 2 or n_outputs != 1:

@@ -131,6 +131,21 @@ def _as_params(parameters: Iterable[Parameter] | Mapping[str, Parameter]) -> dic
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class ConductanceForm:
+    """Constant arrays of a network without massless nodes (see :attr:`RCNetwork.conductance_form`)."""
+
+    L: np.ndarray
+    P: np.ndarray
+    E: np.ndarray
+    Gb0: np.ndarray
+    Nf: np.ndarray
+    Mf: np.ndarray
+    resistances: tuple
+    capacities: tuple
+    output_state: tuple[int, ...]
+
+
 @dataclass(frozen=True)
 class RCNetwork:
     """A frozen RC-network description from which state spaces are built.
@@ -511,6 +526,40 @@ class RCNetwork:
         inv = (1.0 / cap)[:, None]
         Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
         return (Axx * inv, Nx, Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
+
+    @cached_property
+    def conductance_form(self) -> ConductanceForm | None:
+        """The network as constant arrays and parameter lists, for compiled assembly.
+
+        ``G = L' diag(1/R) L``, ``Gb = P' diag(1/R) E + Gb0``, ``A = -G / c``, ``B = Gb / c``,
+        ``N_k = Nf_k / c``, ``M_k = Mf_k / c`` (rows divided by the capacities). Available when
+        every node is capacitive (no Kron reduction) and heat-input gains and supply-air ``cp``
+        are numbers; None otherwise.
+        """
+        st = self._structure
+        if st["zs"].size or st["heat"] or st["air"]:
+            return None
+        return ConductanceForm(
+            L=st["L"],
+            P=st["P"],
+            E=st["E"],
+            Gb0=st["Gb"],
+            Nf=st["Nf"],
+            Mf=st["Mf"],
+            resistances=tuple(st["res"]),
+            capacities=tuple(st["cap"]),
+            output_state=tuple(self.state_names.index(o) for o in self.outputs),
+        )
+
+    def conductance_values(self, theta: Mapping[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(R, c)``: resistor values and capacities (state order) for ``theta``, ties resolved."""
+        vals = self.values(theta)
+        form = self.conductance_form
+        if form is None:
+            raise NetworkError(f"network {self.name!r} has no plain conductance form (massless nodes?)")
+        r = np.array([vals[x] if isinstance(x, str) else float(x) for x in form.resistances])
+        c = np.array([vals[x] if isinstance(x, str) else float(x) for x in form.capacities])
+        return r, c
 
     def replace_parameters(self, parameters: Iterable[Parameter]) -> RCNetwork:
         """A copy of the network with some parameter declarations replaced or added."""
