@@ -141,7 +141,7 @@ def cases() -> list[Case]:
 def jml_cases(rng: np.random.Generator) -> list[Case]:
     from rczone.estimation import Dataset, fit
     from rczone.estimation.costs import ml_cost
-    from rczone.kernels.kalman import kalman_nll_rc2
+    from rczone.kernels.kalman import interval_groups, kalman_nll_rc2
 
     net = get_model("second-order-paper")
     ss = net.state_space()
@@ -165,12 +165,23 @@ def jml_cases(rng: np.random.Generator) -> list[Case]:
         return theta[: len(free)]
 
     values = {**net.values(), **noise_free, **noise_fixed}
+    # flows as a building logs them: to 1 g/s (a few dozen levels in a night)
+    mq = np.round(m, 3)
+    groups = interval_groups(t, mq)
+    n_levels = groups[1].size
     return [
         Case(
             "jml_2state",
             f"Kalman -log L of {net.name} (2 states), {N_SAMPLES} samples, m varying (discretization included)",
             lambda: kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R),
             lambda: plain.kalman_nll(ss, t, m, u, y, x0, P0, Qc, R),
+            lambda a, b: abs(a - b) / abs(b),
+        ),
+        Case(
+            "jml_2state_quantized_m",
+            f"as jml_2state with m logged to 1 g/s ({n_levels} distinct (dt, m)): each discretized once",
+            lambda: kalman_nll_rc2(ss, t, mq, u, y, x0, P0, Qc, R, groups=groups),
+            lambda: plain.kalman_nll(ss, t, mq, u, y, x0, P0, Qc, R),
             lambda a, b: abs(a - b) / abs(b),
         ),
         Case(

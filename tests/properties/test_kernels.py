@@ -16,7 +16,7 @@ from hypothesis import strategies as st
 from scipy.linalg import expm
 
 from rczone.estimation.kalman import kalman_nll
-from rczone.kernels.kalman import kalman_nll_rc2
+from rczone.kernels.kalman import interval_groups, kalman_nll_rc2
 from rczone.kernels.propagate import propagate_kernel
 from rczone.kernels.rankone import simulate_rank_one
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
@@ -218,6 +218,46 @@ def test_compiled_two_state_likelihood_equals_the_reference_filter(seed, n_massl
     ref = reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold)
     got = kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R, hold)
     assert got == pytest.approx(ref, rel=RTOL, abs=RTOL)
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from(["zoh", "foh"]))
+def test_table_of_distinct_intervals_gives_the_reference_likelihood(seed, hold):
+    """Quantized flows on a partly irregular grid: each distinct (dt, m) discretized once."""
+    rng = np.random.default_rng(seed)
+    net = random_network(rng, 2, 0, 2)
+    ss = net.state_space()
+    N = 80
+    dt = rng.choice([60.0, 60.0, 60.0, 120.0, 37.5], N - 1)
+    t = np.cumsum(np.r_[0.0, dt])
+    m = rng.choice(np.round(rng.uniform(0, 0.4, 6), 3), (N, 1))  # six flow levels, any order
+    u = 20 + 3 * rng.standard_normal((N, ss.n_inputs))
+    y = 20 + rng.standard_normal((N, 1))
+    y[rng.integers(0, N, 5)] = np.nan
+    x0 = 20 + rng.standard_normal(2)
+    P0 = np.diag(rng.uniform(0.1, 2, 2))
+    Qc = np.diag(10 ** rng.uniform(-8, -4, 2))
+    R = np.array([[10 ** rng.uniform(-4, -1)]])
+    groups = interval_groups(t, m)
+    assert groups is not None and groups[1].size <= 18
+    g, first = groups
+    key = np.column_stack([np.diff(t), m[:-1]])
+    assert np.array_equal(key, key[first][g])  # every interval is equal to its group's first
+    ref = reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold)
+    e_plain, e_table = np.full(N, np.nan), np.full(N, np.nan)
+    plain = kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R, hold, e_plain)
+    table = kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R, hold, e_table, groups)
+    assert table == pytest.approx(ref, rel=RTOL, abs=RTOL)
+    assert table == plain  # same arithmetic, fewer discretizations
+    np.testing.assert_array_equal(e_table, e_plain)
+
+
+def test_interval_groups_declines_when_most_intervals_differ():
+    t = np.arange(100.0) * 60
+    assert interval_groups(t, np.linspace(0, 1, 100)[:, None]) is None
+    assert interval_groups(t[:1], np.zeros((1, 1))) is None
+    g, first = interval_groups(t, np.zeros((100, 0)))  # no flows: one group of equal steps
+    assert first.size == 1 and np.all(g == 0)
 
 
 def identical_branches(n_branches: int, rng: np.random.Generator) -> RCNetwork:

@@ -20,7 +20,6 @@ Flat sensors
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,10 +87,9 @@ def find_gaps(t: np.ndarray, x: np.ndarray, channel: str, max_gap: float) -> lis
     gaps = []
     if ok[0] > 0:
         gaps.append(Gap(channel, float(t[0]), float(t[ok[0]]), int(ok[0])))
-    for a, b in itertools.pairwise(ok):
-        missing = int(b - a - 1)
-        if missing > 0 or t[b] - t[a] > max_gap:
-            gaps.append(Gap(channel, float(t[a]), float(t[b]), missing))
+    a, b = ok[:-1], ok[1:]
+    for i in np.flatnonzero((b - a > 1) | (t[b] - t[a] > max_gap)):
+        gaps.append(Gap(channel, float(t[a[i]]), float(t[b[i]]), int(b[i] - a[i] - 1)))
     if ok[-1] < t.size - 1:
         gaps.append(Gap(channel, float(t[ok[-1]]), float(t[-1]), int(t.size - 1 - ok[-1])))
     return gaps

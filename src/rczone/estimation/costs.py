@@ -145,7 +145,9 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     if _values_path(network, values, data):
         e = np.full(data.t.shape[0], np.nan)
         res, cap = network.conductance_values(network_theta(network, values))
-        kalman_nll_rc2_values(network, res, cap, data.t, data.m, data.u, data.y, zero, zero, 1.0, hold, e)
+        kalman_nll_rc2_values(
+            network, res, cap, data.t, data.m, data.u, data.y, zero, zero, 1.0, hold, e, data.interval_groups
+        )
         return trapezoid_sse(data.t, e[:, None])
     ss = network.state_space(network_theta(network, values))
     if ss.n_states == 2 and data.y.shape[1] == 1:
@@ -153,7 +155,20 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
         e = np.full(data.t.shape[0], np.nan)
         zero = np.zeros((2, 2))
         try:
-            kalman_nll_rc2(ss, data.t, data.m, data.u, data.y, x0, zero, zero, np.ones((1, 1)), hold, e)
+            kalman_nll_rc2(
+                ss,
+                data.t,
+                data.m,
+                data.u,
+                data.y,
+                x0,
+                zero,
+                zero,
+                np.ones((1, 1)),
+                hold,
+                e,
+                data.interval_groups,
+            )
         except InputShapeError:
             if rc2_applicable(ss, 1):
                 raise
@@ -222,7 +237,18 @@ def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
         res, cap = network.conductance_values(network_theta(network, values))
         sw, sx, sv = _noise(network.state_names, values)
         return kalman_nll_rc2_values(
-            network, res, cap, data.t, data.m, data.u, data.y, np.diag(sx**2), np.diag(sw**2), sv**2, hold
+            network,
+            res,
+            cap,
+            data.t,
+            data.m,
+            data.u,
+            data.y,
+            np.diag(sx**2),
+            np.diag(sw**2),
+            sv**2,
+            hold,
+            groups=data.interval_groups,
         )
     ss = network.state_space(network_theta(network, values))
     if ss.n_states == 2 and data.y.shape[1] == 1:
@@ -242,6 +268,7 @@ def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
                 np.diag(sw**2),
                 np.array([[sv**2]]),
                 hold,
+                groups=data.interval_groups,
             )
         except InputShapeError:
             if rc2_applicable(ss, 1):

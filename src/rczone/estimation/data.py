@@ -8,6 +8,7 @@ job of the data package. Inputs and flows must be finite; outputs may contain Na
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -71,6 +72,13 @@ class Dataset:
     @property
     def n_samples(self) -> int:
         return self.t.size
+
+    @cached_property
+    def interval_groups(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Intervals sharing length and flows (:func:`rczone.kernels.kalman.interval_groups`)."""
+        from rczone.kernels.kalman import interval_groups
+
+        return interval_groups(self.t, self.m)
 
     def check_against(self, network: RCNetwork) -> None:
         """Raise :class:`InputShapeError` unless the columns match the network's signals."""

@@ -36,7 +36,10 @@ from scipy import optimize
 from scipy.stats import qmc
 
 from rczone.errors import ParameterError
+from rczone.estimation.compiled import compiled_problem
+from rczone.estimation.costs import Objective
 from rczone.estimation.parameters import ParameterSpec
+from rczone.kernels import rc2fit
 
 OPTIMIZERS = ("nelder-mead", "powell", "lbfgs")
 
@@ -45,6 +48,14 @@ _BIG = 1e300
 
 #: Relative step of the central-difference gradient, about eps^(1/3).
 GRADIENT_STEP = 1e-5
+
+#: Nelder-Mead stopping tolerance on the cost (scaled to 1 at the start).
+FATOL = 1e-12
+
+_NM_MESSAGES = (
+    "Optimization terminated successfully.",
+    "Maximum number of function evaluations has been exceeded.",
+)
 
 
 def central_gradient(
@@ -189,9 +200,20 @@ def minimize_from(
             return min(counted(spec.from_z(z)), _BIG)
 
         z0 = spec.to_z(eta0)
+        problem = (
+            compiled_problem(cost) if optimizer == "nelder-mead" and isinstance(cost, Objective) else None
+        )
+        if problem is not None:
+            # the same search without leaving compiled code (rczone.kernels.rc2fit)
+            simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
+            z, _, n, status = rc2fit.nelder_mead(simplex, problem, counted.scale, tol, FATOL, max_evals)
+            eta = spec.from_z(z)
+            theta = spec.to_theta(eta)
+            message = _NM_MESSAGES[status]
+            return StartOutcome(theta0, theta, float(cost(eta)), status == 0, n + 2, message)
         if optimizer == "nelder-mead":
             simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
-            opts = {"xatol": tol, "fatol": 1e-12, "maxfev": max_evals, "initial_simplex": simplex}
+            opts = {"xatol": tol, "fatol": FATOL, "maxfev": max_evals, "initial_simplex": simplex}
             res = optimize.minimize(fz, z0, method="Nelder-Mead", options=opts)
         else:
             opts = {"xtol": tol, "ftol": 1e-15, "maxfev": max_evals}

@@ -40,6 +40,41 @@ from rczone.simulation.simulate import HOLDS
 _LOG_2PI = math.log(2.0 * math.pi)
 _SERIES_LIMIT = 0.2
 _PHI2 = np.array([1.0 / math.factorial(k + 2) for k in range(13)])
+_NO_GROUPS = (np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
+
+#: Use a table of distinct intervals when it has at most this fraction of the intervals.
+GROUP_FRACTION = 0.5
+
+
+def interval_groups(t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Intervals that share their length and flows, so their discrete matrices are equal.
+
+    Measured flows are quantized (a damper position, a logger resolution of 1 g/s), so a
+    night of 720 samples typically has a few dozen distinct ``(dt, m)`` pairs; the kernels
+    then discretize each pair once instead of every interval. Matching is exact (bit
+    equality), so the results are identical to discretizing every interval.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+    m : ndarray, shape (N, n_flows)
+
+    Returns
+    -------
+    (groups, firsts) or None
+        ``groups[k]`` is the group of interval ``k`` (shape (N - 1,)), ``firsts[g]`` an
+        interval of group ``g``; None when the groups would save little (more than
+        :data:`GROUP_FRACTION` of the intervals are distinct) or there is no interval.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    m = np.asarray(m, dtype=np.float64).reshape(t.shape[0], -1)
+    if t.shape[0] < 2:
+        return None
+    key = np.column_stack([np.diff(t), m[:-1]])
+    _, firsts, groups = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    if firsts.shape[0] > GROUP_FRACTION * key.shape[0]:
+        return None
+    return np.ascontiguousarray(groups.ravel(), dtype=np.int64), np.ascontiguousarray(firsts, dtype=np.int64)
 
 
 @njit(cache=True, error_model="numpy")
@@ -80,6 +115,8 @@ def nll_rc2_kernel(
     phi2: np.ndarray,
     rtol: float,
     e_out: np.ndarray,
+    groups: np.ndarray,
+    firsts: np.ndarray,
 ) -> tuple[float, int]:
     """``-log L`` without the ``0.5 n log 2 pi`` term, and the number of observations.
 
@@ -113,6 +150,10 @@ def nll_rc2_kernel(
         Receives the innovations (one-step prediction errors) when it has one entry per
         sample; entries of missing samples are left as they are. With ``P0 = Qc = 0`` the
         filter never corrects the state, so these are the open-loop output errors.
+    groups, firsts : ndarray of int64, shapes (N - 1,) and (G,), or both (0,)
+        Intervals with equal length and flows (:func:`interval_groups`): interval ``k`` uses
+        the matrices of group ``groups[k]``, computed once from interval ``firsts[g]``.
+        Empty: discretize every interval whose length or flows differ from the previous one.
     """
     n_t = y.shape[0]
     keep = e_out.shape[0] == n_t
@@ -139,16 +180,113 @@ def nll_rc2_kernel(
         x[i] = x0[i]
         for j in range(2):
             P[i, j] = P0[i, j]
-    Phi = np.empty((2, 2))
-    Qd = np.empty((2, 2))
-    G0 = np.empty((2, p))
-    G1 = np.empty((2, p))
-    A = np.empty((2, 2))
-    B = np.empty((2, p))
-    Pn = np.empty((2, 2))
+    # one discretization per group of equal intervals: the groups given, else runs of
+    # consecutive intervals with the same length and flows
+    n_int = max(n_t - 1, 0)
+    if groups.shape[0] > 0:
+        grp = groups
+        fst = firsts
+    else:
+        grp = np.empty(n_int, dtype=np.int64)
+        fst = np.empty(n_int, dtype=np.int64)
+        n_g = 0
+        for k in range(n_int):
+            new = k == 0 or t[k + 1] - t[k] != t[k] - t[k - 1]
+            for f in range(nf):
+                if k > 0 and m[k, f] != m[k - 1, f]:
+                    new = True
+            if new:
+                fst[n_g] = k
+                n_g += 1
+            grp[k] = n_g - 1
+        fst = fst[:n_g]
+    n_slots = fst.shape[0]
+    Phi = np.empty((n_slots, 2, 2))
+    Qd = np.empty((n_slots, 2, 2))
+    G0 = np.empty((n_slots, 2, p))
+    G1 = np.zeros((n_slots, 2, p))
+    for g in range(n_slots):
+        kk = fst[g]
+        h = t[kk + 1] - t[kk]
+        a = A0[0, 0]
+        a01 = A0[0, 1]
+        a10 = A0[1, 0]
+        d = A0[1, 1]
+        for f in range(nf):
+            mf = m[kk, f]
+            a += mf * N[f, 0, 0]
+            a01 += mf * N[f, 0, 1]
+            a10 += mf * N[f, 1, 0]
+            d += mf * N[f, 1, 1]
+        # symmetric S = diag(s) A diag(s)^-1 and its Jacobi rotation [[cs, sn], [-sn, cs]]
+        b = 0.5 * (a01 * r01 + a10 / r01)
+        if b == 0.0:
+            tn = 0.0
+        else:
+            tau = (d - a) / (2.0 * b)
+            at = abs(tau)
+            # sqrt(1 + tau^2) without overflow for |tau| > 1e150
+            root = at * math.sqrt(1.0 + (1.0 / at) ** 2) if at > 1e150 else math.sqrt(1.0 + at * at)
+            tn = math.copysign(1.0, tau) / (at + root)
+        cs = 1.0 / math.sqrt(1.0 + tn * tn)
+        sn = tn * cs
+        # T = diag(s)^-1 V, Ti = T^-1 = V' diag(s)
+        T00, T01, T10, T11 = cs * is0, sn * is0, -sn * is1, cs * is1
+        U00, U01, U10, U11 = cs * s0, -sn * s1, sn * s0, cs * s1
+        x0_ = (a - tn * b) * h
+        x1_ = (d + tn * b) * h
+        # two expm1 per interval; e^{(l_i + l_j) h} - 1 = em1_i + em1_j + em1_i em1_j exactly;
+        # e = em1 + 1 is accurate to eps absolutely, which is all Phi (|e| <= 1) needs
+        em0 = math.expm1(x0_)
+        em1_ = math.expm1(x1_)
+        e0 = em0 + 1.0
+        e1 = em1_ + 1.0
+        w10 = _ratio(x0_, em0)
+        w11 = _ratio(x1_, em1_)
+        if foh:
+            w20 = _phi2(x0_, em0, phi2)
+            w21 = _phi2(x1_, em1_, phi2)
+            ga0, ga1 = (w10 - w20) * h, (w11 - w21) * h
+            gb0, gb1 = w20 * h, w21 * h
+        else:
+            ga0, ga1 = w10 * h, w11 * h
+            gb0, gb1 = 0.0, 0.0
+        Phi[g, 0, 0] = T00 * e0 * U00 + T01 * e1 * U10
+        Phi[g, 0, 1] = T00 * e0 * U01 + T01 * e1 * U11
+        Phi[g, 1, 0] = T10 * e0 * U00 + T11 * e1 * U10
+        Phi[g, 1, 1] = T10 * e0 * U01 + T11 * e1 * U11
+        for j in range(p):
+            bj0 = B0[0, j]
+            bj1 = B0[1, j]
+            for f in range(nf):
+                bj0 += m[kk, f] * M[f, 0, j]
+                bj1 += m[kk, f] * M[f, 1, j]
+            z0 = U00 * bj0 + U01 * bj1
+            z1 = U10 * bj0 + U11 * bj1
+            G0[g, 0, j] = T00 * ga0 * z0 + T01 * ga1 * z1
+            G0[g, 1, j] = T10 * ga0 * z0 + T11 * ga1 * z1
+            if foh:
+                G1[g, 0, j] = T00 * gb0 * z0 + T01 * gb1 * z1
+                G1[g, 1, j] = T10 * gb0 * z0 + T11 * gb1 * z1
+        # W = Ti Qc Ti' weighted by (e^{(l_i + l_j) h} - 1)/(l_i + l_j); Qd = T W T'
+        y00 = U00 * Qc[0, 0] + U01 * Qc[1, 0]
+        y01 = U00 * Qc[0, 1] + U01 * Qc[1, 1]
+        y10 = U10 * Qc[0, 0] + U11 * Qc[1, 0]
+        y11 = U10 * Qc[0, 1] + U11 * Qc[1, 1]
+        W00 = (y00 * U00 + y01 * U01) * _ratio(2.0 * x0_, em0 * (em0 + 2.0)) * h
+        W01 = (y00 * U10 + y01 * U11) * _ratio(x0_ + x1_, em0 + em1_ + em0 * em1_) * h
+        W11 = (y10 * U10 + y11 * U11) * _ratio(2.0 * x1_, em1_ * (em1_ + 2.0)) * h
+        v00 = T00 * W00 + T01 * W01
+        v01 = T00 * W01 + T01 * W11
+        v10 = T10 * W00 + T11 * W01
+        v11 = T10 * W01 + T11 * W11
+        Qd[g, 0, 0] = v00 * T00 + v01 * T01
+        q01 = v00 * T10 + v01 * T11
+        Qd[g, 0, 1] = q01
+        Qd[g, 1, 0] = q01
+        Qd[g, 1, 1] = v10 * T10 + v11 * T11
     nll = 0.0
     n_obs = 0
-    last_dt = -1.0
     for k in range(n_t):
         if not math.isnan(y[k]):
             pc0 = P[0, 0] * c[0] + P[0, 1] * c[1]
@@ -184,107 +322,32 @@ def nll_rc2_kernel(
             n_obs += 1
         if k == n_t - 1:
             break
-        h = t[k + 1] - t[k]
-        same = h == last_dt
-        for f in range(nf):
-            if k == 0 or m[k, f] != m[k - 1, f]:
-                same = False
-        if not same:
-            last_dt = h
-            for i in range(2):
-                for j in range(2):
-                    A[i, j] = A0[i, j]
-                for j in range(p):
-                    B[i, j] = B0[i, j]
-                for f in range(nf):
-                    mf = m[k, f]
-                    for j in range(2):
-                        A[i, j] += mf * N[f, i, j]
-                    for j in range(p):
-                        B[i, j] += mf * M[f, i, j]
-            # symmetric S = diag(s) A diag(s)^-1 and its Jacobi rotation [[cs, sn], [-sn, cs]]
-            a = A[0, 0]
-            d = A[1, 1]
-            b = 0.5 * (A[0, 1] * r01 + A[1, 0] / r01)
-            if b == 0.0:
-                tn = 0.0
-            else:
-                tau = (d - a) / (2.0 * b)
-                at = abs(tau)
-                # sqrt(1 + tau^2) without overflow for |tau| > 1e150
-                root = at * math.sqrt(1.0 + (1.0 / at) ** 2) if at > 1e150 else math.sqrt(1.0 + at * at)
-                tn = math.copysign(1.0, tau) / (at + root)
-            cs = 1.0 / math.sqrt(1.0 + tn * tn)
-            sn = tn * cs
-            # T = diag(s)^-1 V, Ti = T^-1 = V' diag(s)
-            T00, T01, T10, T11 = cs * is0, sn * is0, -sn * is1, cs * is1
-            U00, U01, U10, U11 = cs * s0, -sn * s1, sn * s0, cs * s1
-            x0_ = (a - tn * b) * h
-            x1_ = (d + tn * b) * h
-            # two expm1 per interval; e^{(l_i + l_j) h} - 1 = em1_i + em1_j + em1_i em1_j exactly;
-            # e = em1 + 1 is accurate to eps absolutely, which is all Phi (|e| <= 1) needs
-            em0 = math.expm1(x0_)
-            em1_ = math.expm1(x1_)
-            e0 = em0 + 1.0
-            e1 = em1_ + 1.0
-            w10 = _ratio(x0_, em0)
-            w11 = _ratio(x1_, em1_)
-            if foh:
-                w20 = _phi2(x0_, em0, phi2)
-                w21 = _phi2(x1_, em1_, phi2)
-                ga0, ga1 = (w10 - w20) * h, (w11 - w21) * h
-                gb0, gb1 = w20 * h, w21 * h
-            else:
-                ga0, ga1 = w10 * h, w11 * h
-                gb0, gb1 = 0.0, 0.0
-            Phi[0, 0] = T00 * e0 * U00 + T01 * e1 * U10
-            Phi[0, 1] = T00 * e0 * U01 + T01 * e1 * U11
-            Phi[1, 0] = T10 * e0 * U00 + T11 * e1 * U10
-            Phi[1, 1] = T10 * e0 * U01 + T11 * e1 * U11
-            for j in range(p):
-                z0 = U00 * B[0, j] + U01 * B[1, j]
-                z1 = U10 * B[0, j] + U11 * B[1, j]
-                G0[0, j] = T00 * ga0 * z0 + T01 * ga1 * z1
-                G0[1, j] = T10 * ga0 * z0 + T11 * ga1 * z1
-                if foh:
-                    G1[0, j] = T00 * gb0 * z0 + T01 * gb1 * z1
-                    G1[1, j] = T10 * gb0 * z0 + T11 * gb1 * z1
-            # W = Ti Qc Ti' weighted by (e^{(l_i + l_j) h} - 1)/(l_i + l_j); Qd = T W T'
-            y00 = U00 * Qc[0, 0] + U01 * Qc[1, 0]
-            y01 = U00 * Qc[0, 1] + U01 * Qc[1, 1]
-            y10 = U10 * Qc[0, 0] + U11 * Qc[1, 0]
-            y11 = U10 * Qc[0, 1] + U11 * Qc[1, 1]
-            W00 = (y00 * U00 + y01 * U01) * _ratio(2.0 * x0_, em0 * (em0 + 2.0)) * h
-            W01 = (y00 * U10 + y01 * U11) * _ratio(x0_ + x1_, em0 + em1_ + em0 * em1_) * h
-            W11 = (y10 * U10 + y11 * U11) * _ratio(2.0 * x1_, em1_ * (em1_ + 2.0)) * h
-            v00 = T00 * W00 + T01 * W01
-            v01 = T00 * W01 + T01 * W11
-            v10 = T10 * W00 + T11 * W01
-            v11 = T10 * W01 + T11 * W11
-            Qd[0, 0] = v00 * T00 + v01 * T01
-            q01 = v00 * T10 + v01 * T11
-            Qd[0, 1] = q01
-            Qd[1, 0] = q01
-            Qd[1, 1] = v10 * T10 + v11 * T11
-        xn0 = Phi[0, 0] * x[0] + Phi[0, 1] * x[1]
-        xn1 = Phi[1, 0] * x[0] + Phi[1, 1] * x[1]
+        g = grp[k]
+        f00 = Phi[g, 0, 0]
+        f01 = Phi[g, 0, 1]
+        f10 = Phi[g, 1, 0]
+        f11 = Phi[g, 1, 1]
+        xn0 = f00 * x[0] + f01 * x[1]
+        xn1 = f10 * x[0] + f11 * x[1]
         for j in range(p):
-            xn0 += G0[0, j] * u[k, j]
-            xn1 += G0[1, j] * u[k, j]
+            xn0 += G0[g, 0, j] * u[k, j]
+            xn1 += G0[g, 1, j] * u[k, j]
         if foh:
             for j in range(p):
-                xn0 += G1[0, j] * u[k + 1, j]
-                xn1 += G1[1, j] * u[k + 1, j]
+                xn0 += G1[g, 0, j] * u[k + 1, j]
+                xn1 += G1[g, 1, j] * u[k + 1, j]
         x[0] = xn0
         x[1] = xn1
-        for i in range(2):
-            for j in range(2):
-                Pn[i, j] = Phi[i, 0] * P[0, j] + Phi[i, 1] * P[1, j]
-        for i in range(2):
-            for j in range(i, 2):
-                acc = Qd[i, j] + Pn[i, 0] * Phi[j, 0] + Pn[i, 1] * Phi[j, 1]
-                P[i, j] = acc
-                P[j, i] = acc
+        # P <- Phi P Phi' + Qd (symmetric)
+        a0 = f00 * P[0, 0] + f01 * P[1, 0]
+        a1 = f00 * P[0, 1] + f01 * P[1, 1]
+        b0 = f10 * P[0, 0] + f11 * P[1, 0]
+        b1 = f10 * P[0, 1] + f11 * P[1, 1]
+        q01 = Qd[g, 0, 1] + a0 * f10 + a1 * f11
+        P[0, 0] = Qd[g, 0, 0] + a0 * f00 + a1 * f01
+        P[0, 1] = q01
+        P[1, 0] = q01
+        P[1, 1] = Qd[g, 1, 1] + b0 * f10 + b1 * f11
     return nll, n_obs
 
 
@@ -310,6 +373,8 @@ def nll_rc2_from_values(
     phi2: np.ndarray,
     rtol: float,
     e_out: np.ndarray,
+    groups: np.ndarray,
+    firsts: np.ndarray,
 ) -> tuple[float, int]:
     """:func:`nll_rc2_kernel` straight from resistor values and capacities (no Python in between).
 
@@ -363,7 +428,9 @@ def nll_rc2_from_values(
     c = np.zeros(2)
     c[io] = 1.0
     dd = np.zeros(p)
-    return nll_rc2_kernel(A0, N, B0, M, cap, t, m, u, y, x0, P0, c, dd, r, Qc, foh, phi2, rtol, e_out)
+    return nll_rc2_kernel(
+        A0, N, B0, M, cap, t, m, u, y, x0, P0, c, dd, r, Qc, foh, phi2, rtol, e_out, groups, firsts
+    )
 
 
 def kalman_nll_rc2_values(
@@ -379,11 +446,13 @@ def kalman_nll_rc2_values(
     R: float,
     hold: str = "zoh",
     innovations: np.ndarray | None = None,
+    groups: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> float:
     """``-log L`` (with ``0.5 n log 2 pi``) from parameter values; see :func:`nll_rc2_from_values`.
 
     ``y`` is shape (N, 1) with a finite first sample; ``m`` (N, n_flows) and ``u`` (N, p) in
-    the network's orders; contiguous float64 arrays are used as they are.
+    the network's orders; contiguous float64 arrays are used as they are. ``groups`` is
+    :func:`interval_groups` of ``(t, m)`` (discretize each distinct interval once).
     """
     form = network.conductance_form
     f = np.ascontiguousarray
@@ -408,6 +477,7 @@ def kalman_nll_rc2_values(
         _PHI2,
         SYMMETRY_RTOL,
         np.empty(0) if innovations is None else innovations,
+        *(groups or _NO_GROUPS),
     )
     if n_obs < 0:
         raise InputShapeError("the network's state space is not symmetrizable; use the general filter")
@@ -443,6 +513,7 @@ def kalman_nll_rc2(
     R: np.ndarray,
     hold: str = "zoh",
     innovations: np.ndarray | None = None,
+    groups: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> float:
     """``-log L`` (including ``0.5 n log 2 pi``) of a 2-state RC model, one output.
 
@@ -468,6 +539,8 @@ def kalman_nll_rc2(
     hold : {"zoh", "foh"}
     innovations : ndarray, shape (N,), optional
         Filled with the one-step prediction errors (missing samples untouched).
+    groups : tuple of ndarray, optional
+        :func:`interval_groups` of ``(t, m)``: discretize each distinct interval once.
 
     Returns
     -------
@@ -511,6 +584,7 @@ def kalman_nll_rc2(
         _PHI2,
         SYMMETRY_RTOL,
         np.empty(0) if innovations is None else innovations,
+        *(groups or _NO_GROUPS),
     )
     if n_obs < 0:
         raise InputShapeError(

@@ -141,6 +141,44 @@ def _evaluate(expr: str, values: Mapping[str, float | complex]) -> float | compl
     return v if isinstance(v, complex) else float(v)
 
 
+def proportional_base(params: Mapping[str, Parameter], name: str) -> tuple[float, str | None] | None:
+    """``(k, base)`` with ``value(name) = k * value(base)`` for every value of ``base``.
+
+    A base parameter is ``(1, name)``; a tie such as ``R1 = Rw/2`` is ``(0.5, "Rw")``, also
+    through chains of ties; an expression of numbers only is ``(value, None)``. Anything else
+    (a sum of parameters, a power, a product of two parameters) is None. Compiled costs use
+    this to go from the free parameters to every element value without evaluating
+    expressions.
+    """
+
+    def walk(node: ast.AST) -> tuple[float, str | None] | None:
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
+            return float(node.value), None
+        if isinstance(node, ast.Name):
+            p = params.get(node.id)
+            if p is None:
+                return None
+            return walk(ast.parse(p.expr, mode="eval").body) if p.is_tied else (1.0, node.id)
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+            inner = walk(node.operand)
+            if inner is None:
+                return None
+            return (-inner[0] if isinstance(node.op, ast.USub) else inner[0]), inner[1]
+        if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.Div)):
+            a, b = walk(node.left), walk(node.right)
+            if a is None or b is None or (a[1] is not None and b[1] is not None):
+                return None
+            if isinstance(node.op, ast.Mult):
+                return a[0] * b[0], a[1] or b[1]
+            if b[1] is not None or b[0] == 0.0:
+                return None
+            return a[0] / b[0], a[1]
+        return None
+
+    p = params[name]
+    return walk(ast.parse(p.expr, mode="eval").body) if p.is_tied else (1.0, name)
+
+
 def check_declarations(params: Mapping[str, Parameter]) -> tuple[str, ...]:
     """Validate tied expressions and return an evaluation order of the tied parameters.
 

@@ -95,11 +95,11 @@ def test_killed_batch_reruns_without_losing_or_recomputing(tmp_path):
     proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     parts = out / "parts"
     deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and len(list(parts.glob("*.parquet"))) < 3:
+    while time.monotonic() < deadline and len(list(parts.glob("*.json"))) < 3:
         time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
-    before = {p.name: p.read_bytes() for p in parts.glob("*.parquet")}
+    before = {p.name: p.read_bytes() for p in parts.glob("*.json")}
     assert 3 <= len(before) < n, "the batch must be killed midway"
     assert not (out / "results.parquet").exists()
     store = ResultStore(out)

@@ -3,7 +3,13 @@ import math
 import pytest
 
 from rczone.errors import ParameterError
-from rczone.network.parameters import Parameter, check_declarations, expression_names, resolve
+from rczone.network.parameters import (
+    Parameter,
+    check_declarations,
+    expression_names,
+    proportional_base,
+    resolve,
+)
 
 
 def _params(*ps):
@@ -84,3 +90,30 @@ def test_cycles_and_unknown_names_in_ties():
         check_declarations(_params(Parameter("a", expr="b"), Parameter("b", expr="a")))
     with pytest.raises(ParameterError, match=r"unknown parameter 'Rww'.*'Rw'"):
         check_declarations(_params(Parameter("Rw", "resistance", 1.0), Parameter("R1", expr="Rww/2")))
+
+
+def test_proportional_base_follows_ties_and_refuses_anything_nonlinear() -> None:
+    params = {
+        p.name: p
+        for p in [
+            Parameter("Rw", "resistance", 0.01),
+            Parameter("Ra", "resistance", 0.02),
+            Parameter("R1", "resistance", expr="Rw/2"),
+            Parameter("R2", "resistance", expr="3 * R1 / 4"),
+            Parameter("R3", "resistance", expr="-(-R2)"),
+            Parameter("R4", "resistance", expr="2.5 * 2"),
+            Parameter("S", "resistance", expr="Rw + Ra"),
+            Parameter("P", "resistance", expr="Rw * Ra"),
+            Parameter("Q", "resistance", expr="Rw ** 2"),
+            Parameter("D", "resistance", expr="2 / Rw"),
+            Parameter("Z", "resistance", expr="Rw / (1 - 1)"),
+            Parameter("T", "resistance", expr="S / 2"),
+        ]
+    }
+    assert proportional_base(params, "Rw") == (1.0, "Rw")
+    assert proportional_base(params, "R1") == (0.5, "Rw")
+    assert proportional_base(params, "R2") == pytest.approx((0.375, "Rw"))
+    assert proportional_base(params, "R3") == pytest.approx((0.375, "Rw"))
+    assert proportional_base(params, "R4") == (5.0, None)
+    for name in ("S", "P", "Q", "D", "Z", "T"):
+        assert proportional_base(params, name) is None
