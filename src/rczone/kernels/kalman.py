@@ -151,8 +151,8 @@ def nll_rc2_kernel(
         sample; entries of missing samples are left as they are. With ``P0 = Qc = 0`` the
         filter never corrects the state, so these are the open-loop output errors.
     groups, firsts : ndarray of int64, shapes (N - 1,) and (G,), or both (0,)
-        Intervals with equal length and flows (:func:`interval_groups`): interval ``k`` uses
-        the matrices of group ``groups[k]``, computed once from interval ``firsts[g]``.
+        Intervals with equal length and flows (:func:`interval_groups`): interval ``k``
+        uses the matrices of group ``groups[k]``, computed at the group's first interval.
         Empty: discretize every interval whose length or flows differ from the previous one.
     """
     n_t = y.shape[0]
@@ -180,111 +180,15 @@ def nll_rc2_kernel(
         x[i] = x0[i]
         for j in range(2):
             P[i, j] = P0[i, j]
-    # one discretization per group of equal intervals: the groups given, else runs of
-    # consecutive intervals with the same length and flows
-    n_int = max(n_t - 1, 0)
-    if groups.shape[0] > 0:
-        grp = groups
-        fst = firsts
-    else:
-        grp = np.empty(n_int, dtype=np.int64)
-        fst = np.empty(n_int, dtype=np.int64)
-        n_g = 0
-        for k in range(n_int):
-            new = k == 0 or t[k + 1] - t[k] != t[k] - t[k - 1]
-            for f in range(nf):
-                if k > 0 and m[k, f] != m[k - 1, f]:
-                    new = True
-            if new:
-                fst[n_g] = k
-                n_g += 1
-            grp[k] = n_g - 1
-        fst = fst[:n_g]
-    n_slots = fst.shape[0]
+    # with groups, each group's matrices are computed at its first interval and kept;
+    # without, one slot holds the current run of intervals with equal length and flows
+    table = groups.shape[0] > 0
+    n_slots = firsts.shape[0] if table else 1
     Phi = np.empty((n_slots, 2, 2))
     Qd = np.empty((n_slots, 2, 2))
     G0 = np.empty((n_slots, 2, p))
     G1 = np.zeros((n_slots, 2, p))
-    for g in range(n_slots):
-        kk = fst[g]
-        h = t[kk + 1] - t[kk]
-        a = A0[0, 0]
-        a01 = A0[0, 1]
-        a10 = A0[1, 0]
-        d = A0[1, 1]
-        for f in range(nf):
-            mf = m[kk, f]
-            a += mf * N[f, 0, 0]
-            a01 += mf * N[f, 0, 1]
-            a10 += mf * N[f, 1, 0]
-            d += mf * N[f, 1, 1]
-        # symmetric S = diag(s) A diag(s)^-1 and its Jacobi rotation [[cs, sn], [-sn, cs]]
-        b = 0.5 * (a01 * r01 + a10 / r01)
-        if b == 0.0:
-            tn = 0.0
-        else:
-            tau = (d - a) / (2.0 * b)
-            at = abs(tau)
-            # sqrt(1 + tau^2) without overflow for |tau| > 1e150
-            root = at * math.sqrt(1.0 + (1.0 / at) ** 2) if at > 1e150 else math.sqrt(1.0 + at * at)
-            tn = math.copysign(1.0, tau) / (at + root)
-        cs = 1.0 / math.sqrt(1.0 + tn * tn)
-        sn = tn * cs
-        # T = diag(s)^-1 V, Ti = T^-1 = V' diag(s)
-        T00, T01, T10, T11 = cs * is0, sn * is0, -sn * is1, cs * is1
-        U00, U01, U10, U11 = cs * s0, -sn * s1, sn * s0, cs * s1
-        x0_ = (a - tn * b) * h
-        x1_ = (d + tn * b) * h
-        # two expm1 per interval; e^{(l_i + l_j) h} - 1 = em1_i + em1_j + em1_i em1_j exactly;
-        # e = em1 + 1 is accurate to eps absolutely, which is all Phi (|e| <= 1) needs
-        em0 = math.expm1(x0_)
-        em1_ = math.expm1(x1_)
-        e0 = em0 + 1.0
-        e1 = em1_ + 1.0
-        w10 = _ratio(x0_, em0)
-        w11 = _ratio(x1_, em1_)
-        if foh:
-            w20 = _phi2(x0_, em0, phi2)
-            w21 = _phi2(x1_, em1_, phi2)
-            ga0, ga1 = (w10 - w20) * h, (w11 - w21) * h
-            gb0, gb1 = w20 * h, w21 * h
-        else:
-            ga0, ga1 = w10 * h, w11 * h
-            gb0, gb1 = 0.0, 0.0
-        Phi[g, 0, 0] = T00 * e0 * U00 + T01 * e1 * U10
-        Phi[g, 0, 1] = T00 * e0 * U01 + T01 * e1 * U11
-        Phi[g, 1, 0] = T10 * e0 * U00 + T11 * e1 * U10
-        Phi[g, 1, 1] = T10 * e0 * U01 + T11 * e1 * U11
-        for j in range(p):
-            bj0 = B0[0, j]
-            bj1 = B0[1, j]
-            for f in range(nf):
-                bj0 += m[kk, f] * M[f, 0, j]
-                bj1 += m[kk, f] * M[f, 1, j]
-            z0 = U00 * bj0 + U01 * bj1
-            z1 = U10 * bj0 + U11 * bj1
-            G0[g, 0, j] = T00 * ga0 * z0 + T01 * ga1 * z1
-            G0[g, 1, j] = T10 * ga0 * z0 + T11 * ga1 * z1
-            if foh:
-                G1[g, 0, j] = T00 * gb0 * z0 + T01 * gb1 * z1
-                G1[g, 1, j] = T10 * gb0 * z0 + T11 * gb1 * z1
-        # W = Ti Qc Ti' weighted by (e^{(l_i + l_j) h} - 1)/(l_i + l_j); Qd = T W T'
-        y00 = U00 * Qc[0, 0] + U01 * Qc[1, 0]
-        y01 = U00 * Qc[0, 1] + U01 * Qc[1, 1]
-        y10 = U10 * Qc[0, 0] + U11 * Qc[1, 0]
-        y11 = U10 * Qc[0, 1] + U11 * Qc[1, 1]
-        W00 = (y00 * U00 + y01 * U01) * _ratio(2.0 * x0_, em0 * (em0 + 2.0)) * h
-        W01 = (y00 * U10 + y01 * U11) * _ratio(x0_ + x1_, em0 + em1_ + em0 * em1_) * h
-        W11 = (y10 * U10 + y11 * U11) * _ratio(2.0 * x1_, em1_ * (em1_ + 2.0)) * h
-        v00 = T00 * W00 + T01 * W01
-        v01 = T00 * W01 + T01 * W11
-        v10 = T10 * W00 + T11 * W01
-        v11 = T10 * W01 + T11 * W11
-        Qd[g, 0, 0] = v00 * T00 + v01 * T01
-        q01 = v00 * T10 + v01 * T11
-        Qd[g, 0, 1] = q01
-        Qd[g, 1, 0] = q01
-        Qd[g, 1, 1] = v10 * T10 + v11 * T11
+    ready = np.zeros(n_slots, dtype=np.bool_)
     nll = 0.0
     n_obs = 0
     for k in range(n_t):
@@ -322,7 +226,96 @@ def nll_rc2_kernel(
             n_obs += 1
         if k == n_t - 1:
             break
-        g = grp[k]
+        if table:
+            g = groups[k]
+            fresh = not ready[g]
+            ready[g] = True
+        else:
+            g = 0
+            fresh = k == 0 or t[k + 1] - t[k] != t[k] - t[k - 1]
+            for f in range(nf):
+                if k > 0 and m[k, f] != m[k - 1, f]:
+                    fresh = True
+        if fresh:
+            kk = k
+            h = t[k + 1] - t[k]
+            a = A0[0, 0]
+            a01 = A0[0, 1]
+            a10 = A0[1, 0]
+            d = A0[1, 1]
+            for f in range(nf):
+                mf = m[kk, f]
+                a += mf * N[f, 0, 0]
+                a01 += mf * N[f, 0, 1]
+                a10 += mf * N[f, 1, 0]
+                d += mf * N[f, 1, 1]
+            # symmetric S = diag(s) A diag(s)^-1 and its Jacobi rotation [[cs, sn], [-sn, cs]]
+            b = 0.5 * (a01 * r01 + a10 / r01)
+            if b == 0.0:
+                tn = 0.0
+            else:
+                tau = (d - a) / (2.0 * b)
+                at = abs(tau)
+                # sqrt(1 + tau^2) without overflow for |tau| > 1e150
+                root = at * math.sqrt(1.0 + (1.0 / at) ** 2) if at > 1e150 else math.sqrt(1.0 + at * at)
+                tn = math.copysign(1.0, tau) / (at + root)
+            cs = 1.0 / math.sqrt(1.0 + tn * tn)
+            sn = tn * cs
+            # T = diag(s)^-1 V, Ti = T^-1 = V' diag(s)
+            T00, T01, T10, T11 = cs * is0, sn * is0, -sn * is1, cs * is1
+            U00, U01, U10, U11 = cs * s0, -sn * s1, sn * s0, cs * s1
+            x0_ = (a - tn * b) * h
+            x1_ = (d + tn * b) * h
+            # two expm1 per interval; e^{(l_i + l_j) h} - 1 = em1_i + em1_j + em1_i em1_j exactly;
+            # e = em1 + 1 is accurate to eps absolutely, which is all Phi (|e| <= 1) needs
+            em0 = math.expm1(x0_)
+            em1_ = math.expm1(x1_)
+            e0 = em0 + 1.0
+            e1 = em1_ + 1.0
+            w10 = _ratio(x0_, em0)
+            w11 = _ratio(x1_, em1_)
+            if foh:
+                w20 = _phi2(x0_, em0, phi2)
+                w21 = _phi2(x1_, em1_, phi2)
+                ga0, ga1 = (w10 - w20) * h, (w11 - w21) * h
+                gb0, gb1 = w20 * h, w21 * h
+            else:
+                ga0, ga1 = w10 * h, w11 * h
+                gb0, gb1 = 0.0, 0.0
+            Phi[g, 0, 0] = T00 * e0 * U00 + T01 * e1 * U10
+            Phi[g, 0, 1] = T00 * e0 * U01 + T01 * e1 * U11
+            Phi[g, 1, 0] = T10 * e0 * U00 + T11 * e1 * U10
+            Phi[g, 1, 1] = T10 * e0 * U01 + T11 * e1 * U11
+            for j in range(p):
+                bj0 = B0[0, j]
+                bj1 = B0[1, j]
+                for f in range(nf):
+                    bj0 += m[kk, f] * M[f, 0, j]
+                    bj1 += m[kk, f] * M[f, 1, j]
+                z0 = U00 * bj0 + U01 * bj1
+                z1 = U10 * bj0 + U11 * bj1
+                G0[g, 0, j] = T00 * ga0 * z0 + T01 * ga1 * z1
+                G0[g, 1, j] = T10 * ga0 * z0 + T11 * ga1 * z1
+                if foh:
+                    G1[g, 0, j] = T00 * gb0 * z0 + T01 * gb1 * z1
+                    G1[g, 1, j] = T10 * gb0 * z0 + T11 * gb1 * z1
+            # W = Ti Qc Ti' weighted by (e^{(l_i + l_j) h} - 1)/(l_i + l_j); Qd = T W T'
+            y00 = U00 * Qc[0, 0] + U01 * Qc[1, 0]
+            y01 = U00 * Qc[0, 1] + U01 * Qc[1, 1]
+            y10 = U10 * Qc[0, 0] + U11 * Qc[1, 0]
+            y11 = U10 * Qc[0, 1] + U11 * Qc[1, 1]
+            W00 = (y00 * U00 + y01 * U01) * _ratio(2.0 * x0_, em0 * (em0 + 2.0)) * h
+            W01 = (y00 * U10 + y01 * U11) * _ratio(x0_ + x1_, em0 + em1_ + em0 * em1_) * h
+            W11 = (y10 * U10 + y11 * U11) * _ratio(2.0 * x1_, em1_ * (em1_ + 2.0)) * h
+            v00 = T00 * W00 + T01 * W01
+            v01 = T00 * W01 + T01 * W11
+            v10 = T10 * W00 + T11 * W01
+            v11 = T10 * W01 + T11 * W11
+            Qd[g, 0, 0] = v00 * T00 + v01 * T01
+            q01 = v00 * T10 + v01 * T11
+            Qd[g, 0, 1] = q01
+            Qd[g, 1, 0] = q01
+            Qd[g, 1, 1] = v10 * T10 + v11 * T11
         f00 = Phi[g, 0, 0]
         f01 = Phi[g, 0, 1]
         f10 = Phi[g, 1, 0]
