@@ -174,6 +174,7 @@ def nll_rc2_kernel(
     is0 = 1.0 / s0
     is1 = 1.0 / s1
     r01 = s0 / s1
+    ir01 = s1 / s0
     x = np.empty(2)
     P = np.empty((2, 2))
     for i in range(2):
@@ -250,7 +251,7 @@ def nll_rc2_kernel(
                 a10 += mf * N[f, 1, 0]
                 d += mf * N[f, 1, 1]
             # symmetric S = diag(s) A diag(s)^-1 and its Jacobi rotation [[cs, sn], [-sn, cs]]
-            b = 0.5 * (a01 * r01 + a10 / r01)
+            b = 0.5 * (a01 * r01 + a10 * ir01)
             if b == 0.0:
                 tn = 0.0
             else:
@@ -272,8 +273,11 @@ def nll_rc2_kernel(
             em1_ = math.expm1(x1_)
             e0 = em0 + 1.0
             e1 = em1_ + 1.0
-            w10 = _ratio(x0_, em0)
-            w11 = _ratio(x1_, em1_)
+            # (e^x - 1)/x with one division per eigenvalue, reused below
+            ix0 = 1.0 / x0_ if x0_ != 0.0 else 0.0
+            ix1 = 1.0 / x1_ if x1_ != 0.0 else 0.0
+            w10 = em0 * ix0 if x0_ != 0.0 else 1.0
+            w11 = em1_ * ix1 if x1_ != 0.0 else 1.0
             if foh:
                 w20 = _phi2(x0_, em0, phi2)
                 w21 = _phi2(x1_, em1_, phi2)
@@ -304,9 +308,9 @@ def nll_rc2_kernel(
             y01 = U00 * Qc[0, 1] + U01 * Qc[1, 1]
             y10 = U10 * Qc[0, 0] + U11 * Qc[1, 0]
             y11 = U10 * Qc[0, 1] + U11 * Qc[1, 1]
-            W00 = (y00 * U00 + y01 * U01) * _ratio(2.0 * x0_, em0 * (em0 + 2.0)) * h
+            W00 = (y00 * U00 + y01 * U01) * (w10 * (0.5 * em0 + 1.0)) * h
             W01 = (y00 * U10 + y01 * U11) * _ratio(x0_ + x1_, em0 + em1_ + em0 * em1_) * h
-            W11 = (y10 * U10 + y11 * U11) * _ratio(2.0 * x1_, em1_ * (em1_ + 2.0)) * h
+            W11 = (y10 * U10 + y11 * U11) * (w11 * (0.5 * em1_ + 1.0)) * h
             v00 = T00 * W00 + T01 * W01
             v01 = T00 * W01 + T01 * W11
             v10 = T10 * W00 + T11 * W01
