@@ -27,13 +27,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from rczone.estimation.costs import METHODS, Objective, _values_path
+from rczone.estimation.costs import Objective, fused_path_applies
 from rczone.kernels import rc2fit
 from rczone.kernels.kalman import _PHI2
 from rczone.network.parameters import proportional_base
 from rczone.simulation.discretize import SYMMETRY_RTOL
 
-_KIND = dict(zip(METHODS, (rc2fit.LS, rc2fit.ML, rc2fit.MAP)))
+_KIND = {"ls": rc2fit.LS, "ml": rc2fit.ML, "map": rc2fit.MAP}
 
 
 def _slot(objective: Objective, name: str | float) -> tuple[int, float] | None:
@@ -62,7 +62,7 @@ def _slot(objective: Objective, name: str | float) -> tuple[int, float] | None:
 def compiled_problem(objective: Objective) -> tuple | None:
     """The problem tuple of ``objective`` for :mod:`rczone.kernels.rc2fit`, or None."""
     net, data, spec = objective.network, objective.data, objective.spec
-    if objective.method not in _KIND or not _values_path(net, spec.fixed, data):
+    if objective.method not in _KIND or not fused_path_applies(net, spec.fixed, data):
         return None
     if any(n.startswith("x0_") for n in spec.names):
         return None

@@ -142,7 +142,7 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     loop, and its innovations are exactly the open-loop output errors.
     """
     zero = np.zeros((2, 2))
-    if _values_path(network, values, data):
+    if fused_path_applies(network, values, data):
         e = np.full(data.t.shape[0], np.nan)
         res, cap = network.conductance_values(network_theta(network, values))
         kalman_nll_rc2_values(
@@ -178,7 +178,7 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     return trapezoid_sse(data.t, data.y - yhat)
 
 
-def _values_path(network: RCNetwork, values: Mapping[str, float], data: Dataset) -> bool:
+def fused_path_applies(network: RCNetwork, values: Mapping[str, float], data: Dataset) -> bool:
     """Whether the 2-state likelihood can run straight from parameter values."""
     return (
         len(network.state_names) == 2
@@ -232,7 +232,7 @@ def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
     discretization + filter, :func:`rczone.kernels.kalman.kalman_nll_rc2`); other models the
     compiled filter loop on :func:`stochastic_matrices`.
     """
-    if _values_path(network, values, data):
+    if fused_path_applies(network, values, data):
         # parameter values to likelihood in one compiled call (assembly, initial state, filter)
         res, cap = network.conductance_values(network_theta(network, values))
         sw, sx, sv = _noise(network.state_names, values)

@@ -40,6 +40,8 @@ if TYPE_CHECKING:  # the simulation package imports this module
     from rczone.simulation.discretize import RankOneForm
 
 _EPS = float(np.finfo(float).eps)
+#: Taylor coefficients 1/(k+2)!, k = 0..12, of (e^x - 1 - x)/x^2.
+_PHI2 = np.array([1.0 / math.factorial(k + 2) for k in range(13)])
 
 
 @njit(cache=True, error_model="numpy")
@@ -201,19 +203,22 @@ def _eigen(
 
 
 @njit(cache=True, error_model="numpy")
-def _weights(x: float) -> tuple[float, float, float]:
-    """``(e^x, (e^x - 1)/x, (e^x - 1 - x)/x^2)`` as :func:`rczone.simulation.discretize.phi_weights`."""
+def _weights(x: float, foh: bool) -> tuple[float, float, float]:
+    """``(e^x, (e^x - 1)/x, (e^x - 1 - x)/x^2)`` as :func:`rczone.simulation.discretize.phi_weights`.
+
+    The last weight is only needed for FOH (0 otherwise); near 0 it is the Taylor series
+    ``sum_k x^k/(k+2)!``, ``k = 0..12``, with the coefficients of :data:`_PHI2`.
+    """
     em1 = math.expm1(x)
     w1 = 1.0 if x == 0.0 else em1 / x
-    if abs(x) < 0.2:
-        # Taylor series sum_k x^k/(k+2)!, k = 0..12, by Horner
-        w2 = 0.0
-        fact = 87178291200.0  # 14!
-        for k in range(12, -1, -1):
-            w2 = w2 * x + 1.0 / fact
-            fact /= k + 2
-    else:
-        w2 = (em1 - x) / (x * x)
+    w2 = 0.0
+    if foh:
+        if abs(x) < 0.2:
+            w2 = _PHI2[12]
+            for k in range(11, -1, -1):
+                w2 = w2 * x + _PHI2[k]
+        else:
+            w2 = (em1 - x) / (x * x)
     # em1 + 1 is exact to eps absolutely, all that Phi = U diag(e) U' (|e| <= 1 for RC) needs
     return em1 + 1.0, w1, w2
 
@@ -327,7 +332,7 @@ def simulate_rank_one_kernel(
             for i in range(r, n):
                 lam[i] = d[i]
             for i in range(n):
-                ei, w1, w2 = _weights(lam[i] * h)
+                ei, w1, w2 = _weights(lam[i] * h, foh)
                 e[i] = ei
                 if foh:
                     g0[i] = (w1 - w2) * h
