@@ -2,8 +2,12 @@
 
 A problem qualifies when the fused 2-state path of the costs applies (two capacitive
 states, one measured output, the network's plain conductance form, a measured first sample,
-no initial-state parameters) and every resistor, capacity and noise level is a constant or
-proportional to one free parameter (``R1 = Rw/2`` is; ``R = Ra + Rb`` is not). Then
+no initial-state parameters), every resistor, capacity and noise level is a constant or
+proportional to one free parameter (``R1 = Rw/2`` is; ``R = Ra + Rb`` is not), and the
+checks the Python path makes on every parameter cannot fail unseen: every tied parameter of
+the network (used by an element or not) is proportional, every resistance and capacitance is
+positive by construction (positive constants, positive factors of log-transformed free
+parameters), and every free parameter that sets an element value is log-transformed. Then
 :func:`rczone.kernels.rc2fit.cost_z` evaluates the cost and
 :func:`rczone.kernels.rc2fit.nelder_mead` minimizes it without returning to Python.
 Anything else returns None and takes the general path, with the same results.
@@ -59,12 +63,38 @@ def _slot(objective: Objective, name: str | float) -> tuple[int, float] | None:
     return -1, k * float(v)
 
 
+def _always_valid(objective: Objective) -> bool:
+    """Whether every parameter value the Python path checks is valid for every free value.
+
+    The compiled cost checks only the values it uses; the Python path resolves and checks
+    every declared parameter. They agree when nothing can fail: every tie proportional, every
+    resistance and capacitance a positive multiple of a positive value.
+    """
+    spec = objective.spec
+    for name, p in objective.network.parameters.items():
+        base = proportional_base(objective.network.parameters, name)
+        if base is None:
+            return False
+        if p.kind not in ("resistance", "capacitance"):
+            continue
+        k, b = base
+        if b is None:
+            sign = k
+        elif b in spec.names:
+            sign = k if spec.log[spec.names.index(b)] else -1.0
+        else:
+            sign = k * spec.fixed.get(b, -1.0)
+        if not sign > 0:
+            return False
+    return True
+
+
 def compiled_problem(objective: Objective) -> tuple | None:
     """The problem tuple of ``objective`` for :mod:`rczone.kernels.rc2fit`, or None."""
     net, data, spec = objective.network, objective.data, objective.spec
     if objective.method not in _KIND or not fused_path_applies(net, spec.fixed, data):
         return None
-    if any(n.startswith("x0_") for n in spec.names):
+    if any(n.startswith("x0_") for n in spec.names) or not _always_valid(objective):
         return None
     form = net.conductance_form
     states = net.state_names
@@ -78,7 +108,8 @@ def compiled_problem(objective: Objective) -> tuple | None:
     slots = []
     for group in names:
         got = [_slot(objective, n) for n in group]
-        if any(g is None for g in got):
+        # a free parameter setting an element value must be positive by its transform
+        if any(g is None or (g[0] >= 0 and not spec.log[g[0]]) for g in got):
             return None
         slots.append((np.array([g[0] for g in got], dtype=np.int64), np.array([g[1] for g in got])))
     if objective.method == "ls":

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.errors import InputShapeError
+from rczone.errors import InputShapeError, ParameterError
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import SYMMETRY_RTOL, symmetrizing_scale
 from rczone.simulation.simulate import HOLDS
@@ -452,6 +452,8 @@ def kalman_nll_rc2_values(
     :func:`interval_groups` of ``(t, m)`` (discretize each distinct interval once).
     """
     form = network.conductance_form
+    if not np.all(np.asarray(cap) > 0) or not np.all(np.isfinite(cap)):
+        raise ParameterError(f"capacities must be finite and > 0, got {list(map(float, cap))}")
     f = np.ascontiguousarray
     nll, n_obs = nll_rc2_from_values(
         form.L,

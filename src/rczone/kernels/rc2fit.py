@@ -17,8 +17,12 @@ loop runs compiled:
   coefficients (reflection 1, expansion 2, contraction 1/2, shrink 1/2) and the stopping
   rule of :func:`scipy.optimize.minimize` (every vertex within ``xatol`` of the best in every
   coordinate and every value within ``fatol`` of the best), on the cost divided by
-  ``scale`` with non-finite values replaced by ``1e300``, so it takes the same steps as the
-  Python path of :func:`rczone.estimation.optimize.minimize_from`.
+  ``scale`` with non-finite values replaced by ``1e300``, as the Python path of
+  :func:`rczone.estimation.optimize.minimize_from`. On the same function it takes SciPy's
+  steps exactly, budget handling included; against the Python path the iterates differ
+  by rounding (``math.tanh`` and NumPy's differ in the last bit) and where vertices tie
+  exactly (the sort here is stable, NumPy's is not), so the two end at the same minimum
+  within the tolerances, not bit for bit.
 
 The problem is a tuple of arrays built by :func:`rczone.estimation.compiled.compiled_problem`
 (see there for the layout); :func:`cost_z` on it equals

@@ -45,6 +45,15 @@ CP_AIR = 1005.0
 Value = str | float
 
 
+def _check_positive(values: np.ndarray, names: Sequence[Value], what: str) -> None:
+    """Element values must be positive, whatever kind their parameter was declared with."""
+    real = values.real if np.iscomplexobj(values) else values
+    bad = np.flatnonzero(~(real > 0))
+    if bad.size:
+        i = int(bad[0])
+        raise ParameterError(f"{what} {names[i]!r} must be > 0, got {real[i]:g}")
+
+
 @dataclass(frozen=True)
 class Node:
     """A temperature node of the network.
@@ -498,7 +507,9 @@ class RCNetwork:
             return vals[x] if isinstance(x, str) else float(x)
 
         xs, zs = st["xs"], st["zs"]
-        g = 1.0 / np.array([v(r) for r in st["res"]], dtype)
+        res = np.array([v(r) for r in st["res"]], dtype)
+        _check_positive(res, st["res"], "resistor")
+        g = 1.0 / res
         G = st["L"].T @ (g[:, None] * st["L"])  # conductance (Laplacian) among nodes
         Gb = st["P"].T @ (g[:, None] * st["E"]) + st["Gb"]  # nodes to inputs (conductances, heat gains)
         for i, j, gain in st["heat"]:
@@ -523,6 +534,7 @@ class RCNetwork:
             C = C + st["Cz"] @ Kz
             D = D + st["Cz"] @ Lz
         cap = np.array([v(c) for c in st["cap"]], dtype)
+        _check_positive(cap, st["cap"], "capacity")
         inv = (1.0 / cap)[:, None]
         Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
         return (Axx * inv, Nx, Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
@@ -559,6 +571,8 @@ class RCNetwork:
             raise NetworkError(f"network {self.name!r} has no plain conductance form (massless nodes?)")
         r = np.array([vals[x] if isinstance(x, str) else float(x) for x in form.resistances])
         c = np.array([vals[x] if isinstance(x, str) else float(x) for x in form.capacities])
+        _check_positive(r, form.resistances, "resistor")
+        _check_positive(c, form.capacities, "capacity")
         return r, c
 
     def replace_parameters(self, parameters: Iterable[Parameter]) -> RCNetwork:

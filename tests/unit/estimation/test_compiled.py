@@ -113,29 +113,51 @@ def test_compiled_nelder_mead_minimizes_and_stays_inside_the_bounds() -> None:
     assert f * scale < 1e-12 * scale
 
 
-def test_invalid_points_cost_infinity_in_both_paths() -> None:
-    # a heat-input-free variant where a capacity is proportional to a parameter that can be
-    # negative (kind "other", not log-transformed): invalid values give inf, never an error
-    net = RCNetwork(
-        "neg",
-        nodes=[Node("Ti", "Cr"), Node("Tw", "Cw")],
+def _other_kind_network(resistor: str, capacity: str) -> RCNetwork:
+    return RCNetwork(
+        "other",
+        nodes=[Node("Ti", capacity), Node("Tw", "Cw")],
         boundaries=["To"],
-        resistors=[Resistor("Ti", "To", "R1"), Resistor("Ti", "Tw", "R2")],
+        resistors=[Resistor("Ti", "To", resistor), Resistor("Ti", "Tw", "R2")],
         heat_inputs=[HeatInput("Q", {"Ti": 1.0})],
         parameters=[
-            Parameter("a", "other", 1.0),
-            Parameter("Cr", "capacitance", expr="a * 1e6"),
+            Parameter("a", "other", 0.02),
+            Parameter("b", "other", 1e6),
+            Parameter("Cr", "capacitance", expr="b * 1"),
             Parameter("Cw", "capacitance", 5e6),
             Parameter("R1", "resistance", 0.02),
             Parameter("R2", "resistance", 0.01),
         ],
     )
+
+
+@pytest.mark.parametrize(
+    ("resistor", "capacity", "free", "bad"), [("a", "Cr", "a", -0.01), ("R1", "b", "b", -1e5)]
+)
+@pytest.mark.parametrize("method", ["ls", "ml"])
+def test_element_values_that_can_turn_negative_stay_on_the_python_path(resistor, capacity, free, bad, method):
+    # a resistor or capacity set by a parameter of kind "other" (not log-transformed): the
+    # Python path returns inf where it is <= 0 (never an error mid-search), and the compiled
+    # path, which checks only what it uses, refuses the problem
+    net = _other_kind_network(resistor, capacity)
     t = np.arange(50) * 600.0
     u = np.column_stack([10 + np.sin(t / 3600), 100 + 0 * t])
     y = 15 + 0.01 * np.arange(50)[:, None]
     data = Dataset(t, u, np.zeros((50, 0)), y, net.input_names, (), net.outputs)
-    obj = Objective(net, data, make_spec(net, ["a"]), "ls")
-    problem = compiled_problem(obj)
-    assert problem is not None
-    assert compiled_cost(problem, np.array([-0.5])) == obj(np.array([-0.5])) == np.inf
-    assert compiled_cost(problem, np.array([2.0])) == pytest.approx(obj(np.array([2.0])), rel=1e-12)
+    obj = Objective(net, data, make_spec(net, [free]), method)
+    assert compiled_problem(obj) is None
+    assert obj(np.array([bad])) == np.inf
+    assert np.isfinite(obj(np.array([-bad])))
+
+
+def test_a_tie_no_element_uses_is_still_checked() -> None:
+    # Rx = Rw - 0.005 is used by no element but is a resistance that the Python path checks
+    # (inf for Rw < 0.005): a problem the compiled cost could not reproduce is refused
+    net = NET2.replace_parameters([Parameter("Rx", "resistance", expr="Rw - 0.005")])
+    obj = Objective(net, noisy_data(), make_spec(net, ["Cr", "Rw"]), "ls")
+    assert compiled_problem(obj) is None
+    assert obj(np.log([8e5, 0.004])) == np.inf
+    negative = NET2.replace_parameters([Parameter("Rx", "resistance", expr="-Rw")])
+    assert (
+        compiled_problem(Objective(negative, noisy_data(), make_spec(negative, ["Cr", "Rw"]), "ls")) is None
+    )
