@@ -29,6 +29,7 @@ import numpy as np
 from rczone.errors import InputShapeError
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import (
+    RankOneForm,
     foh,
     rank_one_form,
     spectral_decomposition,
@@ -40,6 +41,8 @@ from rczone.simulation.discretize import (
 HOLDS = ("zoh", "foh")
 #: Up to this many distinct ``(dt, m)`` the batched per-key discretization beats per-sample updates.
 FEW_KEYS = 32
+#: Rank-one forms kept per state space (one per flow range simulated).
+_FORMS_KEPT = 8
 
 
 def check_time(t: np.ndarray) -> np.ndarray:
@@ -190,6 +193,22 @@ def propagate_reference(
     return x
 
 
+def _rank_one_form_of(ss: BilinearStateSpace, m_max: float) -> RankOneForm | None:
+    """:func:`rank_one_form` of ``ss`` for flows up to ``m_max``, kept on the (immutable) state space.
+
+    The eigen-decomposition and deflation are a property of the model, not of the data: a
+    model simulated again (MPC predictions, comparisons) reuses them. Up to
+    :data:`_FORMS_KEPT` flow ranges are kept per state space.
+    """
+    kept = ss.__dict__.setdefault("_rank_one_forms", {})
+    if m_max not in kept:
+        scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+        if len(kept) >= _FORMS_KEPT:
+            kept.pop(next(iter(kept)))
+        kept[m_max] = None if scale is None else rank_one_form(ss.A, ss.N, scale, m_max)
+    return kept[m_max]
+
+
 def _simulate_rank_one(
     ss: BilinearStateSpace, t: np.ndarray, u: np.ndarray, m: np.ndarray, x0: np.ndarray, hold: str
 ) -> np.ndarray | None:
@@ -203,10 +222,7 @@ def _simulate_rank_one(
         return None
     if np.unique(m[:-1, 0]).size * np.unique(np.diff(t)).size <= FEW_KEYS:
         return None
-    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
-    if scale is None:
-        return None
-    form = rank_one_form(ss.A, ss.N, scale, float(np.max(np.abs(m))))
+    form = _rank_one_form_of(ss, float(np.max(np.abs(m))))
     if form is None:
         return None
     from rczone.kernels.rankone import simulate_rank_one  # numba loads lazily, see propagate

@@ -9,9 +9,14 @@ from rczone.errors import InputShapeError
 from rczone.kernels.kalman import kalman_nll_rc2, rc2_applicable
 from rczone.kernels.propagate import propagate
 from rczone.network import BilinearStateSpace, HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
-from rczone.simulation import zoh
+from rczone.simulation import simulate, zoh
 from rczone.simulation.discretize import symmetrizing_scale
-from rczone.simulation.simulate import propagate_reference, transition_matrices
+from rczone.simulation.simulate import (
+    _FORMS_KEPT,
+    _rank_one_form_of,
+    propagate_reference,
+    transition_matrices,
+)
 from tests.netfactory import one_r_one_c, thirteen_state
 
 NET2 = RCNetwork(
@@ -146,3 +151,24 @@ def test_kalman_nll_rc2_rejects_what_it_cannot_do(change, match):
         kwargs = change
     with pytest.raises(InputShapeError, match=match):
         kalman_nll_rc2(*args, **kwargs)
+
+
+def test_rank_one_form_is_kept_per_state_space_and_flow_range():
+    ss = thirteen_state(np.random.default_rng(4)).state_space()
+    rng = np.random.default_rng(4)
+    t = np.arange(100) * 60.0
+    u = 20 + rng.standard_normal((100, ss.n_inputs))
+    m = rng.uniform(0.05, 0.2, (100, 1))
+    first = simulate(ss, t, u, m).x
+    kept = ss.__dict__["_rank_one_forms"]
+    form = kept[float(np.max(m))]
+    again = simulate(ss, t, u, m).x
+    np.testing.assert_array_equal(first, again)  # the kept form gives the same numbers
+    assert kept[float(np.max(m))] is form
+    fresh = thirteen_state(
+        np.random.default_rng(4)
+    ).state_space()  # an equal model computes its own, no sharing by value
+    np.testing.assert_array_equal(simulate(fresh, t, u, m).x, first)
+    for k in range(_FORMS_KEPT + 3):  # the store stays bounded
+        _rank_one_form_of(ss, 1.0 + k)
+    assert len(kept) == _FORMS_KEPT
