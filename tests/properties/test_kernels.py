@@ -196,6 +196,18 @@ def reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold):
     return kalman_nll(Phi, G0, G1, Qd, np.arange(K), u, y, x0, P0, ss.C, ss.D, R)
 
 
+def filter_problem(rng: np.random.Generator, p: int, N: int) -> tuple[np.ndarray, ...]:
+    """Random inputs, measurements (5 missing), prior and noise of a 2-state filter problem."""
+    u = 20 + 3 * rng.standard_normal((N, p))
+    y = 20 + rng.standard_normal((N, 1))
+    y[rng.integers(0, N, 5)] = np.nan
+    x0 = 20 + rng.standard_normal(2)
+    P0 = np.diag(rng.uniform(0.1, 2, 2))
+    Qc = np.diag(10 ** rng.uniform(-8, -4, 2))
+    R = np.array([[10 ** rng.uniform(-4, -1)]])
+    return u, y, x0, P0, Qc, R
+
+
 @settings(max_examples=15, deadline=None)
 @given(st.integers(0, 2**32 - 1), st.integers(0, 1), st.sampled_from(["zoh", "foh"]))
 def test_compiled_two_state_likelihood_equals_the_reference_filter(seed, n_massless, hold):
@@ -208,13 +220,7 @@ def test_compiled_two_state_likelihood_equals_the_reference_filter(seed, n_massl
     m[10:20] = 0.2  # repeated (dt, m) reuse the previous discretization
     t[10:20] = t[10] + 60.0 * np.arange(10)
     t[20:] = t[20:] - t[20] + t[19] + 60.0
-    u = 20 + 3 * rng.standard_normal((N, ss.n_inputs))
-    y = 20 + rng.standard_normal((N, 1))
-    y[rng.integers(0, N, 5)] = np.nan
-    x0 = 20 + rng.standard_normal(2)
-    P0 = np.diag(rng.uniform(0.1, 2, 2))
-    Qc = np.diag(10 ** rng.uniform(-8, -4, 2))
-    R = np.array([[10 ** rng.uniform(-4, -1)]])
+    u, y, x0, P0, Qc, R = filter_problem(rng, ss.n_inputs, N)
     ref = reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold)
     got = kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R, hold)
     assert got == pytest.approx(ref, rel=RTOL, abs=RTOL)
@@ -231,13 +237,7 @@ def test_table_of_distinct_intervals_gives_the_reference_likelihood(seed, hold):
     dt = rng.choice([60.0, 60.0, 60.0, 120.0, 37.5], N - 1)
     t = np.cumsum(np.r_[0.0, dt])
     m = rng.choice(np.round(rng.uniform(0, 0.4, 6), 3), (N, 1))  # six flow levels, any order
-    u = 20 + 3 * rng.standard_normal((N, ss.n_inputs))
-    y = 20 + rng.standard_normal((N, 1))
-    y[rng.integers(0, N, 5)] = np.nan
-    x0 = 20 + rng.standard_normal(2)
-    P0 = np.diag(rng.uniform(0.1, 2, 2))
-    Qc = np.diag(10 ** rng.uniform(-8, -4, 2))
-    R = np.array([[10 ** rng.uniform(-4, -1)]])
+    u, y, x0, P0, Qc, R = filter_problem(rng, ss.n_inputs, N)
     groups = interval_groups(t, m)
     assert groups is not None and groups[1].size <= 18
     g, first = groups
