@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -293,6 +294,12 @@ class Objective:
     values (e.g. a non-positive resistance from a non-log parameter) return ``inf``
     instead of raising, so direct search can step back.
 
+    Problems that qualify (:func:`rczone.estimation.compiled.compiled_problem`: 2-state
+    networks whose element values are proportional to the free parameters, such as the
+    paper's) are evaluated by one compiled call (:func:`rczone.kernels.rc2fit.cost_theta`),
+    about 3x faster than going through parameter dictionaries; :meth:`reference_cost` is
+    the Python path it is tested against, and the one every other problem takes.
+
     Attributes
     ----------
     network : RCNetwork
@@ -331,8 +338,23 @@ class Objective:
         if not 0 < self.likelihood_weight <= 1:
             raise ParameterError(f"likelihood_weight must be in (0, 1], got {self.likelihood_weight!r}")
 
+    @cached_property
+    def compiled(self) -> tuple | None:
+        """The compiled form of this problem, or None (see the class notes)."""
+        from rczone.estimation.compiled import compiled_problem
+
+        return compiled_problem(self)
+
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
+        if self.compiled is not None:
+            from rczone.kernels.rc2fit import cost_theta
+
+            return float(cost_theta(np.asarray(theta, dtype=np.float64), self.compiled))
+        return self.reference_cost(theta)
+
+    def reference_cost(self, theta: np.ndarray) -> float:
+        """Cost at physical values ``theta`` through parameter values and the Python path."""
         values = self.spec.values(theta)
         try:
             if self.method == "ls":

@@ -36,7 +36,6 @@ from scipy import optimize
 from scipy.stats import qmc
 
 from rczone.errors import ParameterError
-from rczone.estimation.compiled import compiled_problem
 from rczone.estimation.costs import Objective
 from rczone.estimation.parameters import ParameterSpec
 from rczone.kernels import rc2fit
@@ -200,9 +199,7 @@ def minimize_from(
             return min(counted(spec.from_z(z)), _BIG)
 
         z0 = spec.to_z(eta0)
-        problem = (
-            compiled_problem(cost) if optimizer == "nelder-mead" and isinstance(cost, Objective) else None
-        )
+        problem = cost.compiled if optimizer == "nelder-mead" and isinstance(cost, Objective) else None
         if problem is not None:
             # the same search without leaving compiled code (rczone.kernels.rc2fit)
             simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
