@@ -46,6 +46,7 @@ from rczone.simulation.discretize import (
     van_loan,
     zoh,
 )
+from rczone.simulation.intervals import interval_keys, unique_rows
 from rczone.simulation.simulate import HOLDS
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
@@ -108,7 +109,7 @@ def stochastic_matrices(
     """
     if hold not in HOLDS:
         raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
-    uniq, which = np.unique(np.column_stack([np.diff(t), m[:-1]]), axis=0, return_inverse=True)
+    uniq, _, which = unique_rows(interval_keys(t, m))
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     if scale is not None:
         # RC network: every matrix in closed form from one symmetric eigen-decomposition per key

@@ -35,6 +35,7 @@ from numba import njit
 from rczone.errors import InputShapeError, ParameterError
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import SYMMETRY_RTOL, symmetrizing_scale
+from rczone.simulation.intervals import interval_keys, unique_rows
 from rczone.simulation.simulate import HOLDS
 
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -70,9 +71,8 @@ def interval_groups(t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarra
     m = np.asarray(m, dtype=np.float64).reshape(t.shape[0], -1)
     if t.shape[0] < 2:
         return None
-    key = np.column_stack([np.diff(t), m[:-1]])
-    _, firsts, groups = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    if firsts.shape[0] > GROUP_FRACTION * key.shape[0]:
+    _, firsts, groups = unique_rows(interval_keys(t, m))
+    if firsts.shape[0] > GROUP_FRACTION * groups.shape[0]:
         return None
     return np.ascontiguousarray(groups.ravel(), dtype=np.int64), np.ascontiguousarray(firsts, dtype=np.int64)
 

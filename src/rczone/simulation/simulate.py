@@ -37,6 +37,7 @@ from rczone.simulation.discretize import (
     symmetrizing_scale,
     zoh,
 )
+from rczone.simulation.intervals import interval_keys, unique_rows
 
 HOLDS = ("zoh", "foh")
 #: Up to this many distinct ``(dt, m)`` the batched per-key discretization beats per-sample updates.
@@ -131,10 +132,7 @@ def transition_matrices(
     """
     if hold not in HOLDS:
         raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
-    dt = np.diff(t)
-    key = np.column_stack([dt, m[:-1]])
-    uniq, which = np.unique(key, axis=0, return_inverse=True)
-    which = which.reshape(-1)
+    uniq, _, which = unique_rows(interval_keys(t, m))
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     if scale is not None:
         A = ss.A + np.tensordot(uniq[:, 1:], ss.N, axes=1)
