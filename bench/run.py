@@ -169,7 +169,7 @@ def jml_cases(rng: np.random.Generator) -> list[Case]:
     # flows as a building logs them: to 1 g/s (a few dozen levels in a night)
     mq = np.round(m, 3)
     groups = interval_groups(t, mq)
-    n_levels = groups[1].size
+    n_levels = int(groups.max()) + 1
     return [
         Case(
             "jml_2state",

@@ -239,10 +239,11 @@ def test_table_of_distinct_intervals_gives_the_reference_likelihood(seed, hold):
     m = rng.choice(np.round(rng.uniform(0, 0.4, 6), 3), (N, 1))  # six flow levels, any order
     u, y, x0, P0, Qc, R = filter_problem(rng, ss.n_inputs, N)
     groups = interval_groups(t, m)
-    assert groups is not None and groups[1].size <= 18
-    g, first = groups
+    assert groups is not None and groups.max() + 1 <= 18
+    _, first = np.unique(groups, return_index=True)  # each group's first interval
     key = np.column_stack([np.diff(t), m[:-1]])
-    assert np.array_equal(key, key[first][g])  # every interval is equal to its group's first
+    assert np.array_equal(key, key[first][groups])  # every interval is equal to its group's first
+    assert len({tuple(r) for r in key[first]}) == first.size  # and groups are distinct
     ref = reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold)
     e_plain, e_table = np.full(N, np.nan), np.full(N, np.nan)
     plain = kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R, hold, e_plain)
@@ -256,8 +257,8 @@ def test_interval_groups_declines_when_most_intervals_differ():
     t = np.arange(100.0) * 60
     assert interval_groups(t, np.linspace(0, 1, 100)[:, None]) is None
     assert interval_groups(t[:1], np.zeros((1, 1))) is None
-    g, first = interval_groups(t, np.zeros((100, 0)))  # no flows: one group of equal steps
-    assert first.size == 1 and np.all(g == 0)
+    g = interval_groups(t, np.zeros((100, 0)))  # no flows: one group of equal steps
+    assert g.shape == (99,) and np.all(g == 0)
 
 
 def identical_branches(n_branches: int, rng: np.random.Generator) -> RCNetwork:

@@ -86,8 +86,7 @@ class ResultStore:
         rows = self._load()
         if not rows:
             return pd.DataFrame(columns=["key", "zone", "method", "status", "error"])
-        df = pd.DataFrame([rows[k] for k in sorted(rows)])
-        return df.reset_index(drop=True)
+        return pd.DataFrame([rows[k] for k in sorted(rows)])
 
     def consolidate(self) -> Path:
         """Write ``results.parquet`` (all rows) atomically and return its path."""

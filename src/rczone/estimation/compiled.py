@@ -16,7 +16,7 @@ Layout of the problem tuple (contiguous float64 / int64 / bool arrays)::
 
     (kind,                                    # LS, ML or MAP
      (L, P, E, Gb0, Nf, Mf, output_state),    # conductance form of the network
-     (t, m, u, y, groups, firsts),            # data, y one column, interval groups
+     (t, m, u, y, groups),                    # data, y one column, interval groups
      (res_idx, res_k, cap_idx, cap_k, noise_idx, noise_k),
      (eta_lower, eta_upper, log),             # direct-search transform
      (prior_idx, prior_log_construction, prior_spread, likelihood_weight),
@@ -118,12 +118,12 @@ def compiled_problem(objective: Objective) -> tuple | None:
         np.array([k in ("resistance", "capacitance") for k in spec.kinds], dtype=bool)
         & np.isfinite(spec.construction)
     )
-    groups = data.interval_groups or (np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
+    groups = np.empty(0, dtype=np.int64) if data.interval_groups is None else data.interval_groups
     c = np.ascontiguousarray
     return (
         _KIND[objective.method],
         (form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, int(form.output_state[0])),
-        (c(data.t), c(data.m), c(data.u), c(data.y[:, 0]), *groups),
+        (c(data.t), c(data.m), c(data.u), c(data.y[:, 0]), groups),
         (slots[0][0], slots[0][1], slots[1][0], slots[1][1], slots[2][0], slots[2][1]),
         (c(spec.eta_lower), c(spec.eta_upper), c(spec.log, dtype=bool)),
         (

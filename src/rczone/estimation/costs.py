@@ -151,32 +151,50 @@ def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
         )
         return trapezoid_sse(data.t, e[:, None])
     ss = network.state_space(network_theta(network, values))
-    if ss.n_states == 2 and data.y.shape[1] == 1:
-        x0 = initial_state(ss, values, data)
-        e = np.full(data.t.shape[0], np.nan)
-        zero = np.zeros((2, 2))
-        try:
-            kalman_nll_rc2(
-                ss,
-                data.t,
-                data.m,
-                data.u,
-                data.y,
-                x0,
-                zero,
-                zero,
-                np.ones((1, 1)),
-                hold,
-                e,
-                data.interval_groups,
-            )
-        except InputShapeError:
-            if rc2_applicable(ss, 1):
-                raise
-        else:
-            return trapezoid_sse(data.t, e[:, None])
+    e = np.full(data.t.shape[0], np.nan)
+    if _nll_rc2_or_none(ss, values, data, hold, zero, zero, 1.0, e) is not None:
+        return trapezoid_sse(data.t, e[:, None])
     _, yhat = simulate_output(network, values, data, hold)
     return trapezoid_sse(data.t, data.y - yhat)
+
+
+def _nll_rc2_or_none(
+    ss: BilinearStateSpace,
+    values: Mapping[str, float],
+    data: Dataset,
+    hold: str,
+    P0: np.ndarray,
+    Qc: np.ndarray,
+    r: float,
+    innovations: np.ndarray | None = None,
+) -> float | None:
+    """The fused 2-state kernel on a state space, or None where it does not apply.
+
+    An RC network's 2-state state space is symmetrizable by construction; the kernel checks
+    it and refuses otherwise (None: the caller takes the general path).
+    """
+    if ss.n_states != 2 or data.y.shape[1] != 1:
+        return None
+    x0 = initial_state(ss, values, data)
+    try:
+        return kalman_nll_rc2(
+            ss,
+            data.t,
+            data.m,
+            data.u,
+            data.y,
+            x0,
+            P0,
+            Qc,
+            np.array([[r]]),
+            hold,
+            innovations,
+            data.interval_groups,
+        )
+    except InputShapeError:
+        if rc2_applicable(ss, 1):
+            raise
+    return None
 
 
 def fused_path_applies(network: RCNetwork, values: Mapping[str, float], data: Dataset) -> bool:
@@ -252,28 +270,11 @@ def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold
             groups=data.interval_groups,
         )
     ss = network.state_space(network_theta(network, values))
-    if ss.n_states == 2 and data.y.shape[1] == 1:
-        # an RC network's state space is symmetrizable by construction (the kernel checks it
-        # and refuses otherwise, which the fallback below then handles)
+    if ss.n_states == 2:
         sw, sx, sv = noise_values(ss, values)
-        x0 = initial_state(ss, values, data)
-        try:
-            return kalman_nll_rc2(
-                ss,
-                data.t,
-                data.m,
-                data.u,
-                data.y,
-                x0,
-                np.diag(sx**2),
-                np.diag(sw**2),
-                np.array([[sv**2]]),
-                hold,
-                groups=data.interval_groups,
-            )
-        except InputShapeError:
-            if rc2_applicable(ss, 1):
-                raise
+        nll = _nll_rc2_or_none(ss, values, data, hold, np.diag(sx**2), np.diag(sw**2), sv**2)
+        if nll is not None:
+            return nll
     return kalman_nll_fast(*filter_arrays(network, values, data, hold))
 
 

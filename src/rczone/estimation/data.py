@@ -74,7 +74,7 @@ class Dataset:
         return self.t.size
 
     @cached_property
-    def interval_groups(self) -> tuple[np.ndarray, np.ndarray] | None:
+    def interval_groups(self) -> np.ndarray | None:
         """Intervals sharing length and flows (:func:`rczone.kernels.kalman.interval_groups`)."""
         from rczone.kernels.kalman import interval_groups
 

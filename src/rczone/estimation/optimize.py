@@ -199,17 +199,16 @@ def minimize_from(
             return min(counted(spec.from_z(z)), _BIG)
 
         z0 = spec.to_z(eta0)
+        simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
         problem = cost.compiled if optimizer == "nelder-mead" and isinstance(cost, Objective) else None
         if problem is not None:
             # the same search without leaving compiled code (rczone.kernels.rc2fit)
-            simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
             z, _, n, status = rc2fit.nelder_mead(simplex, problem, counted.scale, tol, FATOL, max_evals)
             eta = spec.from_z(z)
             theta = spec.to_theta(eta)
             message = _NM_MESSAGES[status]
             return StartOutcome(theta0, theta, float(cost(eta)), status == 0, n + 2, message)
         if optimizer == "nelder-mead":
-            simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
             opts = {"xatol": tol, "fatol": FATOL, "maxfev": max_evals, "initial_simplex": simplex}
             res = optimize.minimize(fz, z0, method="Nelder-Mead", options=opts)
         else:

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.errors import InputShapeError, ParameterError
+from rczone.errors import InputShapeError
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import SYMMETRY_RTOL, symmetrizing_scale
 from rczone.simulation.intervals import interval_keys, unique_rows
@@ -41,13 +41,13 @@ from rczone.simulation.simulate import HOLDS
 _LOG_2PI = math.log(2.0 * math.pi)
 _SERIES_LIMIT = 0.2
 _PHI2 = np.array([1.0 / math.factorial(k + 2) for k in range(13)])
-_NO_GROUPS = (np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64))
+_NO_GROUPS = np.empty(0, dtype=np.int64)
 
 #: Use a table of distinct intervals when it has at most this fraction of the intervals.
 GROUP_FRACTION = 0.5
 
 
-def interval_groups(t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+def interval_groups(t: np.ndarray, m: np.ndarray) -> np.ndarray | None:
     """Intervals that share their length and flows, so their discrete matrices are equal.
 
     Measured flows are quantized (a damper position, a logger resolution of 1 g/s), so a
@@ -62,19 +62,19 @@ def interval_groups(t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
     Returns
     -------
-    (groups, firsts) or None
-        ``groups[k]`` is the group of interval ``k`` (shape (N - 1,)), ``firsts[g]`` an
-        interval of group ``g``; None when the groups would save little (more than
-        :data:`GROUP_FRACTION` of the intervals are distinct) or there is no interval.
+    groups : ndarray of int64, shape (N - 1,), or None
+        ``groups[k]`` is the group of interval ``k`` (``0 .. G - 1``); None when the groups
+        would save little (more than :data:`GROUP_FRACTION` of the intervals are distinct) or
+        there is no interval.
     """
     t = np.asarray(t, dtype=np.float64)
     m = np.asarray(m, dtype=np.float64).reshape(t.shape[0], -1)
     if t.shape[0] < 2:
         return None
-    _, firsts, groups = unique_rows(interval_keys(t, m))
-    if firsts.shape[0] > GROUP_FRACTION * groups.shape[0]:
+    uniq, _, groups = unique_rows(interval_keys(t, m))
+    if uniq.shape[0] > GROUP_FRACTION * groups.shape[0]:
         return None
-    return np.ascontiguousarray(groups.ravel(), dtype=np.int64), np.ascontiguousarray(firsts, dtype=np.int64)
+    return groups
 
 
 @njit(cache=True, error_model="numpy")
@@ -116,7 +116,6 @@ def nll_rc2_kernel(
     rtol: float,
     e_out: np.ndarray,
     groups: np.ndarray,
-    firsts: np.ndarray,
 ) -> tuple[float, int]:
     """``-log L`` without the ``0.5 n log 2 pi`` term, and the number of observations.
 
@@ -150,7 +149,7 @@ def nll_rc2_kernel(
         Receives the innovations (one-step prediction errors) when it has one entry per
         sample; entries of missing samples are left as they are. With ``P0 = Qc = 0`` the
         filter never corrects the state, so these are the open-loop output errors.
-    groups, firsts : ndarray of int64, shapes (N - 1,) and (G,), or both (0,)
+    groups : ndarray of int64, shape (N - 1,) or (0,)
         Intervals with equal length and flows (:func:`interval_groups`): interval ``k``
         uses the matrices of group ``groups[k]``, computed at the group's first interval.
         Empty: discretize every interval whose length or flows differ from the previous one.
@@ -184,7 +183,9 @@ def nll_rc2_kernel(
     # with groups, each group's matrices are computed at its first interval and kept;
     # without, one slot holds the current run of intervals with equal length and flows
     table = groups.shape[0] > 0
-    n_slots = firsts.shape[0] if table else 1
+    n_slots = 1
+    for k in range(groups.shape[0]):
+        n_slots = max(n_slots, groups[k] + 1)
     Phi = np.empty((n_slots, 2, 2))
     Qd = np.empty((n_slots, 2, 2))
     G0 = np.empty((n_slots, 2, p))
@@ -371,7 +372,6 @@ def nll_rc2_from_values(
     rtol: float,
     e_out: np.ndarray,
     groups: np.ndarray,
-    firsts: np.ndarray,
 ) -> tuple[float, int]:
     """:func:`nll_rc2_kernel` straight from resistor values and capacities (no Python in between).
 
@@ -425,9 +425,7 @@ def nll_rc2_from_values(
     c = np.zeros(2)
     c[io] = 1.0
     dd = np.zeros(p)
-    return nll_rc2_kernel(
-        A0, N, B0, M, cap, t, m, u, y, x0, P0, c, dd, r, Qc, foh, phi2, rtol, e_out, groups, firsts
-    )
+    return nll_rc2_kernel(A0, N, B0, M, cap, t, m, u, y, x0, P0, c, dd, r, Qc, foh, phi2, rtol, e_out, groups)
 
 
 def kalman_nll_rc2_values(
@@ -443,7 +441,7 @@ def kalman_nll_rc2_values(
     R: float,
     hold: str = "zoh",
     innovations: np.ndarray | None = None,
-    groups: tuple[np.ndarray, np.ndarray] | None = None,
+    groups: np.ndarray | None = None,
 ) -> float:
     """``-log L`` (with ``0.5 n log 2 pi``) from parameter values; see :func:`nll_rc2_from_values`.
 
@@ -452,8 +450,6 @@ def kalman_nll_rc2_values(
     :func:`interval_groups` of ``(t, m)`` (discretize each distinct interval once).
     """
     form = network.conductance_form
-    if not np.all(np.asarray(cap) > 0) or not np.all(np.isfinite(cap)):
-        raise ParameterError(f"capacities must be finite and > 0, got {list(map(float, cap))}")
     f = np.ascontiguousarray
     nll, n_obs = nll_rc2_from_values(
         form.L,
@@ -476,7 +472,7 @@ def kalman_nll_rc2_values(
         _PHI2,
         SYMMETRY_RTOL,
         np.empty(0) if innovations is None else innovations,
-        *(groups or _NO_GROUPS),
+        _NO_GROUPS if groups is None else groups,
     )
     if n_obs < 0:
         raise InputShapeError("the network's state space is not symmetrizable; use the general filter")
@@ -512,7 +508,7 @@ def kalman_nll_rc2(
     R: np.ndarray,
     hold: str = "zoh",
     innovations: np.ndarray | None = None,
-    groups: tuple[np.ndarray, np.ndarray] | None = None,
+    groups: np.ndarray | None = None,
 ) -> float:
     """``-log L`` (including ``0.5 n log 2 pi``) of a 2-state RC model, one output.
 
@@ -538,7 +534,7 @@ def kalman_nll_rc2(
     hold : {"zoh", "foh"}
     innovations : ndarray, shape (N,), optional
         Filled with the one-step prediction errors (missing samples untouched).
-    groups : tuple of ndarray, optional
+    groups : ndarray, optional
         :func:`interval_groups` of ``(t, m)``: discretize each distinct interval once.
 
     Returns
@@ -583,7 +579,7 @@ def kalman_nll_rc2(
         _PHI2,
         SYMMETRY_RTOL,
         np.empty(0) if innovations is None else innovations,
-        *(groups or _NO_GROUPS),
+        _NO_GROUPS if groups is None else groups,
     )
     if n_obs < 0:
         raise InputShapeError(

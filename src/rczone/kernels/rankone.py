@@ -159,7 +159,7 @@ def _eigen(
     lam: np.ndarray,
     U: np.ndarray,
     zh: np.ndarray,
-    slope: np.ndarray,
+    track: np.ndarray,
     rho_prev: np.ndarray,
     Qinv: np.ndarray,
 ) -> None:
@@ -167,8 +167,8 @@ def _eigen(
 
     ``rho > 0``; ``z2 = z * z``; ``inv_dd[i, j] = 1/(d_i - d_j)``; ``zh`` and ``Qinv`` (r, r) are
     workspace.
-    ``org, tau, slope, rho_prev`` carry the previous calls' roots: ``slope[0]`` their
-    derivatives ``d lam_i / d rho = (u_i' z)^2``, ``slope[1]`` and ``slope[2]`` the roots of the
+    ``org, tau, track, rho_prev`` carry the previous calls' roots: ``track[0]`` their
+    derivatives ``d lam_i / d rho = (u_i' z)^2``, ``track[1]`` and ``track[2]`` the roots of the
     last two calls, ``rho_prev = (rho_1, rho_2, calls)``. The next call starts from the
     first-order prediction plus the curvature fitted to the older root (a quadratic through
     both, with the last slope), so Newton needs about two iterations per root (2.5 with the
@@ -183,12 +183,12 @@ def _eigen(
         for i in range(r):
             # first order, plus the curvature from the root two calls back when there is one:
             # lam(rho) ~ lam1 + s1 d + c d^2 with c fitted to lam2 at rho2
-            tau[i] += step * slope[0, i] + w * (slope[2, i] - slope[1, i] - slope[0, i] * back)
+            tau[i] += step * track[0, i] + w * (track[2, i] - track[1, i] - track[0, i] * back)
     _secular_roots(d, z2, rho, org, tau, Qinv)
     for i in range(r):
         lam[i] = d[org[i]] + tau[i]
-        slope[2, i] = slope[1, i]
-        slope[1, i] = lam[i]
+        track[2, i] = track[1, i]
+        track[1, i] = lam[i]
     # Gu-Eisenstat: the z for which the computed roots are exact eigenvalues
     for j in range(r):
         prod = -((d[j] - d[org[j]]) - tau[j]) / rho
@@ -208,7 +208,7 @@ def _eigen(
         for j in range(r):
             U[j, i] *= nrm
             uz += U[j, i] * z[j]
-        slope[0, i] = uz * uz
+        track[0, i] = uz * uz
     rho_prev[1] = rho_prev[0]
     rho_prev[0] = rho
     rho_prev[2] += 1.0
@@ -306,8 +306,8 @@ def simulate_rank_one_kernel(
                 inv_r[i, j] = 1.0 / (dr[i] - dr[j])
     tau_a = np.zeros(r)
     tau_r = np.zeros(r)
-    slope_a = np.zeros((3, r))
-    slope_r = np.zeros((3, r))
+    track_a = np.zeros((3, r))
+    track_r = np.zeros((3, r))
     rho_a = np.zeros(3)
     rho_r = np.zeros(3)
     lam = np.empty(n)
@@ -329,9 +329,9 @@ def simulate_rank_one_kernel(
         if mk != last_m or h != last_h:
             rho = mk * sigma
             if rho > 0.0 and r > 0:
-                _eigen(da, za, za2, rho, org_a, tau_a, inv_a, lam, U, zh, slope_a, rho_a, Qinv)
+                _eigen(da, za, za2, rho, org_a, tau_a, inv_a, lam, U, zh, track_a, rho_a, Qinv)
             elif rho < 0.0 and r > 0:
-                _eigen(dr, zr, zr2, -rho, org_r, tau_r, inv_r, lam, Ut, zh, slope_r, rho_r, Qinv)
+                _eigen(dr, zr, zr2, -rho, org_r, tau_r, inv_r, lam, Ut, zh, track_r, rho_r, Qinv)
                 for i in range(r):
                     lam[i] = -lam[i]
                     for j in range(r):

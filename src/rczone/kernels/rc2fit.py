@@ -83,7 +83,7 @@ def cost_theta(theta: np.ndarray, prob) -> float:
         e,
     ) = prob
     L, P, E, Gb0, Nf, Mf, iout = form
-    t, m, u, y, groups, firsts = data
+    t, m, u, y, groups = data
     res_idx, res_k, cap_idx, cap_k, noise_idx, noise_k = slots
     prior_idx, prior_logc, spread, weight = prior
     foh, phi2, rtol = consts
@@ -117,7 +117,7 @@ def cost_theta(theta: np.ndarray, prob) -> float:
             P0[i, i] = sig[3 + i] * sig[3 + i]
         out = e[:0]
     nll, n_obs = nll_rc2_from_values(
-        L, P, E, Gb0, Nf, Mf, res, cap, iout, t, m, u, y, P0, Qc, r, foh, phi2, rtol, out, groups, firsts
+        L, P, E, Gb0, Nf, Mf, res, cap, iout, t, m, u, y, P0, Qc, r, foh, phi2, rtol, out, groups
     )
     if n_obs < 0:
         return math.inf
