@@ -12,9 +12,10 @@ from pathlib import Path
 from typing import Any
 
 from rczone import datasets
+from rczone.atomic import write_json_atomic
 from rczone.comparison import TimeComparison, compare_frequency, compare_time, input_variation
 from rczone.models import get_model
-from rczone.report import Report, write_json_atomic
+from rczone.report import Report
 from rczone.report import figures as figs
 
 ORDERS = ("full-scale", "second-order", "first-order")

@@ -19,10 +19,10 @@ from typing import Any
 import numpy as np
 
 from rczone import __version__
+from rczone.atomic import write_json_atomic
 from rczone.errors import DataError, RczoneError
 from rczone.network import BilinearStateSpace, LinearStateSpace, RCNetwork
 from rczone.network.serialize import network_from_dict, network_to_dict
-from rczone.report.io import write_json_atomic
 from rczone.simulation import SimulationResult, foh, simulate, zoh
 
 FORMAT = "rczone-model/1"

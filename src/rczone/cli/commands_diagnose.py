@@ -58,8 +58,8 @@ def diagnose(
     ] = None,
 ) -> None:
     """Tell, before fitting, whether DATA can identify the model's parameters, and why."""
+    from rczone.atomic import write_json_atomic
     from rczone.diagnostics import diagnose as run
-    from rczone.report import write_json_atomic
 
     net = model(model_name)
     frame = read_frame(data, column_map)
@@ -108,8 +108,8 @@ def design(
     ] = None,
 ) -> None:
     """Design a forced-response test (D-optimal supply-air schedule) that can identify the parameters."""
+    from rczone.atomic import write_json_atomic
     from rczone.diagnostics.design import DesignLimits, design_test
-    from rczone.report import write_json_atomic
 
     net = model(model_name)
     limits = DesignLimits(

@@ -58,8 +58,8 @@ def fit(
     ] = True,
 ) -> None:
     """Identify the model's R and C from DATA."""
+    from rczone.atomic import write_json_atomic
     from rczone.calibrate import calibrate
-    from rczone.report import write_json_atomic
 
     net = model(model_name)
     frame = read_frame(data, column_map)
@@ -184,9 +184,9 @@ def predict(
     json_out: Annotated[Path | None, typer.Option("--json", help="Write RMSE and max error as JSON.")] = None,
 ) -> None:
     """Simulate a saved model open loop on DATA and report the error."""
+    from rczone.atomic import write_json_atomic
     from rczone.calibrate import predict as run
     from rczone.mpc import ZoneModel
-    from rczone.report import write_json_atomic
 
     zm = ZoneModel.load(model_file)
     frame = read_frame(data, column_map)
