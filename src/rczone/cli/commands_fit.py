@@ -44,8 +44,9 @@ def _parameter_table(r, title: str):
     from rich.table import Table
 
     table = Table(title=title)
-    for c in ("parameter", "estimate", "unit", "std. error", "construction", "ratio", "flag"):
-        table.add_column(c)
+    table.add_column("parameter", no_wrap=True)
+    for c in ("estimate", "unit", "std. error", "construction", "ratio", "flag"):
+        table.add_column(c, overflow="fold")
     search = r.search
     for n in r.names:
         c = r.construction[n]

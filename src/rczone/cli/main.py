@@ -68,7 +68,8 @@ from rczone.cli import (  # noqa: E402, F401
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code (also used by the console script)."""
     try:
-        app(args=argv, standalone_mode=False)
+        # outside standalone mode click returns the code of a typer.Exit instead of raising it
+        code = app(args=argv, standalone_mode=False)
     except RczoneError as exc:
         typer.echo(f"error: {exc}", err=True)
         return 2
@@ -85,7 +86,7 @@ def main(argv: list[str] | None = None) -> int:
             exc.show()
             return exc.exit_code
         raise
-    return 0
+    return code if isinstance(code, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover

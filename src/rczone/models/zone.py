@@ -454,8 +454,10 @@ class ZoneModel:
             else:
                 raise ModelFileError("'inputs' must be an object")
             return cls(network_from_dict(d["network"]), dict(theta), dict(prov), inputs, dict(noise), source)
+        except ModelFileError as exc:
+            raise ModelFileError(f"{where}: {str(exc).removeprefix('model: ')}") from None
         except RczoneError as exc:
-            raise type(exc)(f"{where}: {exc}") from None
+            raise ModelFileError(f"{where}: {exc}") from None
         except (TypeError, AttributeError, ValueError) as exc:
             raise ModelFileError(f"{where}: malformed ({exc})") from None
 
