@@ -57,7 +57,7 @@ def _parameter_table(r, title: str):
             flags.append("[red]at bound[/]")
         elif r.at_bound[n]:
             flags.append("[dim]at floor[/]")
-        if not math.isfinite(se):
+        if not math.isfinite(se) and not r.at_bound[n]:
             flags.append("[red]no std. error[/]")
         if search is not None and search.n_best >= 2 and n in search.spread:
             lo, hi = search.spread[n]
