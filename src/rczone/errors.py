@@ -27,6 +27,10 @@ class InputShapeError(RczoneError, ValueError):
     """An array passed to a simulation or cost has the wrong shape or content."""
 
 
+class OutputError(RczoneError, OSError):
+    """A result cannot be written where asked (a folder for a file, read-only, disk full...)."""
+
+
 class DataError(RczoneError, ValueError):
     """Measured data cannot be used as given (missing column, bad unit, bad timestamps...)."""
 

@@ -36,12 +36,12 @@ the file, with a suggestion where one is close.
 from __future__ import annotations
 
 import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from rczone.errors import DataError, did_you_mean
+from rczone.textfiles import read_toml
 
 METHODS = ("ls", "ml", "map")
 OPTIMIZERS = ("nelder-mead", "powell", "lbfgs")
@@ -261,8 +261,4 @@ def read_manifest(path: str | Path) -> Manifest:
     path = Path(path)
     if not path.exists():
         raise DataError(f"manifest {str(path)!r} does not exist")
-    try:
-        doc = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise DataError(f"manifest {path}: not valid TOML: {exc}") from None
-    return parse_manifest(doc, path)
+    return parse_manifest(read_toml(path, "manifest"), path)
