@@ -8,9 +8,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from rczone.errors import DataError
+from rczone.estimation.data import MIN_MEASURED
 
 
 def read_frame(path: str | Path, column_map: str | Path | None = None) -> pd.DataFrame:
@@ -18,7 +20,9 @@ def read_frame(path: str | Path, column_map: str | Path | None = None) -> pd.Dat
 
     ``path`` is a CSV or Parquet file in the default columns (``time``, ``Ti``, ``To``, ``Ts``,
     ``m``, ``Q`` and ``Tsd`` or the five surroundings), or any trend log described by a TOML
-    ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``).
+    ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``). A record
+    with fewer than :data:`~rczone.estimation.data.MIN_MEASURED` measured ``Ti`` samples is an
+    error: it would fit anything.
     """
     from rczone.data import load_zone_data
 
@@ -31,4 +35,13 @@ def read_frame(path: str | Path, column_map: str | Path | None = None) -> pd.Dat
         raise DataError(
             f"data file {str(path)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
         )
-    return load_zone_data(path, column_map).to_frame()
+    frame = load_zone_data(path, column_map).to_frame()
+    if "Ti" in frame:
+        measured = int(np.isfinite(frame["Ti"].to_numpy(float)).sum())
+        if measured < MIN_MEASURED:
+            raise DataError(
+                f"{path}: only {measured} of {len(frame)} samples have a measured room temperature Ti;"
+                f" at least {MIN_MEASURED} are needed (rczone.estimation.data.MIN_MEASURED): use a longer"
+                " record with fewer gaps"
+            )
+    return frame

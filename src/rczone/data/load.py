@@ -190,13 +190,22 @@ def _check_order(t: np.ndarray, rows: np.ndarray, where: str, source: str) -> No
     )
 
 
+def _times(source: str, raw: pd.Series, **kwargs) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """:func:`parse_times` with the file named in its errors."""
+    try:
+        return parse_times(raw, **kwargs)
+    except DataError as exc:
+        raise DataError(f"{source}: {exc}") from None
+
+
 def _samples_wide(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list[str]):
     cols = [str(c) for c in frame.columns]
     _require(cols, cmap.time_column, "time column", source)
     for ch in cmap.channels:
         if ch.column is not None:
             _require(cols, ch.column, f"column for channel {ch.name!r}", source)
-    t, keep, dropped = parse_times(
+    t, keep, dropped = _times(
+        source,
         frame[cmap.time_column],
         fmt=cmap.time_format,
         tz=cmap.timezone,
@@ -234,7 +243,8 @@ def _samples_long(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list
             )
     rows = np.flatnonzero(points.isin(wanted).fillna(False).to_numpy())
     sub = frame.iloc[rows]
-    t, keep, dropped = parse_times(
+    t, keep, dropped = _times(
+        source,
         sub[cmap.time_column],
         fmt=cmap.time_format,
         tz=cmap.timezone,

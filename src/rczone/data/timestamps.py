@@ -74,12 +74,12 @@ def _numeric(raw: pd.Series, column: str, unit: float = 1.0) -> np.ndarray:
         k = int(far[0])
         if unit == 1.0 and np.all(np.abs(t) / 1e3 <= LATEST) and np.all(t / 1e3 >= EPOCH_PLAUSIBLE):
             raise DataError(
-                f"time column {column!r}: {raw.iloc[k]!r} at {rows_text(far)} is after the year 2262 in"
+                f"time column {column!r}: {raw.iloc[k]} at {rows_text(far)} is after the year 2262 in"
                 " seconds; the times look like milliseconds since 1970: set [time] format ="
                 ' "milliseconds" in a column map'
             )
         raise DataError(
-            f"time column {column!r}: {raw.iloc[k]!r} at {rows_text(far)} is {what} outside the years"
+            f"time column {column!r}: {raw.iloc[k]} at {rows_text(far)} is {what} outside the years"
             " 1677 to 2262; use Unix seconds or ISO 8601 stamps"
         )
     return t
