@@ -26,7 +26,6 @@ import numpy as np
 
 from rczone.errors import DataError
 
-
 MAX_SAMPLES = 2_000_000
 """Most grid times a record is resampled onto (23 days at 1 s, 3.8 years at 1 min)."""
 

@@ -16,7 +16,6 @@ from rczone.errors import DataError, InputShapeError, did_you_mean
 from rczone.network import RCNetwork
 from rczone.simulation.simulate import check_inputs, check_time
 
-
 MIN_MEASURED = 30
 """Fewest measured output samples a fit accepts (see :meth:`Dataset.check_fit_size`): the
 residual whiteness test after a fit looks at up to 20 lags, and a fit of a few samples would
