@@ -1,7 +1,10 @@
 """One batch task: load a zone's data, calibrate one method, diagnose; always return a row.
 
 Runs in a worker process. Whatever goes wrong in one zone (bad data, a failed fit, a bug)
-becomes a row with ``status = "failed"`` and the error, so the batch goes on.
+becomes a row with ``status = "failed"`` and the error, so the batch goes on. Running out of
+memory is not the zone's own error (the same zone may fit on a machine with more memory, or
+when fewer zones run beside it): :class:`MemoryError` propagates, and the runner retries the
+task instead of storing a failure.
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rczone.batch.manifest import Task
+from rczone.batch.manifest import MODEL_FILE_SUFFIXES, Task
 from rczone.errors import RczoneError
 
 
@@ -29,6 +32,15 @@ def load_task_data(task: Task) -> pd.DataFrame:
 
     _, path, columns = task.source
     return read_frame(Path(path), Path(columns) if columns else None)
+
+
+def task_network(task: Task):
+    """The task's RC network: a built-in model by name, or a model file (a resolved path)."""
+    from rczone import models
+
+    if Path(task.model).suffix.lower() in MODEL_FILE_SUFFIXES:
+        return models.load_model(task.model).network
+    return models.get_model(task.model)
 
 
 def source_label(task: Task) -> str:
@@ -60,9 +72,8 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
     }
     try:
         from rczone.calibrate import calibrate
-        from rczone.models import get_model
 
-        net = get_model(task.model)
+        net = task_network(task)
         if "frame" not in cache:
             cache["frame"] = load_task_data(task)
         frame = cache["frame"]
@@ -95,6 +106,8 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
                 cache["diagnose", rc] = {n: v.verdict for n, v in d.parameters.items()}
             for n, verdict in cache.get(("diagnose", rc), {}).items():
                 row[f"{n}_verdict"] = verdict
+    except MemoryError:
+        raise  # not the zone's own error: the runner retries it
     except RczoneError as exc:
         row.update(status="failed", error=f"{type(exc).__name__}: {exc}")
     except Exception as exc:  # a bug or numerical failure in one zone must not stop the batch

@@ -69,7 +69,7 @@ diagnose = false
             r"unknown season 'autum'; did you mean 'autumn'",
         ),
         ('[[generate]]\nseeds="9..2"', r"seeds must be a list of integers or a range"),
-        ('n_starts = 0\n[[zone]]\nid="a"\ndata="C"', r"n_starts must be a positive integer"),
+        ('n_starts = 0\n[[zone]]\nid="a"\ndata="C"', r"n_starts must be an integer from 1 to 1000"),
         ("", r"no zones"),
     ],
 )
