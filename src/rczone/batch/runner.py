@@ -114,36 +114,36 @@ def _connect(scheduler: str | None, workers: int):
         ) from None
 
 
+def _close(client, cluster) -> None:
+    client.close(timeout=10)
+    if cluster is not None:
+        cluster.close(timeout=10)
+
+
 def _dask_results(
-    groups: list[list[Task]], scheduler: str | None, workers: int, retries: int, worker_timeout: float
+    groups: list[list[Task]], client, where: str, retries: int, worker_timeout: float
 ) -> Iterator[list[dict] | Lost]:
     from dask.distributed import as_completed
 
-    client, cluster = _connect(scheduler, workers)
     try:
+        client.wait_for_workers(1, timeout=worker_timeout)
+    except (TimeoutError, OSError) as exc:
+        reason = f"no Dask worker joined {where} within {worker_timeout:g} s"
+        reason += f" ({_why(exc)})" if not isinstance(exc, TimeoutError) else "; start workers"
+        for g in groups:
+            yield Lost(g, reason)
+        return
+    # the scheduler reruns a task whose worker died (up to its allowed-failures), then
+    # raises KilledWorker; retries= reruns it after any other exception
+    futures = client.map(run_tasks, groups, pure=False, retries=retries)
+    index = {f.key: g for f, g in zip(futures, groups)}
+    for fut in as_completed(futures):
         try:
-            client.wait_for_workers(1, timeout=worker_timeout)
-        except (TimeoutError, OSError) as exc:
-            reason = f"no Dask worker joined {scheduler or 'the local cluster'} within {worker_timeout:g} s"
-            reason += f" ({_why(exc)})" if not isinstance(exc, TimeoutError) else "; start workers"
-            for g in groups:
-                yield Lost(g, reason)
-            return
-        # the scheduler reruns a task whose worker died (up to its allowed-failures), then
-        # raises KilledWorker; retries= reruns it after any other exception
-        futures = client.map(run_tasks, groups, pure=False, retries=retries)
-        index = {f.key: g for f, g in zip(futures, groups)}
-        for fut in as_completed(futures):
-            try:
-                rows = fut.result()
-            except Exception as exc:  # run_tasks returns every zone error: this is the cluster's
-                yield Lost(index[fut.key], _why(exc))
-            else:
-                yield rows
-    finally:
-        client.close(timeout=10)
-        if cluster is not None:
-            cluster.close(timeout=10)
+            rows = fut.result()
+        except Exception as exc:  # run_tasks returns every zone error: this is the cluster's
+            yield Lost(index[fut.key], _why(exc))
+        else:
+            yield rows
 
 
 def _process_results(groups: list[list[Task]], workers: int, retries: int) -> Iterator[list[dict] | Lost]:
@@ -260,15 +260,18 @@ def run_batch(
         fingerprints = {t.key: t.fingerprint for t in manifest.tasks}
         done = store.done(manifest.tasks)
         todo = [t for t in manifest.tasks if t.key not in done]
-        if on_start:
-            on_start(len(manifest.tasks) - len(todo), len(todo))
         computed = failed = 0
         lost: dict[str, str] = {}
-        if todo:
+        connection = _connect(scheduler, workers) if todo and use_dask else None
+        try:
+            if on_start:
+                on_start(len(manifest.tasks) - len(todo), len(todo))
             groups = _by_zone(todo)
             outcomes = (
-                _dask_results(groups, scheduler, workers, retries, worker_timeout)
-                if use_dask
+                _dask_results(
+                    groups, connection[0], scheduler or "the local cluster", retries, worker_timeout
+                )
+                if connection
                 else _process_results(groups, workers, retries)
             )
             for outcome in outcomes:
@@ -281,6 +284,9 @@ def run_batch(
                     failed += row["status"] != "ok"
                     if on_result:
                         on_result(row, computed + len(lost), len(todo))
+        finally:
+            if connection:
+                _close(*connection)
         table = store.table(manifest.tasks)
         path = store.consolidate(table)
         summary = write_summary(table, store.folder, title=title)

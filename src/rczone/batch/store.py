@@ -29,6 +29,7 @@ import io
 import json
 import os
 import re
+import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -41,6 +42,8 @@ from rczone.errors import RczoneError
 
 RESULTS = "results.parquet"
 LOCK = ".lock"
+_HELD: set[str] = set()  # folders locked by this process (the lock itself is per process)
+_HELD_GUARD = threading.Lock()
 
 #: Columns of a row and the JSON types they hold (others hold numbers or null).
 TEXT = ("key", "zone", "method", "model", "source", "status", "error", "fingerprint", "flags")
@@ -109,6 +112,20 @@ class ResultStore:
     def locked(self) -> Iterator[ResultStore]:
         """Hold the folder for one run; a second run into it is refused with one line."""
         path = self.folder / LOCK
+        here = os.path.realpath(self.folder)
+        with _HELD_GUARD:  # a POSIX lock does not exclude threads of one process: this does
+            if here in _HELD:
+                raise FolderBusyError(
+                    f"results folder {os.fspath(self.folder)!r} is in use by another run in this process"
+                )
+            _HELD.add(here)
+        try:
+            yield from self._lock_file(path)
+        finally:
+            with _HELD_GUARD:
+                _HELD.discard(here)
+
+    def _lock_file(self, path: Path) -> Iterator[ResultStore]:
         try:
             fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
         except OSError as exc:
@@ -178,4 +195,3 @@ class ResultStore:
         buf = io.BytesIO()
         (self.table() if table is None else table).to_parquet(buf, index=False)
         return write_bytes_atomic(self.folder / RESULTS, buf.getvalue())
-

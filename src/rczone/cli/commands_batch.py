@@ -48,21 +48,23 @@ def fit_many(
         TextColumn("{task.fields[failed]} failed"),
         TimeRemainingColumn(),
     )
-    with Progress(*columns, console=err, transient=False) as progress:
-        bar = progress.add_task("fit", total=None, failed=0, visible=False)
-        state = {"failed": 0}
+    progress = Progress(*columns, console=err, transient=False)
+    bar = progress.add_task("fit", total=None, failed=0)
+    state = {"failed": 0}
 
-        def on_start(resumed: int, to_do: int) -> None:
-            progress.console.print(
-                f"{len(m.tasks)} calibrations of {len(m.zones)} zones; {resumed} already done in"
-                f" {escape(folder)}"
-            )
-            progress.update(bar, total=to_do, visible=True)
+    def on_start(resumed: int, to_do: int) -> None:
+        err.print(
+            f"{len(m.tasks)} calibrations of {len(m.zones)} zones; {resumed} already done in {escape(folder)}"
+        )
+        progress.update(bar, total=to_do)
+        state["started"] = 1
+        progress.start()  # only now: an error before the run prints its one line and nothing else
 
-        def on_result(row: dict, done: int, total: int) -> None:
-            state["failed"] += row["status"] != "ok"
-            progress.update(bar, completed=done, failed=state["failed"])
+    def on_result(row: dict, done: int, total: int) -> None:
+        state["failed"] += row["status"] != "ok"
+        progress.update(bar, completed=done, failed=state["failed"])
 
+    try:
         run = run_batch(
             m,
             folder,
@@ -73,6 +75,9 @@ def fit_many(
             on_start=on_start,
             title=f"rczone fit-many {manifest.name}",
         )
+    finally:
+        if state.get("started"):
+            progress.stop()
     summary = run.summary
     say = console()
     say.print(

@@ -19,5 +19,8 @@ def escape(text: object) -> str:
 
 
 def console(stderr: bool = False) -> Console:
-    """A rich console for rczone's output (``stderr=True`` for progress and notes)."""
-    return Console(stderr=stderr, emoji=False, highlight=False)
+    """A rich console for rczone's output (``stderr=True`` for progress and notes).
+
+    Lines are not wrapped, so a long path or message stays one line (and one copy-paste).
+    """
+    return Console(stderr=stderr, emoji=False, highlight=False, soft_wrap=True)

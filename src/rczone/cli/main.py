@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
     """
     try:
-        app(args=argv, standalone_mode=False)
+        code = app(args=argv, standalone_mode=False)  # returns typer.Exit's code in this mode
     except RczoneError as exc:
         return _error(exc)
     except FileNotFoundError as exc:
@@ -87,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
             exc.show()
             return exc.exit_code
         raise
-    return 0
+    return code if isinstance(code, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover
