@@ -8,6 +8,7 @@ exit code 2, never a traceback.
 from __future__ import annotations
 
 import sys
+import warnings
 
 import typer
 
@@ -50,6 +51,11 @@ def one_line(text: object) -> str:
     return " ".join("".join(c if c.isprintable() else " " for c in str(text)).split())
 
 
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning for the user as one line on stderr (no source line, no file of rczone's)."""
+    typer.echo(f"warning: {one_line(message)}", err=True)
+
+
 def _error(message: object) -> int:
     typer.echo(f"error: {one_line(message)}", err=True)
     return 2
@@ -63,7 +69,9 @@ def main(argv: list[str] | None = None) -> int:
     ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
     """
     try:
-        code = app(args=argv, standalone_mode=False)  # returns typer.Exit's code in this mode
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            code = app(args=argv, standalone_mode=False)  # returns typer.Exit's code in this mode
     except RczoneError as exc:
         return _error(exc)
     except FileNotFoundError as exc:

@@ -26,7 +26,7 @@ def time_text(t: float) -> str:
     """A time for messages: ``t = 420 s``, with the UTC date when ``t`` is an epoch time."""
     if 3.15e8 <= t <= 9.2e9:  # 1980 to 2261: Unix seconds
         stamp = np.datetime64(int(t), "s").astype(str)
-        return f"t = {t:g} s ({stamp}Z)"
+        return f"t = {t:.10g} s ({stamp}Z)"
     return f"t = {t:g} s"
 
 
