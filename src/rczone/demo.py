@@ -29,6 +29,13 @@ PAPER_SECOND_ORDER_K = 1.0 / 1.8
 PAPER_FIRST_ORDER_K = 3.0 / 1.8
 #: Constant internal gain used in every time-domain simulation (the paper's Q = 50 W).
 Q_PAPER = 50.0
+#: The paper's unknowns (section IV: theta = [Cr, Rw], the initial state taken from the data), plus
+#: the noise levels a likelihood fit needs.
+PAPER_FREE = {
+    "ls": ("Cr", "Rw"),
+    "ml": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
+    "map": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
+}
 
 
 def true_equivalent() -> dict[str, float] | None:
@@ -194,7 +201,7 @@ def identification_study(
         preds: dict[str, dict[str, Any]] = {s: {} for s in (cal_set, *val_sets)}
         for meth in METHODS:
             progress(f"attempt {att}: calibrating on {cal_set} by {meth.upper()}")
-            cal = calibrate(net, frames[cal_set], meth, n_starts=3, seed=1, constants=const)
+            cal = calibrate(net, frames[cal_set], meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const)
             entry = {
                 "parameters": {
                     n: {

@@ -4,7 +4,7 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
 ``[[zone]]`` names one zone and either a data file or a virtual-building night; each
 ``[[generate]]`` expands into many virtual-building nights (seasons x modes x seeds)::
 
-    model = "second-order-paper"     # default model (rczone.models.get_model)
+    model = "second-order-paper"     # a built-in model, or a model file (rczone.models.load_model)
     methods = ["ls", "ml"]           # one task per zone and method
     optimizer = "nelder-mead"
     n_starts = 1
@@ -221,15 +221,24 @@ def _model(spec: object, folder: Path, where: str) -> str:
         path = (folder / spec).resolve()
         if not path.is_file():
             raise _err(where, f"model file {spec!r} does not exist (looked for {str(path)!r})")
-        return str(path)
-    from rczone.models import model_names
-
-    if spec not in model_names():
-        raise _err(
-            where,
-            f"unknown model {spec!r}; {did_you_mean(spec, model_names())} (or give a model file .toml/.json)",
-        )
+        spec = str(path)
+    problem = _model_problem(spec, file_digest(spec) if Path(spec).is_absolute() else "")
+    if problem:
+        raise _err(where, problem)
     return spec
+
+
+@lru_cache(maxsize=64)
+def _model_problem(spec: str, digest: str) -> str:  # digest: an edited model file is checked again
+    """Why ``spec`` is not a usable model ("" if it is): loaded once per model, not per zone."""
+    from rczone.errors import RczoneError
+    from rczone.models import load_model
+
+    try:
+        load_model(spec)
+    except RczoneError as exc:
+        return str(exc)
+    return ""
 
 
 def _seeds(spec: object, where: str) -> range | list[int]:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rczone.batch.manifest import MODEL_FILE_SUFFIXES, Task
+from rczone.batch.manifest import Task
 from rczone.errors import RczoneError
 
 
@@ -34,13 +34,11 @@ def load_task_data(task: Task) -> pd.DataFrame:
     return read_frame(Path(path), Path(columns) if columns else None)
 
 
-def task_network(task: Task):
-    """The task's RC network: a built-in model by name, or a model file (a resolved path)."""
-    from rczone import models
+def task_model(task: Task):
+    """The task's model: a built-in name or a model file (already resolved by the manifest)."""
+    from rczone.models import load_model
 
-    if Path(task.model).suffix.lower() in MODEL_FILE_SUFFIXES:
-        return models.load_model(task.model).network
-    return models.get_model(task.model)
+    return load_model(task.model)
 
 
 def source_label(task: Task) -> str:
@@ -73,14 +71,13 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
     try:
         from rczone.calibrate import calibrate
 
-        net = task_network(task)
+        zm = task_model(task)
+        net = zm.network
         if "frame" not in cache:
             cache["frame"] = load_task_data(task)
         frame = cache["frame"]
         constants = dict(task.constants) or None
-        cal = calibrate(
-            net, frame, task.method, task.free, task.optimizer, task.n_starts, constants=constants
-        )
+        cal = calibrate(zm, frame, task.method, task.free, task.optimizer, task.n_starts, constants=constants)
         r = cal.result
         row.update(
             open_loop_rmse_K=cal.open_loop.rmse_K,

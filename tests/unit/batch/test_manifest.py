@@ -153,10 +153,16 @@ def test_more_bad_manifests(tmp_path, text, match):
 
 
 def test_a_model_file_is_resolved_against_the_manifest_folder(tmp_path):
+    from rczone.models import load_model, model_to_toml
+
     (tmp_path / "models").mkdir()
-    (tmp_path / "models" / "mine.toml").write_text("# a model file\n")
+    text = model_to_toml(load_model("first-order"))
+    (tmp_path / "models" / "mine.toml").write_text(text)
     m = parse('model = "models/mine.toml"\n[[zone]]\nid = "a"\ndata = "C"\nmethods = ["ls"]', tmp_path)
     assert m.tasks[0].model == str((tmp_path / "models" / "mine.toml").resolve())
     before = m.tasks[0].fingerprint
-    (tmp_path / "models" / "mine.toml").write_text("# the same model file, edited\n")
+    (tmp_path / "models" / "mine.toml").write_text("# edited\n" + text)
     assert m.tasks[0].fingerprint != before  # an edited model file is a new task
+    (tmp_path / "models" / "broken.toml").write_text("[network\n")
+    with pytest.raises(DataError, match=r"zone 1 \(a\): .*broken.toml"):
+        parse('[[zone]]\nid = "a"\ndata = "C"\nmodel = "models/broken.toml"', tmp_path)

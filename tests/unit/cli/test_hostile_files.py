@@ -125,15 +125,20 @@ def test_hostile_trend_logs(tmp_path, capsys, make, pattern):
     one_line_exit_2(["diagnose", str(tmp_path / "z.csv")], capsys, pattern)
 
 
-def test_a_gap_in_an_input_names_the_time_and_what_to_do(tmp_path, capsys):
+def test_a_gap_in_an_input_names_the_time_and_what_to_do():
     """Defect 12: a gap in an input said "not finite at sample 0" without time or hint."""
-    zone_frame().assign(To=lambda f: f.To.where(f.index != 7)).to_csv(tmp_path / "z.csv", index=False)
-    one_line_exit_2(
-        ["fit", str(tmp_path / "z.csv"), "--method", "ls"],
-        capsys,
-        r"input 'To' is missing \(NaN or infinite\) at 1 of 60 samples, first at t = 1300002100 s"
+    from rczone.errors import DataError
+    from rczone.estimation import Dataset
+
+    f = zone_frame()
+    u = f[["To", "Q"]].to_numpy(float)
+    u[7, 0] = np.nan
+    with pytest.raises(
+        DataError,
+        match=r"input 'To' is missing \(NaN or infinite\) at 1 of 60 samples, first at t = 1300002100 s"
         r" \(2011-03-13T07:41:40Z\) \(sample 7\); inputs must be complete",
-    )
+    ):
+        Dataset(f.time.to_numpy(), u, None, f[["Ti"]].to_numpy(), ("To", "Q"))
 
 
 def test_dates_after_2262_in_parquet(tmp_path):
