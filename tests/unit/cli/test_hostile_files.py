@@ -131,7 +131,7 @@ def test_a_gap_in_an_input_names_the_time_and_what_to_do():
     from rczone.estimation import Dataset
 
     f = zone_frame()
-    u = f[["To", "Q"]].to_numpy(float)
+    u = f[["To", "Q"]].to_numpy(float).copy()
     u[7, 0] = np.nan
     with pytest.raises(
         DataError,
