@@ -163,7 +163,7 @@ BAD = [
         r"used as capacitance and as resistance",
     ),
     ("resistors = 3\n[nodes]\nTi = 'C'\n[parameters]\nC = 1", r"resistors: must be a list"),
-    ("x = " + "[" * 5000 + "]" * 5000, r"nested too deeply|not valid TOML"),
+    ("x = " + "[" * 5000 + "]" * 5000, r"nested more than 32 levels"),
     ("[nodes]\n[parameters]\n", r"missing 'resistors'"),
 ]
 
@@ -185,8 +185,8 @@ def test_hostile_files(tmp_path) -> None:
     with pytest.raises(ModelFileError, match="is a folder"):
         load_model(str(tmp_path / "dir.toml"))
     big = tmp_path / "big.toml"
-    big.write_text("# " + "x" * 2_000_000)
-    with pytest.raises(ModelFileError, match="larger than the limit"):
+    big.write_text("# " + "x" * 17_000_000)
+    with pytest.raises(ModelFileError, match="more than the limit"):
         load_model(str(big))
     with pytest.raises(ModelFileError, match="does not exist"):
         load_model(str(tmp_path / "missing.toml"))
@@ -207,8 +207,7 @@ SAVED_BAD = [
     ('{"format": "rczone-model/1", "network": {}, "theta": "x"}', "'theta' must be an object"),
     ('{"format": "rczone-model/1", "network": [], "theta": {}}', "must be an object"),
     ('{"format": "rczone-model/1", "network": {"format": "rczone-network/1"}}', "has no 'nodes'"),
-    ('{"format": "rczone-model/1", "theta": {"a": NaN}}', "must not contain NaN"),
-    ("[" * 100000 + "]" * 100000, "nested too deeply"),
+    ("[" * 100000 + "]" * 100000, "nested more than 32 levels"),
 ]
 
 
@@ -225,6 +224,10 @@ def test_saved_model_with_non_finite_element_is_refused(tmp_path) -> None:
     text = json.dumps(bad).replace("Infinity", "1e400")
     with pytest.raises(ModelFileError, match="not finite"):
         load_model(str(_write(tmp_path, text, "m.json")))
+    nan_theta = json.loads(json.dumps(good))
+    nan_theta["theta"]["Rw"] = float("nan")
+    with pytest.raises(ModelFileError, match="'Rw' = nan is not finite"):
+        load_model(str(_write(tmp_path, json.dumps(nan_theta), "nan.json")))
     ok = _write(tmp_path, json.dumps(good), "ok.json")
     assert isinstance(load_model(str(ok)), ZoneModel)
 
