@@ -184,3 +184,46 @@ class VAVController:
         else:
             self.ts += (1.0 - math.exp(-CONTROL_DT / c.tau_coil)) * (cmd - self.ts)
         return FLOW_LEVELS[self.level], self.ts
+
+
+class TightController:
+    """A constant-flow box whose fast PI loop on the discharge temperature pins the room to one setpoint.
+
+    The setpoint is the middle of the mode's band (occupied or unoccupied, as
+    :class:`VAVController`); the discharge temperature spans the AHU supply temperature to
+    ``ts_max`` through the same coil lag. With ``kp`` = 10 K per K and ``ti`` = 10 min the room
+    stays within about 0.1 K of the setpoint while ``Ts`` swings by several K.
+    """
+
+    def __init__(self, config: ControllerConfig, flow: float, kp: float = 10.0, ti: float = 600.0) -> None:
+        self.cfg = config
+        self.flow = flow
+        self.kp = kp
+        self.ti = ti
+        self.integral: float | None = None
+        self.ts: float | None = None
+
+    def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
+        """Advance one control interval; returns ``(m, Ts)`` in kg/s and degC."""
+        c = self.cfg
+        unocc = c.unocc_start <= t < c.unocc_end
+        sp = 0.5 * (c.heat_unocc + c.cool_unocc) if unocc else 0.5 * (c.heat_occ + c.cool_occ)
+        e = sp - t_sensed
+        span = c.ts_max - t_ahu
+        if self.integral is None:  # bumpless start at mid-span
+            self.integral = 0.5 * span / self.kp
+        integ = self.integral + CONTROL_DT / self.ti * e
+        reheat = self.kp * (e + integ)
+        if reheat > span:
+            reheat = span
+            integ = self.integral if e > 0 else integ
+        elif reheat < 0.0:
+            reheat = 0.0
+            integ = self.integral if e < 0 else integ
+        self.integral = integ
+        cmd = t_ahu + reheat
+        if self.ts is None:
+            self.ts = cmd
+        else:
+            self.ts += (1.0 - math.exp(-CONTROL_DT / c.tau_coil)) * (cmd - self.ts)
+        return self.flow, self.ts
