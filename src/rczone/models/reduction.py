@@ -20,9 +20,12 @@ Cost
     start on all the weighted errors followed by SLSQP on the epigraph form
     ``min t s.t. du_i |e_i(w_k)| <= t``. Parameters are varied in ``ln``; the result is returned
     only if it improves on the parallel aggregation's worst error, else the parallel values.
-What is given up
-    The steady state: the fitted ``Rwin`` and ``R1 + R2`` (or ``Rw``) differ from the parallel
-    (DC-exact) values by some per cent, since the band starts at 1e-5 Hz, not at 0 Hz.
+Which parameters move
+    With ``keep_dc=True`` (the default) every steady-state gain of the parallel aggregation is
+    kept: ``Rwin`` and the wall's total resistance stay, and only the dynamics are matched:
+    ``Cr`` and ``Cw`` and, for the 2nd-order model, the room-side share ``R1 / (R1 + R2)``. With
+    ``keep_dc=False`` every parameter is free; the fitted ``Rwin`` and ``R1 + R2`` (or ``Rw``)
+    then trade some steady-state accuracy for the band (which starts at 1e-5 Hz, not 0 Hz).
 
 The full model's responses are computed here from the surface elements' transmission matrices
 (:func:`rczone.models.split.lumped_wall_response`), not from the network's state space, and the
@@ -40,24 +43,27 @@ References
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 
 import numpy as np
 from scipy.optimize import least_squares, minimize
 
-from rczone.construction.room import AIR_CP
+from rczone.construction.room import AIR_CP, ZoneGeometry, office_241
 from rczone.errors import ParameterError, did_you_mean
 from rczone.models.aggregation import OUTDOOR, first_order_values, reduced_values, second_order_values
-from rczone.models.elements import SurfaceElement
+from rczone.models.elements import SurfaceElement, surface_elements
 from rczone.models.split import lumped_wall_response
+from rczone.network import RCNetwork
 
 #: The paper's frequency band of interest, Hz (section III-C).
 PAPER_BAND_HZ = (1e-5, 1e-3)
 #: The paper's flow for the frequency comparison (its largest), kg/s.
 PAPER_FLOW = 0.12
+#: Fahrenheit degrees per kelvin of temperature difference.
+F_PER_K = 1.8
 #: The paper's input amplitudes for eq. 7: 45 F (Ts), 10 F (surroundings), 45 F (To), in K.
-PAPER_DU_K = {"Ts": 45.0 / 1.8, "Tsd": 10.0 / 1.8, "To": 45.0 / 1.8}
+PAPER_DU_K = {"Ts": 45.0 / F_PER_K, "Tsd": 10.0 / F_PER_K, "To": 45.0 / F_PER_K}
 #: Inputs whose responses are matched, in order.
 MATCHED_INPUTS = ("Ts", "Tsd", "To")
 #: Free parameters of each low-order structure.
@@ -174,6 +180,7 @@ def band_matched(
     band_hz: tuple[float, float] = PAPER_BAND_HZ,
     flows: Sequence[float] = (PAPER_FLOW,),
     n_freq: int = 60,
+    keep_dc: bool = True,
 ) -> BandFit:
     """Low-order values of ``structure`` matched to the full model over ``band_hz`` (module docstring).
 
@@ -192,6 +199,10 @@ def band_matched(
         Constant flows (kg/s) at which the responses are matched together.
     n_freq : int
         Log-spaced frequencies per flow.
+    keep_dc : bool
+        Keep every steady-state gain of the parallel aggregation (``Rwin`` and the wall's total
+        resistance fixed; only ``Cr``, ``Cw`` and, for the 2nd-order model, the room-side share
+        ``R1 / (R1 + R2)`` are matched), or match every parameter.
 
     Returns
     -------
@@ -221,7 +232,42 @@ def band_matched(
         (float(lo), float(hi)),
         flows_t,
         int(n_freq),
+        bool(keep_dc),
     )
+
+
+def _free(structure: str, keep_dc: bool) -> tuple[str, ...]:
+    if not keep_dc:
+        return STRUCTURES[structure]
+    return {
+        "second-order": ("Cr", "Cw", "alpha"),
+        "second-order-paper": ("Cr", "Cw"),
+        "first-order": ("Cr",),
+    }[structure]
+
+
+def _values_from(x: np.ndarray, free: tuple[str, ...], start: Mapping[str, float]) -> dict[str, float]:
+    """Map the optimizer's variables (``ln`` values, logit of ``alpha``) to parameter values."""
+    v = dict(start)
+    for name, xi in zip(free, x, strict=True):
+        if name == "alpha":  # room-side share of the DC wall resistance R1 + R2
+            a = 1.0 / (1.0 + np.exp(-xi))
+            rw = start["R1"] + start["R2"]
+            v["R1"], v["R2"] = a * rw, (1.0 - a) * rw
+        else:
+            v[name] = float(np.exp(xi))
+    return v
+
+
+def _x_from(values: Mapping[str, float], free: tuple[str, ...]) -> np.ndarray:
+    out = []
+    for name in free:
+        if name == "alpha":
+            a = values["R1"] / (values["R1"] + values["R2"])
+            out.append(np.log(a / (1.0 - a)))
+        else:
+            out.append(np.log(values[name]))
+    return np.array(out)
 
 
 @cache
@@ -234,16 +280,18 @@ def _band_matched(
     band: tuple[float, float],
     flows: tuple[float, ...],
     n_freq: int,
+    keep_dc: bool,
 ) -> BandFit:
     f = np.logspace(np.log10(band[0]), np.log10(band[1]), n_freq)
     names = STRUCTURES[structure]
+    free = _free(structure, keep_dc)
     ref = [full_response(cr, rwin, elements, f, m) for m in flows]
-    start = _parallel(structure, cr, rwin, elements)
-    start = {n: start[n] for n in names}
+    par = _parallel(structure, cr, rwin, elements)
+    start = {n: float(par[n]) for n in names}
 
     def errors(x: np.ndarray) -> np.ndarray:
         # shape (n_flows, n_inputs, K), complex, weighted: K
-        vals = dict(zip(names, np.exp(x), strict=True))
+        vals = _values_from(x, free, start)
         out = np.empty((len(flows), len(MATCHED_INPUTS), f.size), dtype=complex)
         for a, m in enumerate(flows):
             low = low_order_response(structure, vals, f, m)
@@ -254,8 +302,8 @@ def _band_matched(
     def worst(x: np.ndarray) -> np.ndarray:
         return np.abs(errors(x)).max(axis=(0, 2))
 
-    x0 = np.log([start[n] for n in names])
-    ls = least_squares(lambda x: errors(x).view(float).ravel(), x0, x_scale=1.0, xtol=1e-12, ftol=1e-12)
+    x0 = _x_from(start, free)
+    ls = least_squares(lambda x: errors(x).view(float).ravel(), x0, xtol=1e-12, ftol=1e-12)
     x1 = ls.x
     scale = max(float(worst(x1).max()), 1e-12)
 
@@ -273,8 +321,42 @@ def _band_matched(
     best = min(candidates, key=lambda x: float(worst(x).max()))
     return BandFit(
         structure,
-        dict(zip(names, map(float, np.exp(best)), strict=True)),
-        {n: float(v) for n, v in start.items()},
+        {n: _values_from(best, free, start)[n] for n in names},
+        start,
         dict(zip(MATCHED_INPUTS, map(float, worst(best)), strict=True)),
         dict(zip(MATCHED_INPUTS, map(float, worst(x0)), strict=True)),
+    )
+
+
+def band_matched_model(
+    name: str, geometry: ZoneGeometry | None = None, keep_dc: bool = True, **options: str
+) -> RCNetwork:
+    """One of the paper's low-order models with band-matched instead of parallel construction values.
+
+    Parameters
+    ----------
+    name : {"second-order", "second-order-paper", "first-order"}
+    geometry : ZoneGeometry, optional
+        Default :func:`~rczone.construction.office_241`.
+    keep_dc : bool
+        See :func:`band_matched`.
+    **options
+        ``split`` and ``door`` of the full model the values are matched to.
+
+    Returns
+    -------
+    RCNetwork
+        The declared network of :func:`rczone.models.paper.get_model` with new parameter values.
+    """
+    from rczone.models.paper import get_model  # paper builds its networks from this package's values
+
+    _check_structure(name)
+    g = office_241() if geometry is None else geometry
+    split, door = options.get("split", "matched"), options.get("door", "fold")
+    fit = band_matched(
+        g.room_capacity, g.window.resistance, surface_elements(g, split, door), name, keep_dc=keep_dc
+    )
+    net = get_model(name, g, split=split, door=door)
+    return net.replace_parameters(
+        [replace(p, value=fit.values[k]) if k in fit.values else p for k, p in net.parameters.items()]
     )

@@ -259,7 +259,7 @@ def run(
     for k in range(n_steps + 1):
         reading = x[k, air_idx]
         if op.sensor != "room" and k > 0:
-            reading = sensor_reading(reading, u[k - 1, ts_idx], m[k - 1], op.sensor)
+            reading = sensor_reading(reading, u[k - 1, ts_idx], m[k - 1], op.sensor, op.diffuser_mix)
         sensed[k] = sense(reading, g_sense)
         if k == n_steps:
             break

@@ -24,7 +24,8 @@ operation of the shipped nights A, B, C (the data files do not change):
     unmeasured, and it changes exactly when the setpoints change.
 ``sensor``
     ``"room"`` (default): the thermostat reads the room air. ``"diffuser"``: it hangs in the
-    supply jet and reads ``Ti + DIFFUSER_MIX * (m / m_max) * (Ts - Ti)``. The target's logged
+    supply jet and reads ``Ti + diffuser_mix * (m / m_max) * (Ts - Ti)`` (``diffuser_mix``
+    default :data:`DIFFUSER_MIX`; ``m_max`` = 0.12 kg/s). The target's logged
     ``Ti`` and every controller use that reading.
 ``trend_quantum_F``
     Resolution of the logged temperatures, F (default 0.1 F; BMS trend logs with 0.5 F or 1 F
@@ -76,6 +77,7 @@ class Operation:
     gains: str = "constant"
     sensor: str = "room"
     trend_quantum_F: float = TEMP_QUANT_F
+    diffuser_mix: float = DIFFUSER_MIX
 
     def __post_init__(self) -> None:
         _check(self.loop, LOOPS, "loop")
@@ -83,6 +85,8 @@ class Operation:
         _check(self.sensor, SENSORS, "sensor option")
         if self.deadband_K is not None and not (np.isfinite(self.deadband_K) and self.deadband_K > 0):
             raise ParameterError(f"deadband_K must be > 0 K or None, got {self.deadband_K!r}")
+        if not (np.isfinite(self.diffuser_mix) and 0 <= self.diffuser_mix < 1):
+            raise ParameterError(f"diffuser_mix must be in [0, 1), got {self.diffuser_mix!r}")
         if not (np.isfinite(self.trend_quantum_F) and self.trend_quantum_F > 0):
             raise ParameterError(f"trend_quantum_F must be > 0 F, got {self.trend_quantum_F!r}")
 
@@ -96,13 +100,15 @@ class Operation:
         d = Operation()
         parts = [
             f"{k}={getattr(self, k)}"
-            for k in ("loop", "deadband_K", "gains", "sensor", "trend_quantum_F")
+            for k in ("loop", "deadband_K", "gains", "sensor", "trend_quantum_F", "diffuser_mix")
             if getattr(self, k) != getattr(d, k)
         ]
         return ", ".join(parts) or "as shipped"
 
 
-def sensor_reading(t_air: np.ndarray, t_supply: np.ndarray, flow: np.ndarray, sensor: str) -> np.ndarray:
+def sensor_reading(
+    t_air: np.ndarray, t_supply: np.ndarray, flow: np.ndarray, sensor: str, mix: float = DIFFUSER_MIX
+) -> np.ndarray:
     """What a thermostat reads (before noise and quantization), degC.
 
     Parameters
@@ -112,8 +118,10 @@ def sensor_reading(t_air: np.ndarray, t_supply: np.ndarray, flow: np.ndarray, se
     t_supply, flow : ndarray
         Discharge temperature (degC) and flow (kg/s) of the box over the last interval.
     sensor : {"room", "diffuser"}
+    mix : float
+        Share of supply air in a diffuser-mounted sensor's reading at full flow.
     """
     if sensor == "room":
         return np.asarray(t_air, dtype=float)
-    share = DIFFUSER_MIX * np.asarray(flow, dtype=float) / FLOW_LEVELS[-1]
+    share = mix * np.asarray(flow, dtype=float) / FLOW_LEVELS[-1]
     return t_air + share * (np.asarray(t_supply, dtype=float) - t_air)
