@@ -26,8 +26,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from rczone.atomic import write_json_atomic
 from rczone.batch import read_manifest, run_batch
-from rczone.report import write_json_atomic
 from rczone.virtual.scenarios import generate_night
 
 

@@ -32,8 +32,8 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 import plain  # noqa: E402
+from rczone.atomic import write_json_atomic  # noqa: E402
 from rczone.models import get_model  # noqa: E402
-from rczone.report import write_json_atomic  # noqa: E402
 from rczone.simulation import simulate, steady_state  # noqa: E402
 from rczone.simulation.simulate import transition_matrices  # noqa: E402
 

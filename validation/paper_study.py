@@ -21,6 +21,7 @@ import numpy as np
 
 from rczone import datasets
 from rczone.calibrate import calibrate
+from rczone.demo import PAPER_FREE
 from rczone.comparison import FrequencyComparison, compare_frequency, input_variation
 from rczone.construction import ashrae_construction, office_241
 from rczone.construction.room import AIR_CP
@@ -57,7 +58,14 @@ def exact_room_response(g) -> dict[str, np.ndarray]:
 
 def with_constructions(kind: str):
     g = office_241()
-    names = {"o": "Exterior Wall", "f": "Floor", "c": "Roof/Ceiling", "n1": "Partitions", "n2": "Partitions", "hw": "Partitions"}
+    names = {
+        "o": "Exterior Wall",
+        "f": "Floor",
+        "c": "Roof/Ceiling",
+        "n1": "Partitions",
+        "n2": "Partitions",
+        "hw": "Partitions",
+    }
     surf = tuple(
         replace(s, construction=ashrae_construction(f"{kind} {names[s.name]}", exterior=s.name in EXTERIOR))
         for s in g.surfaces
@@ -73,13 +81,28 @@ def part1(out: Path) -> None:
         print(f"| {label} | {e['Ts']} | {e['Tsd']} | {e['To']} |")
 
     base = {"full": get_model("full-scale"), "2nd": get_model("second-order")}
-    row("parallel aggregation, paper's weights (baseline)", worst_F(compare_frequency(base, "full", PAPER_DU_K, M, F), "2nd"))
+    row(
+        "parallel aggregation, paper's weights (baseline)",
+        worst_F(compare_frequency(base, "full", PAPER_DU_K, M, F), "2nd"),
+    )
     du_data = input_variation([datasets.load(s) for s in "ABC"])
-    row(f"weights: the shipped nights' du ({', '.join(f'{k} {v * F_PER_K:.0f} F' for k, v in du_data.items())})", worst_F(compare_frequency(base, "full", du_data, M, F), "2nd"))
+    row(
+        f"weights: the shipped nights' du ({', '.join(f'{k} {v * F_PER_K:.0f} F' for k, v in du_data.items())})",
+        worst_F(compare_frequency(base, "full", du_data, M, F), "2nd"),
+    )
     half = {k: v / 2 for k, v in PAPER_DU_K.items()}
-    row("weights: du read as amplitude (half the range)", worst_F(compare_frequency(base, "full", half, M, F), "2nd"))
-    sym = {"full": get_model("full-scale", split="symmetric"), "2nd": get_model("second-order", split="symmetric")}
-    row("layer split: symmetric 3R2C in the 13-state model", worst_F(compare_frequency(sym, "full", PAPER_DU_K, M, F), "2nd"))
+    row(
+        "weights: du read as amplitude (half the range)",
+        worst_F(compare_frequency(base, "full", half, M, F), "2nd"),
+    )
+    sym = {
+        "full": get_model("full-scale", split="symmetric"),
+        "2nd": get_model("second-order", split="symmetric"),
+    }
+    row(
+        "layer split: symmetric 3R2C in the 13-state model",
+        worst_F(compare_frequency(sym, "full", PAPER_DU_K, M, F), "2nd"),
+    )
     # the 13-state models against the exact walls
     g = office_241()
     ex = exact_room_response(g)
@@ -87,27 +110,60 @@ def part1(out: Path) -> None:
         fr = compare_frequency({"full": get_model("full-scale", split=split)}, "full", PAPER_DU_K, M, F)
         from rczone.frequency import frequency_response
 
-        H = frequency_response(get_model("full-scale", split=split).state_space().lti(M), F).summed({"Tsd": ["Tf", "Tc", "Tn1", "Tn2", "Thw"]})
-        e = {i: round(float(np.max(np.abs(np.abs(H.to_input(i)) - np.abs(ex[i]))) * PAPER_DU_K[i] * F_PER_K), 2) for i in PAPER_DU_K}
+        H = frequency_response(get_model("full-scale", split=split).state_space().lti(M), F).summed(
+            {"Tsd": ["Tf", "Tc", "Tn1", "Tn2", "Thw"]}
+        )
+        e = {
+            i: round(
+                float(np.max(np.abs(np.abs(H.to_input(i)) - np.abs(ex[i]))) * PAPER_DU_K[i] * F_PER_K), 2
+            )
+            for i in PAPER_DU_K
+        }
         row(f"13-state model ({split} split) against the exact walls", e)
         del fr
     H2 = frequency_response(get_model("second-order").state_space().lti(M), F)
-    row("reference: exact walls instead of the 13-state model", {i: round(float(np.max(np.abs(np.abs(H2.to_input(i)) - np.abs(ex[i]))) * PAPER_DU_K[i] * F_PER_K), 2) for i in PAPER_DU_K})
-    for name, keep in (("second-order", True), ("second-order", False), ("second-order-paper", True), ("second-order-paper", False)):
+    row(
+        "reference: exact walls instead of the 13-state model",
+        {
+            i: round(
+                float(np.max(np.abs(np.abs(H2.to_input(i)) - np.abs(ex[i]))) * PAPER_DU_K[i] * F_PER_K), 2
+            )
+            for i in PAPER_DU_K
+        },
+    )
+    for name, keep in (
+        ("second-order", True),
+        ("second-order", False),
+        ("second-order-paper", True),
+        ("second-order-paper", False),
+    ):
         ms = {"full": get_model("full-scale"), "x": band_matched_model(name, keep_dc=keep)}
-        row(f"aggregation: band-matched {name}{' (DC kept)' if keep else ' (all free)'}", worst_F(compare_frequency(ms, "full", PAPER_DU_K, M, F), "x"))
+        row(
+            f"aggregation: band-matched {name}{' (DC kept)' if keep else ' (all free)'}",
+            worst_F(compare_frequency(ms, "full", PAPER_DU_K, M, F), "x"),
+        )
     for kind in ("Light", "Heavy"):
         gk = with_constructions(kind)
-        ms = {"full": get_model("full-scale", gk), "2nd": get_model("second-order", gk), "band": band_matched_model("second-order", gk)}
+        ms = {
+            "full": get_model("full-scale", gk),
+            "2nd": get_model("second-order", gk),
+            "band": band_matched_model("second-order", gk),
+        }
         fc = compare_frequency(ms, "full", PAPER_DU_K, M, F)
         row(f"constructions: ASHRAE '{kind}' set, parallel", worst_F(fc, "2nd"))
         row(f"constructions: ASHRAE '{kind}' set, band-matched", worst_F(fc, "band"))
     for area in (0.0, 40.0):
         gk = replace(office_241(), furnishing_area=area)
         ms = {"full": get_model("full-scale", gk), "2nd": get_model("second-order", gk)}
-        row(f"constructions: furnishing {area:.0f} m2 (Cr = {gk.room_capacity:.3g} J/K), parallel", worst_F(compare_frequency(ms, "full", PAPER_DU_K, M, F), "2nd"))
+        row(
+            f"constructions: furnishing {area:.0f} m2 (Cr = {gk.room_capacity:.3g} J/K), parallel",
+            worst_F(compare_frequency(ms, "full", PAPER_DU_K, M, F), "2nd"),
+        )
     for m in (0.05,):
-        row(f"flow m = {m} kg/s instead of 0.12, parallel", worst_F(compare_frequency(base, "full", PAPER_DU_K, m, F), "2nd"))
+        row(
+            f"flow m = {m} kg/s instead of 0.12, parallel",
+            worst_F(compare_frequency(base, "full", PAPER_DU_K, m, F), "2nd"),
+        )
     fit = band_matched(g.room_capacity, g.window.resistance, surface_elements(g), "second-order")
     print("\nband-matched 2nd-order values:", {k: f"{v:.4g}" for k, v in fit.values.items()})
     print("parallel values:              ", {k: f"{v:.4g}" for k, v in fit.parallel.items()})
@@ -130,7 +186,10 @@ def part1(out: Path) -> None:
     }
     fcl = compare_frequency(models_l, "full-scale", PAPER_DU_K, M, F)
     figs.paper_figs_5_6(fcl).savefig(out / "paper_fig5_6_light.png", dpi=110)
-    print("\nLight set (first-order: room capacity only):", {k: worst_F(fcl, k) for k in models_l if k != "full-scale"})
+    print(
+        "\nLight set (first-order: room capacity only):",
+        {k: worst_F(fcl, k) for k in models_l if k != "full-scale"},
+    )
 
 
 OPS = {
@@ -150,11 +209,15 @@ def part2() -> None:
     const = {"Q": 50.0}
 
     def fit(df, meth):
-        cal = calibrate(net, df, meth, n_starts=3, seed=1, constants=const, uncertainty=False)
+        cal = calibrate(
+            net, df, meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const, uncertainty=False
+        )
         return cal.result.estimates["Rw"], cal.open_loop.rmse_K, any(cal.result.at_bound.values())
 
     print("\n## Part 2: closed-loop Rw against the forced night's, same operation\n")
-    print("| operation | method | forced Rw (K/W) | C/A ratio per night (summer x3, winter x3) | nights >= 5x and RMSE <= 0.2 K | at a bound |")
+    print(
+        "| operation | method | forced Rw (K/W) | C/A ratio per night (summer x3, winter x3) | nights >= 5x and RMSE <= 0.2 K | at a bound |"
+    )
     print("|---|---|---|---|---|---|")
     for label, op in OPS.items():
         forced = generate_night("autumn", "forced", 20111024, operation=op)

@@ -28,7 +28,7 @@ from rczone.diagnostics import diagnose
 from rczone.estimation import Dataset, fit
 from rczone.estimation.validation import open_loop_error
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
-from rczone.report import write_json_atomic
+from rczone.atomic import write_json_atomic
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_SHARED = HERE.parent.parent / "shared"

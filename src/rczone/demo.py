@@ -14,11 +14,12 @@ from typing import Any
 import numpy as np
 
 from rczone import datasets
+from rczone.atomic import write_json_atomic
 from rczone.comparison import TimeComparison, compare_frequency, compare_time, input_variation
 from rczone.models import get_model
 from rczone.models.reduction import F_PER_K, PAPER_DU_K, band_matched_model
 from rczone.network import RCNetwork
-from rczone.report import Report, write_json_atomic
+from rczone.report import Report
 from rczone.report import figures as figs
 from rczone.virtual.operation import Operation
 
@@ -42,6 +43,13 @@ VARIANTS = (
 )
 #: Constant internal gain used in every time-domain simulation (the paper's Q = 50 W).
 Q_PAPER = 50.0
+#: The paper's unknowns (section IV: theta = [Cr, Rw], the initial state taken from the data), plus
+#: the noise levels a likelihood fit needs.
+PAPER_FREE = {
+    "ls": ("Cr", "Rw"),
+    "ml": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
+    "map": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
+}
 
 
 def true_equivalent() -> dict[str, float] | None:
@@ -265,7 +273,7 @@ def identification_study(
         preds: dict[str, dict[str, Any]] = {s: {} for s in (cal_set, *val_sets)}
         for meth in METHODS:
             progress(f"attempt {att}: calibrating on {cal_set} by {meth.upper()}")
-            cal = calibrate(net, frames[cal_set], meth, n_starts=3, seed=1, constants=const)
+            cal = calibrate(net, frames[cal_set], meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const)
             entry = {
                 "parameters": {
                     n: {
@@ -379,7 +387,9 @@ def _map_prior_study(
         fits = {}
         for s in ("A", "B"):
             progress(f"MAP on {s} with {rule} construction values as prior")
-            cal = calibrate(n, frames[s], "map", n_starts=3, seed=1, constants=const, uncertainty=False)
+            cal = calibrate(
+                n, frames[s], "map", PAPER_FREE["map"], n_starts=3, seed=1, constants=const, uncertainty=False
+            )
             fits[s] = {
                 "Rw": cal.result.estimates["Rw"],
                 "Cr": cal.result.estimates["Cr"],
@@ -423,7 +433,9 @@ def closed_loop_study(report: Report, progress: Callable[[str], None]) -> dict[s
         for meth in ("ls", "ml"):
             fits = {}
             for s, f in frames.items():
-                cal = calibrate(net, f, meth, n_starts=3, seed=1, constants=const, uncertainty=False)
+                cal = calibrate(
+                    net, f, meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const, uncertainty=False
+                )
                 other = "C" if s == "A" else "A"
                 fits[s] = {
                     "Rw": cal.result.estimates["Rw"],

@@ -31,6 +31,10 @@ class DataError(RczoneError, ValueError):
     """Measured data cannot be used as given (missing column, bad unit, bad timestamps...)."""
 
 
+class ModelFileError(RczoneError, ValueError):
+    """A model file (TOML written by a person, or JSON saved by rczone) cannot be used as given."""
+
+
 def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
     """Return a hint naming the candidates closest to ``name``, or listing them all.
 

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rczone.report.io import write_bytes_atomic
+from rczone.atomic import write_bytes_atomic
 
 RESULTS = "results.parquet"
 

@@ -8,7 +8,8 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from rczone.report import Report, write_json_atomic
+from rczone.atomic import write_json_atomic
+from rczone.report import Report
 
 VERDICTS = ("identifiable", "weak", "not identifiable")
 

@@ -25,7 +25,7 @@ def load_task_data(task: Task) -> pd.DataFrame:
 
         _, season, mode, seed = task.source
         return generate_night(season, mode, seed)
-    from rczone.cli.common import read_frame
+    from rczone.sources import read_frame
 
     _, path, columns = task.source
     return read_frame(Path(path), Path(columns) if columns else None)

@@ -8,6 +8,7 @@ exit code 2, never a traceback.
 from __future__ import annotations
 
 import sys
+import warnings
 
 import typer
 
@@ -22,9 +23,27 @@ app = typer.Typer(
 )
 
 
+def _version(value: bool) -> None:
+    if value:
+        from rczone import __version__
+
+        typer.echo(__version__)
+        raise typer.Exit()
+
+
+def _plain_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Warnings as one line for a person, without the Python source line they came from."""
+    typer.echo(f"warning: {message}", err=True)
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the rczone version and exit."
+    ),
+) -> None:
     """Grey-box RC thermal models of building zones."""
+    warnings.showwarning = _plain_warning
 
 
 @app.command()
@@ -41,6 +60,7 @@ from rczone.cli import (  # noqa: E402, F401
     commands_demo,
     commands_diagnose,
     commands_fit,
+    commands_models,
     commands_validate,
 )
 

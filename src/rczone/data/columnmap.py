@@ -88,7 +88,12 @@ KNOWN_CHANNELS = {
 DEFAULT_SURROUNDINGS = ("Tf", "Tc", "Tn1", "Tn2", "Thw")
 """The paper's five surrounding spaces: floor, ceiling, two neighbours, hallway."""
 
-_ROLE_OF_QUANTITY = {"temperature": "temperature", "flow": "flow", "power": "power"}
+_ROLE_OF_QUANTITY = {
+    "temperature": "temperature",
+    "flow": "flow",
+    "power": "power",
+    "irradiance": "irradiance",
+}
 AMBIGUOUS = ("infer", "first", "second", "drop", "raise")
 NONEXISTENT = ("raise", "shift_forward", "drop")
 TIME_FORMATS = ("auto", "iso", "seconds")
@@ -185,8 +190,11 @@ class ColumnMap:
         raise DataError(f"no channel {name!r} in the column map; {did_you_mean(name, self.channel_names)}")
 
 
-def read_column_map(path: str | Path) -> ColumnMap:
+def read_column_map(path: str | Path, signals: Mapping[str, str] | None = None) -> ColumnMap:
     """Read and validate a TOML column map.
+
+    ``signals`` (channel name -> quantity, from the model the data are for) gives the quantity of
+    channels the map does not declare one for (a model's heater ``Ph`` is a power).
 
     Raises
     ------
@@ -201,7 +209,7 @@ def read_column_map(path: str | Path) -> ColumnMap:
             doc = tomllib.load(fh)
         except tomllib.TOMLDecodeError as exc:
             raise DataError(f"column map {path}: invalid TOML: {exc}") from None
-    return parse_column_map(doc, source=str(path))
+    return parse_column_map(doc, source=str(path), signals=signals)
 
 
 def _check_keys(table: Mapping, allowed: Sequence[str], where: str, source: str) -> None:
@@ -262,11 +270,15 @@ def check_clock(text: str, what: str, source: str = "<defaults>") -> str:
     return text.strip()
 
 
-def _channel(name: str, spec, source: str, where: str, surrounding: bool) -> Channel:
+def _channel(
+    name: str, spec, source: str, where: str, surrounding: bool, signals: Mapping[str, str] | None = None
+) -> Channel:
     if surrounding:
         quantity, role = "temperature", "room"
     else:
         quantity, role = KNOWN_CHANNELS.get(name, (None, None))
+        if quantity is None and signals and name in signals:
+            quantity, role = signals[name], _ROLE_OF_QUANTITY[signals[name]]
     if isinstance(spec, str):
         spec = {"column": spec}
     _check_keys(spec, _CHANNEL_KEYS, f"{where}.{name}", source)
@@ -291,7 +303,9 @@ def _channel(name: str, spec, source: str, where: str, surrounding: bool) -> Cha
     return Channel(name, column, value, unit, quantity, role)
 
 
-def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
+def parse_column_map(
+    doc: Mapping, source: str = "<dict>", signals: Mapping[str, str] | None = None
+) -> ColumnMap:
     """Validate a parsed TOML document (a dict) and build a :class:`ColumnMap`.
 
     Raises
@@ -308,7 +322,7 @@ def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
     _check_keys(cols, list(cols), "[columns]", source)
     surr = doc.get("surroundings", {})
     _check_keys(surr, list(surr), "[surroundings]", source)
-    channels = [_channel(n, s, source, "[columns]", False) for n, s in cols.items()]
+    channels = [_channel(n, s, source, "[columns]", False, signals) for n, s in cols.items()]
     if not channels:
         raise DataError(f"column map {source}: [columns] is empty; map at least 'Ti'")
     for n in surr:
@@ -361,13 +375,24 @@ def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
     )
 
 
-def default_column_map(columns: Sequence[str], source: str = "<data>") -> ColumnMap:
+def default_column_map(
+    columns: Sequence[str],
+    source: str = "<data>",
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
+) -> ColumnMap:
     """The map used when none is given (the CLI's default layout).
 
-    Columns ``time`` (seconds or ISO 8601), ``Ti``, ``To``, ``Ts``, ``m`` (kg/s), ``Q``
-    (W), and either ``Tsd`` or the five ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw``, all
-    temperatures in degC. When ``Tsd`` is present it is used as is and any of the five
+    Without ``signals``: columns ``time`` (seconds or ISO 8601), ``Ti``, ``To``, ``Ts``, ``m``
+    (kg/s), ``Q`` (W), and either ``Tsd`` or the five ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw``,
+    all temperatures in degC. When ``Tsd`` is present it is used as is and any of the five
     also present are loaded as plain channels; otherwise Tsd is the mean of the five.
+
+    With ``signals`` (channel name -> quantity, the signals of the model the data are for):
+    ``time`` and every column named as one of the signals, in SI units; a model input the data
+    lack is reported by the model (it may have a default), except the ``required`` ones, which
+    are reported here with close names of the file's columns. An unnamed first column (a frame
+    written with its index) is taken as the time.
 
     Raises
     ------
@@ -375,6 +400,29 @@ def default_column_map(columns: Sequence[str], source: str = "<data>") -> Column
         Naming every missing column, with close names from ``columns``.
     """
     present = [str(c) for c in columns]
+    if signals is not None:
+        time = "time"
+        if "time" not in present and present and (present[0].startswith("Unnamed") or not present[0].strip()):
+            time = present[0]
+        missing = [c for c in (time, *required) if c not in present]
+        if missing:
+            hints = "; ".join(f"{c!r}: {did_you_mean(c, present)}" for c in missing)
+            raise DataError(
+                f"{source}: missing column(s) {', '.join(repr(c) for c in missing)} that the model needs"
+                f" ({hints}); rename them or give a column map"
+            )
+        channels = []
+        for n, q in signals.items():
+            if n in present and n != time:
+                known = KNOWN_CHANNELS.get(n)
+                role = known[1] if known is not None and known[0] == q else _ROLE_OF_QUANTITY[q]
+                channels.append(Channel(n, n, None, SI_UNITS[q], q, role))
+        if not channels:
+            raise DataError(
+                f"{source}: none of the model's signals ({', '.join(signals)}) is a column; rename the"
+                " columns or give a column map"
+            )
+        return ColumnMap(channels=tuple(channels), time_column=time, source=source)
     required = ["time", "Ti", "To", "Ts", "m", "Q"]
     if "Tsd" in present:
         required.append("Tsd")

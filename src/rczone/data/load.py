@@ -32,6 +32,7 @@ the column, row or key and what was expected -- never a traceback from pandas.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -74,6 +75,8 @@ def load_zone_data(
     column_map: ColumnMap | str | Path | None = None,
     *,
     flat_seconds: float = FLAT_SECONDS,
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
 ) -> ZoneData:
     """Load a trend log file into SI arrays.
 
@@ -85,6 +88,12 @@ def load_zone_data(
         None uses the default layout (:func:`~rczone.data.columnmap.default_column_map`).
     flat_seconds : float
         A temperature exactly constant for longer than this (s) is reported as flat.
+    signals : mapping of channel name to quantity, optional
+        The signals of the model the data are for: without a column map, every column named as
+        one of them is read (:func:`~rczone.data.columnmap.default_column_map`); with a map, they
+        give the quantity of channels the map does not declare.
+    required : sequence of str
+        Of the ``signals``, the columns a file without a column map must have.
 
     Returns
     -------
@@ -97,9 +106,11 @@ def load_zone_data(
     FileNotFoundError
         If ``path`` (or the map file) does not exist.
     """
-    cmap = read_column_map(column_map) if isinstance(column_map, str | Path) else column_map
+    cmap = read_column_map(column_map, signals) if isinstance(column_map, str | Path) else column_map
     frame = read_table(path, cmap.na_values if cmap is not None else ())
-    return zone_data_from_frame(frame, cmap, source=Path(path).name, flat_seconds=flat_seconds)
+    return zone_data_from_frame(
+        frame, cmap, source=Path(path).name, flat_seconds=flat_seconds, signals=signals, required=required
+    )
 
 
 def _require(columns: list[str], needed: str, what: str, source: str) -> None:
@@ -242,9 +253,15 @@ def zone_data_from_frame(
     *,
     source: str = "<frame>",
     flat_seconds: float = FLAT_SECONDS,
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
 ) -> ZoneData:
     """Build :class:`ZoneData` from a table already in memory (same rules as :func:`load_zone_data`)."""
-    cmap = column_map if column_map is not None else default_column_map(list(frame.columns), source)
+    cmap = (
+        column_map
+        if column_map is not None
+        else default_column_map(list(frame.columns), source, signals, required)
+    )
     if not isinstance(cmap, ColumnMap):
         raise DataError(f"column_map must be a ColumnMap, a TOML path or None, got {type(cmap).__name__}")
     if len(frame) == 0:

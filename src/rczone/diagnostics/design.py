@@ -25,9 +25,9 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from rczone.atomic import write_text_atomic
 from rczone.errors import ParameterError, did_you_mean
 from rczone.network import RCNetwork
-from rczone.report.io import write_text_atomic
 from rczone.simulation import simulate, steady_state
 from rczone.simulation.sensitivity import output_sensitivities
 

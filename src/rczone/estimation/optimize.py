@@ -48,6 +48,9 @@ _BIG = 1e300
 #: Relative step of the central-difference gradient, about eps^(1/3).
 GRADIENT_STEP = 1e-5
 
+#: Largest |z| of a start: a start exactly on a bound (z infinite) begins this far inside it.
+Z_LIMIT = 30.0
+
 #: Nelder-Mead stopping tolerance on the cost (scaled to 1 at the start).
 FATOL = 1e-12
 
@@ -198,7 +201,7 @@ def minimize_from(
         def fz(z: np.ndarray) -> float:
             return min(counted(spec.from_z(z)), _BIG)
 
-        z0 = spec.to_z(eta0)
+        z0 = np.clip(spec.to_z(eta0), -Z_LIMIT, Z_LIMIT)  # a start on a bound: just inside it
         simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
         problem = cost.compiled if optimizer == "nelder-mead" and isinstance(cost, Objective) else None
         if problem is not None:

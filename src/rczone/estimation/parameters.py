@@ -202,7 +202,8 @@ def make_spec(
         Names of the parameters to estimate: base network parameters and/or noise
         parameters (:func:`noise_parameter_names`).
     bounds : mapping of name to (lower, upper), optional
-        Bounds in physical units. Default ``[theta0/1000, theta0*1000]`` for
+        Bounds in physical units. Default: the bounds declared on the network parameter,
+        else ``[theta0/1000, theta0*1000]`` for
         resistances, capacitances and noise standard deviations, ``theta0 +- 20 K`` for
         initial states and ``theta0 +- max(10 |theta0|, 1)`` otherwise.
     start : mapping of name to float, optional
@@ -266,6 +267,8 @@ def make_spec(
                 raise ParameterError(
                     f"bounds of {name!r} must be a (lower, upper) pair, got {bounds[name]!r}"
                 ) from None
+        elif name in network.parameters and network.parameters[name].bounds is not None:
+            lo[i], hi[i] = network.parameters[name].bounds
         elif log[i]:
             ref = c if c is not None and c > 0 else s
             lo[i], hi[i] = ref / LOG_BOUND_FACTOR, ref * LOG_BOUND_FACTOR

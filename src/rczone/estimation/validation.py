@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import chi2
 
-from rczone.errors import ParameterError
-from rczone.estimation.costs import filter_arrays, simulate_output
+from rczone.errors import InputShapeError, ParameterError
+from rczone.estimation.costs import filter_arrays, run_filter, simulate_output
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
 from rczone.network import RCNetwork
@@ -51,8 +51,40 @@ def open_loop_error(
     """Simulate ``network`` with ``values`` (base parameters, optional ``x0_*``) on ``data``."""
     data.check_against(network)
     _, yhat = simulate_output(network, values, data, hold)
+    if not np.all(np.isfinite(yhat)):
+        k = int(np.flatnonzero(~np.isfinite(yhat).all(axis=1))[0])
+        raise InputShapeError(
+            f"the model's prediction is not finite from sample {k} on; its parameter values or inputs"
+            " are not usable"
+        )
     e = data.y - yhat
     return OpenLoopError(data.t, yhat, e, float(np.sqrt(np.nanmean(e**2))), float(np.nanmax(np.abs(e))))
+
+
+def open_loop_band(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop prediction and its standard deviation from the model's noise levels.
+
+    The Kalman filter of the stochastic model is run with every measurement after the first
+    removed: it conditions the state on the first measurement and then only predicts, so its
+    mean is the open-loop simulation and its innovation covariance ``C P C' + R`` is the variance
+    of the measurement around it (process noise accumulated since the start, plus measurement
+    noise). ``values`` must hold the noise levels (``sigma_v``, ``sigma_w_*``, ``sigma_x0_*``).
+
+    Returns
+    -------
+    y_hat : ndarray, shape (N, ny)
+    sd : ndarray, shape (N, ny)
+    """
+    y = np.full_like(data.y, np.nan)
+    y[0] = data.y[0]
+    masked = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+    out = run_filter(network, values, masked, hold)
+    _, _, _, _, _, u, _, _, _, C, D, _ = filter_arrays(network, values, masked, hold)
+    y_hat = out.x_pred @ C.T + u @ D.T
+    sd = np.sqrt(np.einsum("kii->ki", out.S))
+    return y_hat, sd
 
 
 @dataclass(frozen=True, eq=False)

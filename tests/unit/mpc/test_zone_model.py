@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from rczone.errors import DataError, NetworkError, ParameterError
+from rczone.errors import ModelFileError, NetworkError, ParameterError
 from rczone.models import get_model
 from rczone.mpc import ZoneModel
 from rczone.network.serialize import network_from_dict, network_to_dict
@@ -49,13 +49,17 @@ def test_discrete_matrices_are_the_exact_exponential():
 @pytest.mark.parametrize(
     ("call", "exc", "match"),
     [
-        (lambda p: ZoneModel.load(p / "missing.json"), DataError, "does not exist"),
-        (lambda p: ZoneModel.load(_write(p, "{not json")), DataError, "not valid JSON"),
-        (lambda p: ZoneModel.load(_write(p, '{"format": "other"}')), DataError, "not an rczone model file"),
+        (lambda p: ZoneModel.load(p / "missing.json"), ModelFileError, "does not exist"),
+        (lambda p: ZoneModel.load(_write(p, "{not json")), ModelFileError, "not valid JSON"),
+        (
+            lambda p: ZoneModel.load(_write(p, '{"format": "other"}')),
+            ModelFileError,
+            "not an rczone model file",
+        ),
         (
             lambda p: network_from_dict({"format": "rczone-network/1", "name": "x"}),
             NetworkError,
-            "incomplete",
+            "has no .nodes.",
         ),
         (lambda p: ZoneModel(get_model("first-order"), {"Rww": 1.0}), ParameterError, "did you mean 'Rw'"),
     ],

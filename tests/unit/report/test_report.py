@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from rczone.report import Report, write_json_atomic
-from rczone.report.io import write_bytes_atomic
+from rczone.atomic import write_bytes_atomic, write_json_atomic
+from rczone.report import Report
 
 
 def test_json_is_plain_and_nan_becomes_null(tmp_path):

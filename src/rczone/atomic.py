@@ -1,4 +1,9 @@
-"""Atomic writes: a result file is either complete or absent, never half written."""
+"""Atomic writes: a result file is either complete or absent, never half written.
+
+Every result rczone writes (JSON, Parquet parts, reports, saved models, schedules) goes through
+these functions, so an interrupted run never leaves a truncated file where a reader expects a
+result. This module imports nothing else of rczone; every layer may use it.
+"""
 
 from __future__ import annotations
 

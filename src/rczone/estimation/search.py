@@ -1,0 +1,303 @@
+"""Global search: the default way rczone minimizes an identification cost.
+
+Identification costs of grey-box building models are not convex: a single local search from
+construction values can stop in a worse optimum (a resistance 60x off) and still report that it
+converged. The search here is a two-phase stochastic method [1]_:
+
+1. **Global phase.** The cost is evaluated at a Latin hypercube of points spread over the whole
+   box of bounds, in the optimizer's variables ``eta`` (log space for resistances, capacities and
+   noise levels).
+2. **Local phase.** Local searches start from the model's own start values and from the best
+   sampled points that are not near a better one already used (single linkage in the unit box).
+   They run until the best optimum has been reached from two starts (at least two runs, at most
+   ``max_local``), or, with a fixed number of starts, that many runs.
+3. **Merge and confirm.** End points whose costs agree within a tolerance are one optimum; the
+   distinct optima, how many starts reached each, and the spread of the estimates among the starts
+   that reached the best one are reported. The result is *converged* only when the best optimum
+   was reached from more than one start, or when a second local method started at it finds nothing
+   better.
+
+References
+----------
+.. [1] A. H. G. Rinnooy Kan, G. T. Timmer, "Stochastic global optimization methods. Part I:
+   Clustering methods", Mathematical Programming 39 (1987) 27-56.
+.. [2] M. D. McKay, R. J. Beckman, W. J. Conover, "A comparison of three methods for selecting
+   values of input variables in the analysis of output from a computer code", Technometrics 21
+   (1979) 239-245.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import qmc
+
+from rczone.errors import ParameterError
+from rczone.estimation.optimize import StartOutcome, minimize_from
+from rczone.estimation.parameters import ParameterSpec
+
+#: Costs of two end points closer than ``ABS_TOL + REL_TOL * |cost| + SCALE_TOL * scale`` are the
+#: same optimum. For likelihood costs 0.01 is far below any difference that matters (a
+#: likelihood-ratio test needs about 2); for least squares the relative part decides, and the part
+#: relative to the data's own variation (``scale``) merges end points of a near-perfect fit.
+ABS_TOL = {"ml": 0.01, "map": 0.01, "ls": 0.0}
+REL_TOL = {"ml": 1e-9, "map": 1e-9, "ls": 1e-5}
+SCALE_TOL = 1e-9
+#: Sampled points closer than this (in the unit box of eta) to a better chosen start are not starts.
+LINK_RADIUS = 0.1
+#: The second method used to confirm an optimum found by one start only.
+SECOND_METHOD = {"nelder-mead": "powell", "powell": "nelder-mead", "lbfgs": "nelder-mead"}
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """One distinct end point of the local searches.
+
+    Attributes
+    ----------
+    cost : float
+    theta : ndarray
+        Estimates at the best start of this optimum (physical units).
+    starts : tuple of int
+        Indices (into the fit's ``starts``) of the local searches that ended here.
+    """
+
+    cost: float
+    theta: np.ndarray
+    starts: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        return len(self.starts)
+
+
+@dataclass(frozen=True)
+class SearchSummary:
+    """How the optimum was found, and how sure the search is of it.
+
+    Attributes
+    ----------
+    strategy : str
+        ``"global"`` (sample + local searches) or ``"local"`` (one start).
+    n_sampled : int
+        Cost evaluations of the global phase.
+    n_local : int
+        Local searches run (the confirmation included).
+    optima : tuple of Optimum
+        Distinct optima, best first.
+    spread : dict of name to (float, float)
+        Smallest and largest estimate among the starts that reached the best optimum.
+    confirmed_by : str or None
+        The second method that found nothing better, when the best optimum was reached once.
+    converged : bool
+        Reached from two starts, or confirmed, and the winning local search converged.
+    reason : str
+        Why it is or is not converged, in words.
+    tolerance : float
+        Cost difference below which two end points are one optimum.
+    """
+
+    strategy: str
+    n_sampled: int
+    n_local: int
+    optima: tuple[Optimum, ...]
+    spread: dict[str, tuple[float, float]]
+    confirmed_by: str | None
+    converged: bool
+    reason: str
+    tolerance: float
+
+    @property
+    def n_best(self) -> int:
+        """How many local searches reached the best optimum."""
+        return self.optima[0].count if self.optima else 0
+
+    def to_dict(self, names: tuple[str, ...]) -> dict:
+        return {
+            "strategy": self.strategy,
+            "n_sampled": self.n_sampled,
+            "n_local": self.n_local,
+            "n_best": self.n_best,
+            "converged": self.converged,
+            "reason": self.reason,
+            "confirmed_by": self.confirmed_by,
+            "tolerance": self.tolerance,
+            "optima": [
+                {
+                    "cost": _num(o.cost),
+                    "count": o.count,
+                    "starts": list(o.starts),
+                    "estimates": dict(zip(names, map(float, o.theta))),
+                }
+                for o in self.optima
+            ],
+            "spread": {k: [float(a), float(b)] for k, (a, b) in self.spread.items()},
+        }
+
+
+def _num(v: float) -> float | None:
+    return float(v) if math.isfinite(v) else None
+
+
+def cost_tolerance(method: str, cost: float, scale: float = 0.0) -> float:
+    """Largest cost difference between end points that are the same optimum (see :data:`ABS_TOL`)."""
+    return ABS_TOL.get(method, 0.0) + REL_TOL.get(method, 1e-9) * abs(cost) + SCALE_TOL * abs(scale)
+
+
+def sample_points(spec: ParameterSpec, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` points (theta) of a Latin hypercube over the whole box of bounds, in eta, strictly inside."""
+    unit = qmc.LatinHypercube(d=spec.n_free, rng=rng).random(n)
+    unit = 1e-6 + (1 - 2e-6) * unit
+    lo, hi = spec.eta_lower, spec.eta_upper
+    return spec.to_theta(lo + unit * (hi - lo))
+
+
+def _unit(spec: ParameterSpec, theta: np.ndarray) -> np.ndarray:
+    lo, hi = spec.eta_lower, spec.eta_upper
+    return (spec.to_eta(theta) - lo) / (hi - lo)
+
+
+def merge_optima(
+    outcomes: list[StartOutcome], method: str, scale: float = 0.0
+) -> tuple[tuple[Optimum, ...], float]:
+    """Group end points by cost (best first); returns the optima and the tolerance used."""
+    finite = [i for i, o in enumerate(outcomes) if math.isfinite(o.cost)]
+    if not finite:
+        return (), math.nan
+    order = sorted(finite, key=lambda i: outcomes[i].cost)
+    tol = cost_tolerance(method, outcomes[order[0]].cost, scale)
+    groups: list[list[int]] = []
+    for i in order:
+        if groups and outcomes[i].cost - outcomes[groups[-1][0]].cost <= tol:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    optima = tuple(Optimum(outcomes[g[0]].cost, outcomes[g[0]].end, tuple(sorted(g))) for g in groups)
+    return optima, tol
+
+
+def global_search(
+    cost: Callable[[np.ndarray], float],
+    spec: ParameterSpec,
+    method: str,
+    rng: np.random.Generator,
+    optimizer: str = "nelder-mead",
+    n_starts: int | None = None,
+    max_evals: int | None = None,
+    n_sample: int | None = None,
+    scale: float = 0.0,
+) -> tuple[list[StartOutcome], SearchSummary]:
+    """Minimize ``cost(eta)`` globally (see the module notes).
+
+    Parameters
+    ----------
+    cost : callable
+        Cost of ``eta`` (an :class:`~rczone.estimation.costs.Objective`).
+    spec : ParameterSpec
+    method : {"ls", "ml", "map"}
+        Sets the tolerance of :func:`merge_optima`.
+    rng : numpy.random.Generator
+    optimizer : {"nelder-mead", "powell", "lbfgs"}
+        The local method.
+    n_starts : int, optional
+        ``1``: one local search from ``spec.start`` (no global phase). ``k > 1``: exactly ``k``
+        local searches. Default: adaptive, 2 to ``4 + n_free // 2`` (stops once the best optimum
+        was reached twice).
+    max_evals : int, optional
+        Evaluation budget per local search.
+    n_sample : int, optional
+        Points of the global phase; default ``16 n_free`` clipped to [32, 256].
+    scale : float
+        The cost's natural scale (for least squares, the data's variation around their mean), for
+        :func:`cost_tolerance`.
+
+    Returns
+    -------
+    outcomes : list of StartOutcome
+        Every local search, in the order run.
+    summary : SearchSummary
+    """
+    if n_starts is not None and (not isinstance(n_starts, int) or n_starts < 1):
+        raise ParameterError(f"n_starts must be a positive integer (or None for automatic), got {n_starts!r}")
+    d = spec.n_free
+    outcomes: list[StartOutcome] = []
+    n_sampled = 0
+    if n_starts == 1:
+        starts = [spec.start]
+        adaptive, max_local = False, 1
+    else:
+        n_sample = n_sample or int(min(256, max(32, 16 * d)))
+        pts = sample_points(spec, n_sample, rng)
+        vals = np.array([cost(spec.to_eta(p)) for p in pts])
+        n_sampled = n_sample
+        adaptive = n_starts is None
+        max_local = n_starts if n_starts is not None else 4 + d // 2
+        starts = [spec.start]
+        chosen = [_unit(spec, spec.start)]
+        for i in np.argsort(np.where(np.isfinite(vals), vals, np.inf)):
+            if len(starts) >= max_local or not math.isfinite(vals[i]):
+                break
+            u = _unit(spec, pts[i])
+            if all(np.max(np.abs(u - c)) > LINK_RADIUS for c in chosen):
+                starts.append(pts[i])
+                chosen.append(u)
+    for k, s in enumerate(starts):
+        try:
+            outcomes.append(minimize_from(cost, spec, s, optimizer, max_evals))
+        except ParameterError:
+            # the model's own start may be invalid for these data (cost not finite): skip it
+            if k == 0 and len(starts) > 1:
+                continue
+            raise
+        if adaptive and len(outcomes) >= 2:
+            optima, _ = merge_optima(outcomes, method, scale)
+            if optima and optima[0].count >= 2:
+                break
+    optima, tol = merge_optima(outcomes, method, scale)
+    if not optima:
+        raise ParameterError("every local search ended at a point where the cost is not finite")
+    confirmed_by = None
+    best = optima[0]
+    winner = outcomes[best.starts[0]]
+    if best.count >= 2:
+        converged = winner.converged
+        reason = f"the best optimum was reached from {best.count} of {len(outcomes)} starts"
+    else:
+        second = SECOND_METHOD.get(optimizer, "powell")
+        check = minimize_from(cost, spec, best.theta, second, max_evals)
+        outcomes.append(check)
+        if check.cost >= best.cost - tol:
+            confirmed_by = second
+            converged = winner.converged
+            reason = (
+                f"the best optimum was reached from 1 of {len(outcomes) - 1} starts and a second method"
+                f" ({second}) started there found nothing better"
+            )
+        else:
+            converged = False
+            reason = (
+                f"the best optimum was reached from only 1 of {len(outcomes) - 1} starts and a second method"
+                f" ({second}) found a lower cost from there: the search has not settled"
+            )
+        optima, tol = merge_optima(outcomes, method, scale)
+        best = optima[0]
+    if not winner.converged and converged:
+        converged = False
+        reason += f", but the winning local search stopped early ({winner.message})"
+    ends = np.array([outcomes[i].end for i in best.starts])
+    spread = {n: (float(ends[:, j].min()), float(ends[:, j].max())) for j, n in enumerate(spec.names)}
+    summary = SearchSummary(
+        "global" if n_starts != 1 else "local",
+        n_sampled,
+        len(outcomes),
+        optima,
+        spread,
+        confirmed_by,
+        bool(converged),
+        reason,
+        tol,
+    )
+    return outcomes, summary

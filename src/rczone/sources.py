@@ -1,0 +1,42 @@
+"""Where a zone's data come from: a trend-log file (with an optional column map) or a built-in name.
+
+Shared by the command line, batch calibration and the Python API, so that every entry point
+reads a user's data the same way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from rczone.errors import DataError
+
+
+def read_frame(
+    path: str | Path,
+    column_map: str | Path | None = None,
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
+) -> pd.DataFrame:
+    """A zone's data as a frame in rczone's default columns (SI units, ``time`` in s).
+
+    ``path`` is a CSV or Parquet file in the default columns (``time``, ``Ti``, ``To``, ``Ts``,
+    ``m``, ``Q`` and ``Tsd`` or the five surroundings), or any trend log described by a TOML
+    ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``). ``signals``
+    (name -> quantity, :meth:`rczone.models.ZoneModel.signal_quantities`) are the model's: without a
+    map, the columns named as them are read in SI units, and the ``required`` ones must exist.
+    """
+    from rczone.data import load_zone_data
+
+    path = Path(path)
+    if not path.exists():
+        from rczone import datasets
+
+        if str(path) in datasets.names():
+            return datasets.load(str(path))
+        raise DataError(
+            f"data file {str(path)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
+        )
+    return load_zone_data(path, column_map, signals=signals, required=required).to_frame()
