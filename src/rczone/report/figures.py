@@ -13,6 +13,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from rczone.comparison import FrequencyComparison, TimeComparison
+from rczone.models.reduction import F_PER_K
 
 COLORS = {"measured": "black", "full-scale": "#2b6cb0", "second-order": "#dd6b20", "first-order": "#38a169"}
 LABELS = {"full-scale": "full-scale (13 states)", "second-order": "2nd order", "first-order": "1st order"}
@@ -145,5 +146,46 @@ def residual_acf(lags: np.ndarray, acf: np.ndarray, n: int, title: str = "") -> 
     ax.grid(alpha=0.3)
     if title:
         ax.set_title(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def _variant_style(name: str) -> dict[str, object]:
+    """Colour of the model a variant derives from; dashed for band-matched values."""
+    base = name.removesuffix("-band").replace("second-order-paper", "second-order")
+    style: dict[str, object] = {"color": COLORS.get(base)}
+    if name.endswith("-band"):
+        style["ls"] = "--"
+    elif name.startswith("second-order-paper"):
+        style["ls"] = ":"
+    return style
+
+
+def paper_figs_5_6(
+    fc: FrequencyComparison, limit_F: float = 1.0, inputs: Sequence[str] = ("Ts", "Tsd")
+) -> Figure:
+    """The paper's Figs. 5 and 6 together: gains (top) and eq.-7 errors in F (bottom).
+
+    Band-matched variants (names ending ``-band``) are dashed in their model's colour; the
+    paper's bound for the 2nd-order model (``limit_F``) is a grey line.
+    """
+    fig = Figure(figsize=(8.5, 6.0))
+    axes = fig.subplots(2, len(inputs), squeeze=False)
+    for j, i in enumerate(inputs):
+        top, bottom = axes[0, j], axes[1, j]
+        for name, g in fc.gains.items():
+            top.semilogx(fc.freq_hz, g[i], label=LABELS.get(name, name), **_variant_style(name))  # type: ignore[arg-type]
+        for name, e in fc.errors.items():
+            bottom.semilogx(fc.freq_hz, e[i] * F_PER_K, label=LABELS.get(name, name), **_variant_style(name))  # type: ignore[arg-type]
+        bottom.axhline(limit_F, color="grey", lw=0.8)
+        top.set_title(f"|H_{i}| at m = {fc.m:g} kg/s", fontsize=10)
+        bottom.set_title(f"e_{i}, du = {fc.du[i] * F_PER_K:.0f} F", fontsize=10)
+        bottom.set_xlabel("frequency (Hz)")
+        for ax in (top, bottom):
+            ax.grid(alpha=0.3, which="both")
+    axes[0, 0].set_ylabel("gain (K/K)")
+    axes[1, 0].set_ylabel("error (F)")
+    axes[0, 0].legend(fontsize=7)
+    axes[1, 0].legend(fontsize=7)
     fig.tight_layout()
     return fig
