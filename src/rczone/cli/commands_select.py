@@ -10,6 +10,8 @@ import typer
 from rczone.cli.common import (
     EXIT_UNTRUSTED,
     MODEL_HELP,
+    ColumnMapOption,
+    ConstantsOption,
     constants,
     data_label,
     esc,
@@ -96,17 +98,19 @@ def select(
         str, typer.Option(help="Without --forward: choose the smallest bic (default) or aic.")
     ] = "bic",
     alpha: Annotated[float, typer.Option(help="Level of the likelihood-ratio tests.")] = 0.05,
+    noise: Annotated[
+        str,
+        typer.Option(
+            help="Process noise estimated on every state (all, default, as Bacher & Madsen) or on the"
+            " measured states only (measured, as rczone fit)."
+        ),
+    ] = "all",
     starts: Annotated[
         str, typer.Option(help="Local searches per fit: auto (global search, default), 1 or N.")
     ] = "auto",
     seed: Annotated[int, typer.Option(help="Seed of the global searches.")] = 0,
-    column_map: Annotated[
-        Path | None, typer.Option("--columns", help="TOML column map for trend logs.")
-    ] = None,
-    const: Annotated[
-        list[str] | None,
-        typer.Option("--const", help="Hold an input constant, NAME=VALUE in SI units (repeatable)."),
-    ] = None,
+    column_map: ColumnMapOption = None,
+    const: ConstantsOption = None,
     json_out: Annotated[
         Path | None,
         typer.Option("--json", help="Write the table, tests and selection as JSON ('-': stdout)."),
@@ -153,7 +157,7 @@ def select(
         raise ParameterError("give at least two candidate models (--model A --model B ...)")
 
     def progress(name: str) -> None:
-        console.log(f"fitting {esc(name)} (ML)")
+        console.print(f"fitting {esc(name)} (ML)")
 
     with console.status(f"selecting among {len(zms)} models on {esc(label)}"):
         sel = select_models(
@@ -166,6 +170,7 @@ def select(
             n_starts=n_starts,
             seed=seed,
             progress=progress,
+            noise=noise.strip().lower(),
         )
     how = f"forward selection, alpha = {alpha:g}" if forward else criterion.upper()
     out.print(_table(sel, f"Candidates fitted to {esc(label)} by ML ({sel.samples['n']} samples)"))

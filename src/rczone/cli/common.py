@@ -9,7 +9,9 @@ import json
 import sys
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -25,6 +27,13 @@ EXIT_UNTRUSTED = 3
 EXIT_ZONES_FAILED = 4
 EXIT_INFRASTRUCTURE = 5
 EXIT_INTERRUPTED = 130
+
+#: Options several commands share (declare a command's parameter with these types).
+ColumnMapOption = Annotated[Path | None, typer.Option("--columns", help="TOML column map for trend logs.")]
+ConstantsOption = Annotated[
+    list[str] | None,
+    typer.Option("--const", help="Hold an input constant, NAME=VALUE in SI units (repeatable), e.g. Q=50."),
+]
 
 MODEL_HELP = (
     "Model: a built-in name (`rczone models` lists them, e.g. second-order-paper, TiTe+heater+solar),"

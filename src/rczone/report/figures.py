@@ -163,7 +163,7 @@ _PERIODS_H = (1 / 12, 1 / 6, 1 / 3, 0.5, 1.0, 2.0, 3.0, 6.0, 12.0, 24.0, 48.0, 1
 
 
 def _period_label(p: float) -> str:
-    return f"{p * 60:.0f} min" if p < 1 else f"{p / 24:.0f} d" if p >= 48 else f"{p:.0f} h"
+    return f"{p * 60:.0f} min" if p < 1 else f"{p / 24:.0f} d" if p >= 24 else f"{p:.0f} h"
 
 
 def period_axis(ax, per_hour: bool = True) -> None:

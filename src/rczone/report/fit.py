@@ -94,12 +94,7 @@ def add_residuals(rep: Report, cal: Calibration) -> None:
             " with past inputs."
         )
         for j, o in enumerate(inn.outputs):
-            rep.figure(
-                f"innovations_{o.output}" if j else "innovations",
-                figs.residual_panels(inn, j),
-                f"Innovations of {o.output}: series, autocorrelation (lags in hours), cumulative"
-                " periodogram (top axis: period) and cross-correlation with each input, 95 % bands",
-            )
+            _residual_figure(rep, inn, j, "innovations", "Innovations")
             rep.paragraph(_verdict(inn, j), None if o.white else "warn")
         if olr is not None:
             rep.paragraph(
@@ -118,16 +113,21 @@ def add_residuals(rep: Report, cal: Calibration) -> None:
             "note",
         )
         for j, o in enumerate(olr.outputs):
-            rep.figure(
-                f"open_loop_residuals_{o.output}" if j else "open_loop_residuals",
-                figs.residual_panels(olr, j),
-                f"Open-loop error of {o.output}: series, autocorrelation (lags in hours), cumulative"
-                " periodogram and cross-correlation with each input",
-            )
+            _residual_figure(rep, olr, j, "open_loop_residuals", "Open-loop error")
             rep.paragraph(
                 f"Ljung-Box p = {o.p_value:.3g} over {o.lb_lags} lags; autocorrelation at the first lag"
                 f" {o.acf[1]:.2f}."
             )
+
+
+def _residual_figure(rep: Report, an, j: int, name: str, what: str) -> None:
+    o = an.outputs[j].output
+    rep.figure(
+        f"{name}_{o}" if j else name,
+        figs.residual_panels(an, j),
+        f"{what} of {o}: series, autocorrelation (lags in hours), cumulative periodogram (top axis:"
+        " period) and cross-correlation with each input, 95 % bands",
+    )
 
 
 def _verdict(an, j: int) -> str:

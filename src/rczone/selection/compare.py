@@ -5,7 +5,10 @@ Every candidate is fitted by maximum likelihood (the Kalman filter of its stocha
 stretch where every input of every candidate is known. For each fit:
 
 * ``log L`` at the estimate, ``k`` free parameters (noise levels included), ``n`` observed
-  outputs;
+  outputs. By default the process noise of *every* state is estimated (``noise="all"``), as in
+  Bacher & Madsen's stochastic models: a state whose diffusion is held at a guess cannot absorb
+  what the model misses there, which shows in the innovations and the likelihood
+  (``noise="measured"``: only the measured states', the default of ``rczone fit``);
 * ``AIC = 2 k - 2 log L`` and ``BIC = k log n - 2 log L`` [2]_ [3]_;
 * the whiteness of its standardized innovations (:mod:`rczone.estimation.innovations`);
 * for every pair where one model is nested in the other (detected by
@@ -58,6 +61,8 @@ from rczone.selection.nesting import Nesting, nesting, realize
 
 #: Ways of choosing among the candidates.
 RULES = ("bic", "aic")
+#: Which process-noise levels are estimated: of every state, or of the measured states only.
+NOISE = ("all", "measured")
 #: A richer model's log-likelihood may fall this far below a nested simpler one's before its fit is retried.
 LOGLIK_TOLERANCE = 1e-3
 
@@ -299,6 +304,14 @@ def common_stretch(models: Sequence[ZoneModel], frame: pd.DataFrame, constants) 
     return frame.iloc[sl].reset_index(drop=True)
 
 
+def candidate_free(network, noise: str = "all") -> tuple[str, ...]:
+    """The free parameters of a candidate: the ML default, with every state's process noise for ``"all"``."""
+    free = list(default_free(network, "ml"))
+    if noise == "all":
+        free += [f"sigma_w_{s}" for s in network.state_names if f"sigma_w_{s}" not in free]
+    return tuple(free)
+
+
 def family_candidates(columns: Sequence[str]) -> list[str]:
     """The Bacher & Madsen family with the options the data can drive (``Ph``, ``Ps``, ``Q``, ``m`` and ``Ts``)."""
     from rczone.models.library import FAMILY
@@ -319,6 +332,7 @@ def select_models(
     n_starts: int | None = None,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    noise: str = "all",
 ) -> Selection:
     """Fit the candidate ``models`` to ``frame`` by ML and choose one (see the module notes).
 
@@ -340,11 +354,15 @@ def select_models(
         As for :func:`rczone.calibrate.calibrate`.
     progress : callable, optional
         Called with the name of each model before it is fitted.
+    noise : {"all", "measured"}
+        Estimate the process noise of every state (default), or of the measured states only.
     """
     if rule not in RULES:
         raise ParameterError(f"rule must be one of {RULES}, got {rule!r}")
     if not 0 < alpha < 1:
         raise ParameterError(f"alpha must be in (0, 1), got {alpha!r}")
+    if noise not in NOISE:
+        raise ParameterError(f"noise must be one of {NOISE}, got {noise!r}")
     zms = [as_model(m) for m in models]
     if len(zms) < 2:
         raise ParameterError("model selection needs at least two candidate models")
@@ -354,7 +372,7 @@ def select_models(
         raise ParameterError(f"candidate {dup[0]!r} is given twice")
     by_name = dict(zip(names, zms))
     frame = common_stretch(zms, frame_from(frame), constants)
-    free = {n: default_free(zm.network, "ml") for n, zm in by_name.items()}
+    free = {n: candidate_free(zm.network, noise) for n, zm in by_name.items()}
     nests: dict[tuple[str, str], Nesting] = {}
     for a in names:
         for b in names:
