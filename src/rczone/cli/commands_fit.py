@@ -44,8 +44,9 @@ def _parameter_table(r, title: str):
     from rich.table import Table
 
     table = Table(title=title)
-    for c in ("parameter", "estimate", "unit", "std. error", "construction", "ratio", "flag"):
-        table.add_column(c)
+    table.add_column("parameter", no_wrap=True)
+    for c in ("estimate", "unit", "std. error", "construction", "ratio", "flag"):
+        table.add_column(c, overflow="fold")
     search = r.search
     for n in r.names:
         c = r.construction[n]
@@ -56,7 +57,7 @@ def _parameter_table(r, title: str):
             flags.append("[red]at bound[/]")
         elif r.at_bound[n]:
             flags.append("[dim]at floor[/]")
-        if not math.isfinite(se):
+        if not math.isfinite(se) and not r.at_bound[n]:
             flags.append("[red]no std. error[/]")
         if search is not None and search.n_best >= 2 and n in search.spread:
             lo, hi = search.spread[n]

@@ -50,7 +50,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtrc
 
 from rczone.errors import ParameterError
 from rczone.estimation.costs import run_filter
@@ -402,7 +402,7 @@ def analyse_residuals(
                 n,
                 r,
                 q,
-                float(chi2.sf(q, lb)),
+                float(chdtrc(lb, q)),
                 lb,
                 cumulative_periodogram(z[:, j]),
                 corr,

@@ -9,8 +9,9 @@ converged. The search here is a two-phase stochastic method [1]_:
    noise levels).
 2. **Local phase.** Local searches start from the model's own start values and from the best
    sampled points that are not near a better one already used (single linkage in the unit box).
-   They run until the best optimum has been reached from two starts (at least two runs, at most
-   ``max_local``), or, with a fixed number of starts, that many runs.
+   They run until the best optimum has been reached from two starts and no sampled point left
+   unused has a lower cost than it (at least two runs, at most ``max_local``), or, with a fixed
+   number of starts, that many runs.
 3. **Merge and confirm.** End points whose costs agree within a tolerance are one optimum; the
    distinct optima, how many starts reached each, and the spread of the estimates among the starts
    that reached the best one are reported. The result is *converged* only when the best optimum
@@ -33,7 +34,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import qmc
 
 from rczone.errors import ParameterError
 from rczone.estimation.optimize import StartOutcome, minimize_from
@@ -147,9 +147,19 @@ def cost_tolerance(method: str, cost: float, scale: float = 0.0) -> float:
     return ABS_TOL.get(method, 0.0) + REL_TOL.get(method, 1e-9) * abs(cost) + SCALE_TOL * abs(scale)
 
 
+def latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` points of a Latin hypercube in the unit cube ``[0, 1)^d`` [2]_.
+
+    Each coordinate takes one value in each of the ``n`` equal strata, at a uniform position
+    inside it, in an independent random order.
+    """
+    strata = np.argsort(rng.random((d, n)), axis=1).T  # a random permutation of 0..n-1 per column
+    return (strata + rng.random((n, d))) / n
+
+
 def sample_points(spec: ParameterSpec, n: int, rng: np.random.Generator) -> np.ndarray:
     """``n`` points (theta) of a Latin hypercube over the whole box of bounds, in eta, strictly inside."""
-    unit = qmc.LatinHypercube(d=spec.n_free, rng=rng).random(n)
+    unit = latin_hypercube(n, spec.n_free, rng)
     unit = 1e-6 + (1 - 2e-6) * unit
     lo, hi = spec.eta_lower, spec.eta_upper
     return spec.to_theta(lo + unit * (hi - lo))
@@ -227,6 +237,7 @@ def global_search(
     n_sampled = 0
     if n_starts == 1:
         starts = [spec.start]
+        start_costs = [math.nan]
         adaptive, max_local = False, 1
     else:
         n_sample = n_sample or int(min(256, max(32, 16 * d)))
@@ -236,6 +247,7 @@ def global_search(
         adaptive = n_starts is None
         max_local = n_starts if n_starts is not None else 4 + d // 2
         starts = [spec.start]
+        start_costs = [math.nan]
         chosen = [_unit(spec, spec.start)]
         for i in np.argsort(np.where(np.isfinite(vals), vals, np.inf)):
             if len(starts) >= max_local or not math.isfinite(vals[i]):
@@ -243,7 +255,9 @@ def global_search(
             u = _unit(spec, pts[i])
             if all(np.max(np.abs(u - c)) > LINK_RADIUS for c in chosen):
                 starts.append(pts[i])
+                start_costs.append(float(vals[i]))
                 chosen.append(u)
+    lower_left = False
     for k, s in enumerate(starts):
         try:
             outcomes.append(minimize_from(cost, spec, s, optimizer, max_evals))
@@ -254,7 +268,11 @@ def global_search(
             raise
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, method, scale)
-            if optima and optima[0].count >= 2:
+            # stop once the best optimum was reached twice, unless a sampled point not yet used as a
+            # start lies below it: that point is in a better basin than any found so far
+            pending = start_costs[k + 1 :]
+            lower_left = bool(optima and any(c < optima[0].cost for c in pending))
+            if optima and optima[0].count >= 2 and not lower_left:
                 break
     optima, tol = merge_optima(outcomes, method, scale)
     if not optima:
@@ -287,6 +305,9 @@ def global_search(
     if not winner.converged and converged:
         converged = False
         reason += f", but the winning local search stopped early ({winner.message})"
+    if lower_left and converged:
+        converged = False
+        reason += ", but a sampled point not used as a start has a lower cost (raise the number of starts)"
     ends = np.array([outcomes[i].end for i in best.starts])
     spread = {n: (float(ends[:, j].min()), float(ends[:, j].max())) for j, n in enumerate(spec.names)}
     summary = SearchSummary(

@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtrc
 
 from rczone.errors import InputShapeError, ParameterError
 from rczone.estimation.costs import filter_arrays, run_filter, simulate_output
@@ -174,5 +174,5 @@ def ljung_box(residuals: np.ndarray, n_lags: int = 20, dof: int = 0) -> Residual
         raise ParameterError(f"dof must be in [0, n_lags), got {dof}")
     r_k = acf(r, n_lags)[1:]
     q = ljung_box_q(r_k, n)
-    p = float(chi2.sf(q, n_lags - dof))
+    p = float(chdtrc(n_lags - dof, q))  # chi2 survival function
     return ResidualTest(np.arange(1, n_lags + 1), r_k, q, p, p > 0.05)

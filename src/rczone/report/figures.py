@@ -14,6 +14,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from rczone.comparison import FrequencyComparison, TimeComparison
+from rczone.models.reduction import F_PER_K
 
 if TYPE_CHECKING:  # pragma: no cover
     from rczone.estimation.innovations import ResidualAnalysis
@@ -158,6 +159,48 @@ def residual_acf(
     return fig
 
 
+def _variant_style(name: str) -> dict[str, object]:
+    """Colour of the model a variant derives from; dashed for band-matched values."""
+    base = name.removesuffix("-band").replace("second-order-paper", "second-order")
+    style: dict[str, object] = {"color": COLORS.get(base)}
+    if name.endswith("-band"):
+        style["ls"] = "--"
+    elif name.startswith("second-order-paper"):
+        style["ls"] = ":"
+    return style
+
+
+def paper_figs_5_6(
+    fc: FrequencyComparison, limit_F: float = 1.0, inputs: Sequence[str] = ("Ts", "Tsd")
+) -> Figure:
+    """The paper's Figs. 5 and 6 together: gains (top) and eq.-7 errors in F (bottom).
+
+    Band-matched variants (names ending ``-band``) are dashed in their model's colour; the
+    paper's bound for the 2nd-order model (``limit_F``) is a grey line.
+    """
+    fig = Figure(figsize=(8.5, 6.0))
+    axes = fig.subplots(2, len(inputs), squeeze=False)
+    for j, i in enumerate(inputs):
+        top, bottom = axes[0, j], axes[1, j]
+        for name, g in fc.gains.items():
+            top.semilogx(fc.freq_hz, g[i], label=LABELS.get(name, name), **_variant_style(name))  # type: ignore[arg-type]
+        for name, e in fc.errors.items():
+            bottom.semilogx(fc.freq_hz, e[i] * F_PER_K, label=LABELS.get(name, name), **_variant_style(name))  # type: ignore[arg-type]
+        bottom.axhline(limit_F, color="grey", lw=0.8)
+        period_axis(top, per_hour=False)
+        top.set_title(f"|H_{i}| at m = {fc.m:g} kg/s", fontsize=10)
+        bottom.set_title(f"e_{i}, du = {fc.du[i] * F_PER_K:.0f} F", fontsize=10)
+        bottom.set_xlabel("frequency (Hz)")
+        for ax in (top, bottom):
+            ax.grid(alpha=0.3, which="both")
+    axes[0, 0].set_ylabel("gain (K/K)")
+    axes[1, 0].set_ylabel("error (F)")
+    axes[0, 0].legend(fontsize=7)
+    axes[1, 0].legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
 #: Periods (h) labelled on the period axes.
 _PERIODS_H = (1 / 12, 1 / 6, 1 / 3, 0.5, 1.0, 2.0, 3.0, 6.0, 12.0, 24.0, 48.0, 168.0, 720.0)
 
@@ -293,14 +336,14 @@ def profile_curves(profiles: dict[str, dict], estimates: dict[str, float], units
     :class:`rczone.diagnostics.postfit.ProfileCheck`); the dashed line is the 95 % threshold
     ``chi2(1, 0.95) / 2``, the shaded span the profile interval.
     """
-    from scipy.stats import chi2
+    from rczone.diagnostics.postfit import PROFILE_THRESHOLD
 
     names = list(profiles)
     cols = min(3, max(1, len(names)))
     rows = -(-len(names) // cols)
     fig = Figure(figsize=(3.1 * cols, 2.6 * rows))
     axes = fig.subplots(rows, cols, squeeze=False).ravel()
-    thr = 0.5 * float(chi2.ppf(0.95, 1))
+    thr = PROFILE_THRESHOLD
     for ax, name in zip(axes, names):
         p = profiles[name]
         x, rise = np.asarray(p["values"], float), np.asarray(p["rise"], float)
@@ -318,5 +361,3 @@ def profile_curves(profiles: dict[str, dict], estimates: dict[str, float], units
         ax.grid(alpha=0.3, which="both")
     for ax in axes[len(names) :]:
         ax.set_visible(False)
-    fig.tight_layout()
-    return fig

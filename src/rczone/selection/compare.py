@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy.stats import chi2
+from scipy.special import chdtrc
 
 from rczone.calibrate import Calibration, ModelLike, as_model, calibrate, complete_stretch, frame_from
 from rczone.errors import DataError, ParameterError
@@ -180,7 +180,7 @@ def chi_bar_sf(statistic: float, df: int, n_boundary: int) -> float:
     total = 0.0
     for i in range(s + 1):
         k = df - s + i
-        tail = float(chi2.sf(x, k)) if k > 0 else float(x <= 0.0)
+        tail = float(chdtrc(k, x)) if k > 0 else float(x <= 0.0)
         total += math.comb(s, i) / 2.0**s * tail
     return total
 
@@ -194,7 +194,7 @@ def likelihood_ratio_test(simple: Candidate, rich: Candidate, nest: Nesting) -> 
         nest,
         stat,
         nest.df,
-        float(chi2.sf(max(stat, 0.0), nest.df)),
+        float(chdtrc(nest.df, max(stat, 0.0))),
         chi_bar_sf(stat, nest.df, nest.n_boundary),
     )
 
