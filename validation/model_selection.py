@@ -5,10 +5,10 @@ Usage::
     python validation/model_selection.py [--shared ../shared] [--out validation-output]
 
 Reads ``data/bacher_madsen_prbs/inputPRBS1.csv`` from the shared folder (its licence does not
-allow shipping it; nothing is copied into the project), converts it to rczone's columns (hours to
-s, kW to W, ``Ta`` is the outdoor temperature ``To``) in a temporary file, and runs
+allow shipping it; nothing is copied into the project) through the column map
+``validation/maps/bacher_madsen.toml`` (``Ta`` is the outdoor temperature ``To``, kW to W) and runs
 
-    rczone select DATA --forward --json ... --report ...
+    rczone select DATA --columns validation/maps/bacher_madsen.toml --forward --json ... --report ...
 
 on it: the Bacher & Madsen family with a heater and solar gains, grown from ``Ti`` by
 likelihood-ratio tests. Prints 'skipped: data not found' and exits 0 when the data are absent.
@@ -21,30 +21,14 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import tempfile
 from pathlib import Path
-
-import pandas as pd
 
 from rczone.cli.main import main as rczone
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_SHARED = HERE.parent.parent / "shared"
 DATA = Path("data") / "bacher_madsen_prbs" / "inputPRBS1.csv"
-
-
-def frame(shared: Path) -> pd.DataFrame:
-    """The PRBS experiment in rczone's columns and SI units."""
-    raw = pd.read_csv(shared / DATA)
-    return pd.DataFrame(
-        {
-            "time": raw["t"] * 3600.0,
-            "Ti": raw["yTi"],
-            "To": raw["Ta"],
-            "Ph": raw["Ph"] * 1e3,
-            "Ps": raw["Ps"] * 1e3,
-        }
-    )
+COLUMN_MAP = HERE / "maps" / "bacher_madsen.toml"
 
 
 def markdown(res: dict) -> str:
@@ -82,20 +66,19 @@ def main(argv: list[str] | None = None) -> int:
         print(f"skipped: data not found under {args.shared / DATA.parent}")
         return 0
     out_json = args.out / "model_selection.json"
-    with tempfile.TemporaryDirectory() as tmp:
-        csv = Path(tmp) / "bacher_madsen_prbs.csv"
-        frame(args.shared).to_csv(csv, index=False)
-        rc = rczone(
-            [
-                "select",
-                str(csv),
-                "--forward",
-                "--json",
-                str(out_json),
-                "--report",
-                str(args.out / "model_selection"),
-            ]
-        )
+    rc = rczone(
+        [
+            "select",
+            str(args.shared / DATA),
+            "--columns",
+            str(COLUMN_MAP),
+            "--forward",
+            "--json",
+            str(out_json),
+            "--report",
+            str(args.out / "model_selection"),
+        ]
+    )
     if rc not in (0, 3):
         return rc
     print(markdown(json.loads(out_json.read_text())))

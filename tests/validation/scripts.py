@@ -1,10 +1,9 @@
-"""Loading the validation scripts (they live outside the package) and where the shared data are."""
+"""Loading the validation scripts (they live outside the package)."""
 
 import importlib.util
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = ROOT.parent / "shared"
 
 
 def load_script(name: str):

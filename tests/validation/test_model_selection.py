@@ -4,7 +4,8 @@ import json
 
 import pytest
 
-from .scripts import SHARED
+from tests.shared_data import SHARED
+
 from .scripts import load_script as load
 
 

@@ -130,9 +130,8 @@ def select(
     (detected from the networks); and the selected model. Exit code 0; 3 when the selected
     model's fit is flagged; 2 for a mistake in the input.
     """
-    from rich.console import Console
-
     from rczone.cli.commands_fit import _save, _starts
+    from rczone.cli.console import console as make_console
     from rczone.errors import ParameterError
     from rczone.selection.compare import family_candidates, select_models
 
@@ -140,7 +139,7 @@ def select(
     criterion = criterion.strip().lower()
     if criterion not in ("bic", "aic"):
         raise ParameterError(f"--criterion must be bic or aic, got {criterion!r}")
-    console = Console(stderr=True)
+    console = make_console(stderr=True)
     out = out_console(json_out)
     label = data_label(data)
     if models:

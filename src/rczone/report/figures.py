@@ -361,3 +361,5 @@ def profile_curves(profiles: dict[str, dict], estimates: dict[str, float], units
         ax.grid(alpha=0.3, which="both")
     for ax in axes[len(names) :]:
         ax.set_visible(False)
+    fig.tight_layout()
+    return fig
