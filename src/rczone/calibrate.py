@@ -19,7 +19,12 @@ import pandas as pd
 from rczone.errors import DataError
 from rczone.estimation import Dataset, FitResult, fit
 from rczone.estimation.fit import default_free
-from rczone.estimation.innovations import ResidualAnalysis, innovation_analysis, open_loop_analysis
+from rczone.estimation.innovations import (
+    ResidualAnalysis,
+    innovation_analysis,
+    ljung_box_lags,
+    open_loop_analysis,
+)
 from rczone.estimation.validation import (
     OpenLoopError,
     ResidualTest,
@@ -236,16 +241,16 @@ def calibrate(
         **dict(provenance or {}),
     )
     ol = open_loop_error(net, {**theta, **initial}, data)
-    n_lags = max(1, min(20, data.n_samples // 5))
+    n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = None
-    if data.n_samples >= MIN_ANALYSIS_SAMPLES:
+    if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
         olr = open_loop_analysis(ol.error, data)
         if method != "ls":
             inn = innovation_analysis(net, values, data, res.hold)
     return Calibration(res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr)
 
 
-#: Fewest samples the residual analysis is made on (fewer: the statistics mean nothing).
+#: Fewest measured samples (of every output) the residual analysis is made on (fewer: the statistics mean nothing).
 MIN_ANALYSIS_SAMPLES = 10
 
 

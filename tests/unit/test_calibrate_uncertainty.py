@@ -56,3 +56,10 @@ def test_k_steps_need_noise_levels_and_a_malformed_covariance_is_an_error(zone, 
     bad = ml.model.with_values({}, covariance={"names": ["Ci"], "matrix": [[1.0, 2.0]]})
     with pytest.raises(DataError, match="covariance is malformed"):
         prediction(bad, zone.iloc[400:])
+
+
+def test_no_residual_analysis_on_a_handful_of_measurements(zone):
+    few = zone.iloc[:200].copy()
+    few.loc[few.index[8:], "Ti"] = np.nan  # eight measured samples
+    cal = calibrate(TRUE_MODEL, few, "ml", n_starts=1, uncertainty=False)
+    assert cal.innovations is None and cal.open_loop_residuals is None

@@ -201,8 +201,8 @@ def paper_figs_5_6(
     return fig
 
 
-#: Periods (h) labelled on the period axes.
-_PERIODS_H = (1 / 12, 1 / 6, 1 / 3, 0.5, 1.0, 2.0, 3.0, 6.0, 12.0, 24.0, 48.0, 168.0, 720.0)
+#: Periods (h) labelled on the period axes, the most useful first (they win where labels crowd).
+_PERIODS_H = (1.0, 24.0, 1 / 6, 168.0, 6.0, 1 / 3, 3.0, 12.0, 0.5, 2.0, 48.0, 720.0, 1 / 12)
 
 
 def _period_label(p: float) -> str:
@@ -212,22 +212,21 @@ def _period_label(p: float) -> str:
 def period_axis(ax, per_hour: bool = True) -> None:
     """A top axis labelling the bottom axis' frequencies (cycles per hour, or Hz) by their periods.
 
-    Call it after the bottom axis' limits are final; labels closer than 6 % of the axis are thinned.
+    Call it after the bottom axis' limits are final; labels closer than 10 % of the axis are thinned.
     """
     lo, hi = ax.get_xlim()
     log = ax.get_xscale() == "log"
     scale = 1.0 if per_hour else 1.0 / 3600.0
-    pos, labels, last = [], [], None
+    kept: list[tuple[float, float, str]] = []  # (position along the axis, frequency, label)
     for p in _PERIODS_H:
         f = scale / p
         if not lo <= f <= hi or f <= 0:
             continue
         x = (np.log(f) - np.log(lo)) / (np.log(hi) - np.log(lo)) if log and lo > 0 else (f - lo) / (hi - lo)
-        if last is not None and abs(x - last) < 0.06:
-            continue
-        pos.append(f)
-        labels.append(_period_label(p))
-        last = x
+        if all(abs(x - other) >= 0.1 for other, _, _ in kept):
+            kept.append((x, f, _period_label(p)))
+    kept.sort()
+    pos, labels = [f for _, f, _ in kept], [text for _, _, text in kept]
     top = ax.secondary_xaxis("top")
     top.set_xticks(pos, labels)
     top.minorticks_off()
