@@ -156,34 +156,24 @@ def test_innovations_of_the_true_model_are_standard_normal_and_white():
 
 def test_two_measured_outputs_get_their_own_statistics():
     from rczone.estimation import Dataset
-    from rczone.network import Node, Parameter, RCNetwork, Resistor
+    from rczone.models import family_network
+    from rczone.network import RCNetwork
     from tests.unit.selection.synthetic import simulate_sde
 
-    net = RCNetwork(
-        "two outputs",
-        [Node("Ti", "Ci"), Node("Tw", "Cw")],
-        ["To"],
-        [Resistor("Ti", "Tw", "R1"), Resistor("Tw", "To", "R2")],
-        [
-            Parameter("Ci", "capacitance", 1e6),
-            Parameter("Cw", "capacitance", 5e6),
-            Parameter("R1", "resistance", 0.005),
-            Parameter("R2", "resistance", 0.01),
-        ],
-        outputs=["Ti", "Tw"],
-    )
+    te = family_network("TiTe")  # room and envelope, both measured here
+    net = RCNetwork("two outputs", te.nodes, te.boundaries, te.resistors, te.parameters, outputs=["Ti", "Te"])
     rng = np.random.default_rng(12)
     t = np.arange(1200) * 600.0
     u = (5 + 4 * np.sin(2 * np.pi * t / 86400) + np.cumsum(rng.normal(0, 0.2, t.size)))[:, None]
-    sw = {"Ti": 2e-3, "Tw": 1e-3}
+    sw = {"Ti": 2e-3, "Te": 1e-3}
     _, y = simulate_sde(net, {}, t, u, sw, 0.03, rng, substeps=30)
     data = Dataset(t, u, None, y, net.input_names, (), net.outputs)
-    values = {"sigma_v": 0.03, "sigma_w_Ti": 2e-3, "sigma_w_Tw": 1e-3, "sigma_x0_Ti": 0.1, "sigma_x0_Tw": 0.1}
+    values = {"sigma_v": 0.03, "sigma_w_Ti": 2e-3, "sigma_w_Te": 1e-3, "sigma_x0_Ti": 0.1, "sigma_x0_Te": 0.1}
     an = innovation_analysis(net, values, data)
-    assert [o.output for o in an.outputs] == ["Ti", "Tw"]
+    assert [o.output for o in an.outputs] == ["Ti", "Te"]
     for o in an.outputs:
         z = o.standardized[1:]
         assert z.var() == pytest.approx(1.0, abs=0.12) and o.white
     # a wrong wall: the wall's own innovations show it
-    bad = innovation_analysis(net, {**values, "R2": 0.03}, data)
+    bad = innovation_analysis(net, {**values, "Rea": 0.06}, data)
     assert not bad.outputs[1].white and not bad.white
