@@ -9,7 +9,9 @@ import json
 import sys
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
 
 from rczone.cli.console import escape
 
@@ -30,6 +32,13 @@ EXIT_UNTRUSTED = 3  # a fit finished but is flagged untrustworthy (all outputs w
 EXIT_ZONES_FAILED = 4  # fit-many: some zones failed with their own errors (stored)
 EXIT_INFRASTRUCTURE = 5  # fit-many: some tasks could not run (lost worker...); the next run retries
 EXIT_INTERRUPTED = 130  # Ctrl-C
+
+#: Options several commands share (declare a command's parameter with these types).
+ColumnMapOption = Annotated[Path | None, typer.Option("--columns", help="TOML column map for trend logs.")]
+ConstantsOption = Annotated[
+    list[str] | None,
+    typer.Option("--const", help="Hold an input constant, NAME=VALUE in SI units (repeatable), e.g. Q=50."),
+]
 
 MODEL_HELP = (
     "Model: a built-in name (`rczone models` lists them, e.g. second-order-paper, TiTe+heater+solar),"

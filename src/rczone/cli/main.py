@@ -55,6 +55,7 @@ from rczone.cli import (  # noqa: E402, F401
     commands_diagnose,
     commands_fit,
     commands_models,
+    commands_select,
     commands_validate,
 )
 

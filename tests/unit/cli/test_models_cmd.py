@@ -47,9 +47,18 @@ def test_fit_saves_a_model_that_predict_and_a_second_fit_use(tmp_path, capsys) -
     )
     out = capsys.readouterr().out
     d = json.loads(out[out.index("{") :])
-    assert d["band"] == "the model's noise levels" and 0.5 < d["coverage_2sigma"]["Ti"] <= 1.0
+    assert d["band"] == "the model's noise levels and the estimates' covariance"
+    assert 0.5 < d["coverage_2sigma"]["Ti"] <= 1.0
     df = pd.read_csv(series)
-    assert list(df.columns) == ["time", "Ti_measured", "Ti_predicted", "Ti_lower", "Ti_upper"]
+    assert list(df.columns) == [
+        "time",
+        "Ti_measured",
+        "Ti_predicted",
+        "Ti_lower",
+        "Ti_upper",
+        "Ti_sd_noise",
+        "Ti_sd_parameters",
+    ]
     assert (df["Ti_lower"] < df["Ti_predicted"]).all() and (df["Ti_predicted"] < df["Ti_upper"]).all()
     assert (tmp_path / "rep" / "report.html").exists()
     # the saved model is a valid start of a new fit (its values are the start) and a model file too
