@@ -306,7 +306,11 @@ def make_spec(
         # current parameters (auto_initial_state), not from the construction values
         v = fixed.get(name)
         if v is None:
-            v = FIXED_NOISE_DEFAULTS["sigma_w"] if name.startswith("sigma_w_") else _default_value(network, name, None)
+            v = (
+                FIXED_NOISE_DEFAULTS["sigma_w"]
+                if name.startswith("sigma_w_")
+                else _default_value(network, name, None)
+            )
         if v is not None:
             values[name] = float(v)
     return ParameterSpec(free, kinds, log, st, lo, hi, con, MappingProxyType(values))

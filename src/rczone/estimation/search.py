@@ -321,6 +321,7 @@ def global_search(
                 starts.append(pts[i])
                 start_costs.append(float(vals[i]))
                 chosen.append(u)
+
     def tol_of(c: float) -> float:
         return cost_tolerance(method, c, scale)
 
