@@ -166,6 +166,7 @@ def calibrate(
     provenance: Mapping[str, object] | None = None,
     uncertainty: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
+    noise: str = "measured",
 ) -> Calibration:
     """Fit ``model`` to ``frame`` and check the fitted model open loop.
 
@@ -192,6 +193,9 @@ def calibrate(
         Standard errors from the Hessian.
     bounds : mapping, optional
         Search bounds overriding the declared ones.
+    noise : {"measured", "all"}
+        ML and MAP without ``free``: process noise on the measured states or on every state
+        (:func:`rczone.estimation.fit.default_free` says why the first is the default).
     """
     zm = as_model(model)
     net = zm.network
@@ -204,7 +208,7 @@ def calibrate(
         "start_s": float(data.t[0]),
         "end_s": float(data.t[-1]),
     }
-    free = tuple(free) if free else default_free(net, method)
+    free = tuple(free) if free else default_free(net, method, noise=noise)
     start = {k: v for k, v in {**zm.theta, **zm.noise}.items() if k in free}
     res = fit(
         net,

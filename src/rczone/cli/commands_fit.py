@@ -112,6 +112,13 @@ def fit(
         ),
     ] = "auto",
     seed: Annotated[int, typer.Option(help="Seed of the global search.")] = 0,
+    noise: Annotated[
+        str,
+        typer.Option(
+            help="ML/MAP process noise on the measured states (default: the model's R and C must explain"
+            " the rest) or on all states."
+        ),
+    ] = "measured",
     column_map: Annotated[
         Path | None, typer.Option("--columns", help="TOML column map for trend logs.")
     ] = None,
@@ -175,6 +182,7 @@ def fit(
             seed,
             constants=consts,
             provenance={"data": label, "model": zm.label},
+            noise=noise,
         )
     r = cal.result
     out = out_console(json_out)

@@ -306,10 +306,7 @@ def common_stretch(models: Sequence[ZoneModel], frame: pd.DataFrame, constants) 
 
 def candidate_free(network, noise: str = "all") -> tuple[str, ...]:
     """The free parameters of a candidate: the ML default, with every state's process noise for ``"all"``."""
-    free = list(default_free(network, "ml"))
-    if noise == "all":
-        free += [f"sigma_w_{s}" for s in network.state_names if f"sigma_w_{s}" not in free]
-    return tuple(free)
+    return default_free(network, "ml", noise=noise)
 
 
 def family_candidates(columns: Sequence[str]) -> list[str]:
