@@ -465,7 +465,9 @@ def diagnose(
         offsets = (heat_input,) if isinstance(heat_input, str) else tuple(heat_input or ())
         for h in offsets:
             if h not in net.input_names:
-                raise ParameterError(f"heat_input {h!r} is not an input of the model; " + did_you_mean(h, net.input_names))
+                raise ParameterError(
+                    f"heat_input {h!r} is not an input of the model; " + did_you_mean(h, net.input_names)
+                )
     op = choose_operating_point(
         zm, frame, data, free, sigma_K, model_error_K, offsets, operating_point, constants, seed
     )
@@ -663,13 +665,17 @@ def _verdict(
                 f"its effect on {measured} is almost the same as that of {partner} (correlation"
                 f" {rho:.2f}), so the data fix only a combination of the two"
             )
-            advice.append(f"fix {partner} or {name} at its construction value, or excite the room differently")
+            advice.append(
+                f"fix {partner} or {name} at its construction value, or excite the room differently"
+            )
         if kind == "capacitance" and not reasons:
             reasons.append(f"{measured} did not change fast or far enough to show the thermal inertia")
             advice.append(f"step {words.actuators} and hold each step for at least an hour")
         if not reasons:
             reasons.append(f"the expected relative standard error is {se:.0%}")
-        advice.append("or keep it at its construction value (fixed, or MAP with a prior)")
+        advice.append(
+            ("or " if advice else "") + "keep it at its construction value (fixed, or MAP with a prior)"
+        )
     else:
         reasons.append(
             f"the data determine it to about ±{_percent(se)} (expected relative standard error); even a model"

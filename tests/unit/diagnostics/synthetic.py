@@ -42,7 +42,6 @@ def night(mode: str, seed: int = 0, hours: float = 12.0, theta: dict | None = No
     return pd.DataFrame({"time": t, "Ti": Ti_meas, "To": To, "Tsd": Tsd, "Ts": Ts, "m": m, "Q": Q})
 
 
-
 def family(name: str = "TiTe+heater", outputs: tuple[str, ...] = ("Ti",), theta: dict | None = None):
     """A family model (Bacher & Madsen) as a ZoneModel, with other measured nodes if asked."""
     from rczone.models import ZoneModel, family_model
