@@ -15,6 +15,7 @@ from rczone import datasets
 from rczone.atomic import write_json_atomic
 from rczone.comparison import TimeComparison, compare_frequency, compare_time, input_variation
 from rczone.models import get_model
+from rczone.models.paper import Q_PAPER
 from rczone.report import Report
 from rczone.report import figures as figs
 
@@ -27,8 +28,6 @@ SCENARIOS = {
 #: The paper's yardstick for section III, in K (1 F and 3 F).
 PAPER_SECOND_ORDER_K = 1.0 / 1.8
 PAPER_FIRST_ORDER_K = 3.0 / 1.8
-#: Constant internal gain used in every time-domain simulation (the paper's Q = 50 W).
-Q_PAPER = 50.0
 #: The paper's unknowns (section IV: theta = [Cr, Rw], the initial state taken from the data), plus
 #: the noise levels a likelihood fit needs.
 PAPER_FREE = {

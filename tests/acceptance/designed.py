@@ -124,7 +124,5 @@ if __name__ == "__main__":  # pragma: no cover - documentation helper
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 10
     res = designed()
     print(res.schedule.to_string())
-    print(
-        "design expected se", res.expected_se, "predicted Ti", res.predicted.min(), res.predicted.max()
-    )
+    print("design expected se", res.expected_se, "predicted Ti", res.predicted.min(), res.predicted.max())
     print(markdown([paired(s) for s in range(300, 300 + n)]))
