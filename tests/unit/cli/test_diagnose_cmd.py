@@ -88,8 +88,15 @@ def test_diagnose_says_when_it_fitted_first_and_where(files, capsys):
 
 def test_diagnose_any_model_and_every_output(files, capsys):
     out = files / "two.json"
-    rc = main(["diagnose", str(files / "heated.csv"), "--model", str(files / "two.toml"), "--json", str(out)])
-    assert rc == 0
+    rep = files / "rep_two"
+    args = ["diagnose", str(files / "heated.csv"), "--model", str(files / "two.toml"), "--json", str(out)]
+    assert main([*args, "--report", str(rep)]) == 0
+    html = (rep / "report.html").read_text()
+    assert (
+        "two.toml model" in html
+        and "Operating point: the model" in html
+        and (rep / "data_overview.png").exists()
+    )
     d = _json(out)
     assert d["outputs"] == ["Ti", "Te"] and d["free"] == ["Ci", "Ce", "Rie", "Rea"]
     assert {v["verdict"] for v in d["parameters"].values()} == {"identifiable"}
@@ -169,7 +176,7 @@ def test_diagnose_escapes_user_strings(files, tmp_path, capsys):
         (["{d}/forced.csv", "--const", "Q"], "--const must be NAME=VALUE"),
         (["{d}/forced.csv", "--sigma", "0"], "must be > 0"),
         (["{d}/forced.csv", "--model", "TiTe+heatr"], "did you mean 'heater'"),
-        (["{d}/heated.csv"], "needs input 'Ts'"),
+        (["{d}/heated.csv"], "missing column(s) 'Ts', 'm' that the model needs"),
         (["{d}/nothing.csv"], "does not exist"),
     ],
 )
@@ -184,7 +191,7 @@ AIR = ["--actuate", "Ts=12,35", "--actuate", "m=0.02,0.12", "--condition", "To=1
 
 def test_design_writes_a_playable_schedule(tmp_path, capsys):
     sched, js = tmp_path / "schedule.csv", tmp_path / "design.json"
-    assert main(["design", *AIR, "--hours", "6", "--out", str(sched), "--json", str(js)]) == 0
+    assert main(["design", *AIR, "--hours", "4", "--out", str(sched), "--json", str(js)]) == 0
     s = pd.read_csv(sched)
     assert list(s.columns) == ["time_s", "day", "clock", "Ts_setpoint_degC", "m_setpoint_kg_s"] and len(s) > 1
     assert s["clock"].iloc[0] == "18:00"  # default start: 6 pm
@@ -199,7 +206,8 @@ def test_design_writes_a_playable_schedule(tmp_path, capsys):
 
 def test_design_in_degf_and_cfm_is_the_si_design_converted(tmp_path, capsys):
     si, us = tmp_path / "si.csv", tmp_path / "us.csv"
-    assert main(["design", *AIR, "--hours", "6", "--out", str(si)]) == 0
+    short = ["--hours", "3", "--min-hold", "60"]
+    assert main(["design", *AIR, *short, "--out", str(si)]) == 0
     flows = f"m={0.02 * CFM_PER_KG_S!r},{0.12 * CFM_PER_KG_S!r}"
     args = [
         "--actuate",
@@ -211,9 +219,7 @@ def test_design_in_degf_and_cfm_is_the_si_design_converted(tmp_path, capsys):
         "--condition",
         "Tsd=71.6",
     ]
-    rc = main(
-        ["design", *args, "--units", "degF,cfm", "--band", "62.6,82.4", "--hours", "6", "--out", str(us)]
-    )
+    rc = main(["design", *args, "--units", "degF,cfm", "--band", "62.6,82.4", *short, "--out", str(us)])
     assert rc == 0
     a, b = pd.read_csv(si), pd.read_csv(us)
     assert list(b.columns) == ["time_s", "day", "clock", "Ts_setpoint_degF", "m_setpoint_cfm"]
@@ -230,7 +236,7 @@ def test_design_takes_units_time_zone_and_night_from_a_column_map(tmp_path, caps
         'To = { column = "OA-T", unit = "degF" }\nm = { column = "SA-F", unit = "L/s" }\n'
         'Tsd = { column = "AVG-T", unit = "degF" }\n'
     )
-    base = ["design", "--columns", str(tmp_path / "map.toml"), "--hours", "4", "--condition", "To=60"]
+    base = ["design", "--columns", str(tmp_path / "map.toml"), "--hours", "2", "--condition", "To=60"]
     base += ["--condition", "Tsd=72", "--actuate", "Ts=55,95", "--actuate", "m=20,100", "--band", "63,82"]
     out = tmp_path / "a.csv"
     assert main([*base, "--out", str(out)]) == 0
@@ -245,7 +251,7 @@ def test_design_takes_units_time_zone_and_night_from_a_column_map(tmp_path, caps
 def test_design_for_a_heater_schedules_its_power(tmp_path, capsys):
     out, js = tmp_path / "heat.csv", tmp_path / "heat.json"
     args = ["design", "--model", "TiTe+heater", "--actuate", "Ph=0,2", "--units", "kW", "--condition", "To=5"]
-    args += ["--band", "15,30", "--hours", "24", "--min-hold", "60", "--out", str(out), "--json", str(js)]
+    args += ["--band", "15,30", "--hours", "24", "--min-hold", "120", "--out", str(out), "--json", str(js)]
     assert main(args) == 0
     s = pd.read_csv(out)
     assert list(s.columns) == ["time_s", "day", "clock", "Ph_setpoint_kW"]
