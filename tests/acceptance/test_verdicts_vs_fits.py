@@ -75,13 +75,14 @@ def test_forced_scatter_is_explained_by_the_model_error_allowance(fast):
 
     The scatter (std of ln theta over nights) exceeds diagnose's statistical expected standard error
     several-fold -- the errors come from model error that changes with each night's schedule and
-    weather, not from sensor noise -- but stays within diagnose's total predicted uncertainty
-    (statistical plus worst-case model-error bias), within a factor 2 either way.
+    weather, not from sensor noise -- but diagnose's total predicted uncertainty (statistical plus
+    worst-case model-error bias, at the quick fit diagnose runs on these nights) bounds it and is at
+    most 2.5 times too pessimistic (docs/identifiability.md: 0.5-0.6 on the fast and slow nights).
     """
     for name in FREE:
         s = fast["reduced", "autumn forced", name]
         assert s.scatter_ln > 2 * s.se_rms, f"{name}: scatter {s.scatter_ln:.3f} vs se {s.se_rms:.3f}"
-        assert s.u_rms / 2 <= s.scatter_ln <= 2 * s.u_rms, (
+        assert s.u_rms / 2.5 <= s.scatter_ln <= s.u_rms, (
             f"{name}: scatter {s.scatter_ln:.3f} vs u {s.u_rms:.3f}"
         )
 

@@ -579,7 +579,11 @@ class _Words:
 
     @property
     def refitted(self) -> str:
-        return "the initial state" + (" and heat gain" if self.offsets else "") + " are re-fitted"
+        return (
+            "the initial state and heat gain are re-fitted"
+            if self.offsets
+            else "the initial state is re-fitted"
+        )
 
     @property
     def actuators(self) -> str:
