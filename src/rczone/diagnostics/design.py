@@ -44,7 +44,7 @@ import pandas as pd
 
 from rczone.atomic import write_text_atomic
 from rczone.data.units import to_si
-from rczone.diagnostics.fisher import marginal_fisher, nuisance_responses, sample_weight
+from rczone.diagnostics.fisher import check_free, marginal_fisher, nuisance_responses, sample_weight
 from rczone.errors import ParameterError, did_you_mean
 from rczone.estimation.costs import auto_initial_state
 from rczone.models import ZoneModel
@@ -259,15 +259,7 @@ def _check_request(
 ) -> dict[str, float]:
     """Validate the free set, the actuated inputs and the conditions; the full conditions (defaults added)."""
     net = zm.network
-    for n in free:
-        if n not in net.parameters:
-            raise ParameterError(f"unknown free parameter {n!r}; " + did_you_mean(n, net.parameters))
-        if net.parameters[n].is_tied:
-            raise ParameterError(
-                f"parameter {n!r} is tied ({n} = {net.parameters[n].expr}); name its base parameters"
-            )
-        if not zm.theta[n] > 0:
-            raise ParameterError(f"parameter {n!r} is {zm.theta[n]:g}; the design needs positive values")
+    check_free(net, free, zm.theta)
     can = actuatable(net)
     signals = (*net.input_names, *net.flow_names)
     for a, (lo, _) in limits.ranges.items():

@@ -20,12 +20,28 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from rczone.network import BilinearStateSpace
+from rczone.errors import ParameterError, did_you_mean
+from rczone.network import BilinearStateSpace, RCNetwork
 from rczone.simulation import simulate
+
+
+def check_free(network: RCNetwork, free: Sequence[str], values: Mapping[str, float] | None = None) -> None:
+    """The parameters of an analysis in ``log(theta)``: known, base (not tied), and > 0 at ``values``."""
+    for n in free:
+        if n not in network.parameters:
+            raise ParameterError(f"unknown free parameter {n!r}; " + did_you_mean(n, network.parameters))
+        if network.parameters[n].is_tied:
+            raise ParameterError(
+                f"parameter {n!r} is tied ({n} = {network.parameters[n].expr}); name its base parameters"
+            )
+        if values is not None and not values[n] > 0:
+            raise ParameterError(
+                f"parameter {n!r} is {values[n]:g}; the analysis is in log({n}), so leave it out of free"
+            )
 
 
 def sample_weight(dt: float, sigma_K: float, correlation_time_s: float) -> float:

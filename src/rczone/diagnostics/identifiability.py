@@ -50,6 +50,7 @@ import numpy as np
 import pandas as pd
 
 from rczone.diagnostics.fisher import (
+    check_free,
     marginal_fisher,
     nuisance_responses,
     project_out,
@@ -450,13 +451,7 @@ def diagnose(
     free = list(free)
     if not free:
         raise ParameterError(f"model {zm.label!r} has no free parameter to diagnose; name some with free")
-    for n in free:
-        if n not in net.parameters:
-            raise ParameterError(f"unknown free parameter {n!r}; " + did_you_mean(n, net.parameters))
-        if net.parameters[n].is_tied:
-            raise ParameterError(
-                f"parameter {n!r} is tied ({n} = {net.parameters[n].expr}); diagnose its base parameters"
-            )
+    check_free(net, free)
     frame = frame_from(frame)
     data = dataset(zm, frame, constants)
     if heat_input == "auto":
@@ -471,12 +466,7 @@ def diagnose(
     op = choose_operating_point(
         zm, frame, data, free, sigma_K, model_error_K, offsets, operating_point, constants, seed
     )
-    for n in free:
-        if not op.theta[n] > 0:
-            raise ParameterError(
-                f"parameter {n!r} is {op.theta[n]:g} at the operating point; diagnose analyses log(value),"
-                " so leave it out of free"
-            )
+    check_free(net, free, op.theta)
     theta = op.theta
     vals = net.values(theta)
     declared = net.values()

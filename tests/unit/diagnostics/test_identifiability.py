@@ -237,3 +237,11 @@ def test_a_datetime_index_is_accepted(net):
     )
     a = diagnose(net, frame, free=["Cr", "Rw"]).expected_se
     np.testing.assert_allclose(diagnose(net, stamped, free=["Cr", "Rw"]).expected_se, a)
+
+
+def test_a_parameter_at_zero_is_left_out_by_default_and_refused_by_name():
+    zm = family("TiTe+heater+solar", theta={"Aw": 0.0})
+    frame = heated(family("TiTe+heater"), "prbs", hours=12).assign(Ps=100.0)
+    assert "Aw" not in diagnose(zm, frame, operating_point="model").names
+    with pytest.raises(ParameterError, match=r"'Aw' is 0; the analysis is in log\(Aw\)"):
+        diagnose(zm, frame, free=["Ci", "Aw"], operating_point="model")
