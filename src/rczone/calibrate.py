@@ -19,11 +19,16 @@ import pandas as pd
 from rczone.errors import DataError
 from rczone.estimation import Dataset, FitResult, fit
 from rczone.estimation.fit import default_free
+from rczone.estimation.innovations import (
+    ResidualAnalysis,
+    innovation_analysis,
+    ljung_box_lags,
+    open_loop_analysis,
+)
 from rczone.estimation.validation import (
     OpenLoopError,
     ResidualTest,
     ljung_box,
-    open_loop_band,
     open_loop_error,
 )
 from rczone.models import ZoneModel, load_model
@@ -131,12 +136,18 @@ class Calibration:
         initial state where the fit estimated one).
     residuals : ResidualTest
         Whiteness of the open-loop error (not expected to be white; see the innovations for ML).
+    innovations : ResidualAnalysis or None
+        Whiteness of the one-step innovations (ML and MAP fits; None for LS or too few samples).
+    open_loop_residuals : ResidualAnalysis or None
+        The same statistics on the open-loop error, labelled as such.
     """
 
     result: FitResult
     model: ZoneModel
     open_loop: OpenLoopError
     residuals: ResidualTest
+    innovations: ResidualAnalysis | None = None
+    open_loop_residuals: ResidualAnalysis | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """The parameter table (:meth:`FitResult.to_frame`)."""
@@ -226,11 +237,31 @@ def calibrate(
         trustworthy=res.trustworthy,
         flags=list(res.flags),
         stretch=stretch,
+        covariance=parameter_covariance(res),
         **dict(provenance or {}),
     )
     ol = open_loop_error(net, {**theta, **initial}, data)
-    n_lags = max(1, min(20, data.n_samples // 5))
-    return Calibration(res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags))
+    n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
+    inn = olr = None
+    if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
+        olr = open_loop_analysis(ol.error, data)
+        if method != "ls":
+            inn = innovation_analysis(net, values, data, res.hold)
+    return Calibration(res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr)
+
+
+#: Fewest measured samples (of every output) the residual analysis is made on (fewer: the statistics mean nothing).
+MIN_ANALYSIS_SAMPLES = 10
+
+
+def parameter_covariance(res: FitResult) -> dict[str, object]:
+    """The estimates' covariance in physical units, ``{"names": [...], "matrix": [[...]]}``.
+
+    ``cov_ij = corr_ij se_i se_j`` (the correlation is the same in eta and theta to first order);
+    NaN where a standard error is missing (an estimate held at a bound).
+    """
+    se = np.array([res.std_errors[n] for n in res.names], dtype=float)
+    return {"names": list(res.names), "matrix": (res.correlation * np.outer(se, se)).tolist()}
 
 
 def predict(
@@ -244,16 +275,21 @@ def predict(
 
 @dataclass(frozen=True, eq=False)
 class Prediction:
-    """An open-loop prediction with a band of plus or minus two standard deviations.
+    """An open-loop or k-step-ahead prediction with a band of plus or minus two standard deviations.
 
     Attributes
     ----------
     t : ndarray, shape (N,)
         Time, s (as in the data: UTC epoch seconds for a loaded trend log).
     measured, predicted, sd : ndarray, shape (N, ny)
+        ``sd`` is the total: ``sqrt(sd_noise^2 + sd_parameters^2)``.
     outputs : tuple of str
     band_source : str
         Where the standard deviation comes from, in words.
+    sd_noise, sd_parameters : ndarray, shape (N, ny), optional
+        The parts from the noise (or the fit's RMSE) and from the estimates' covariance (NaN: none).
+    steps : int, optional
+        Steps ahead; None for open loop.
     """
 
     t: np.ndarray
@@ -262,6 +298,14 @@ class Prediction:
     sd: np.ndarray
     outputs: tuple[str, ...]
     band_source: str
+    sd_noise: np.ndarray | None = None
+    sd_parameters: np.ndarray | None = None
+    steps: int | None = None
+
+    @property
+    def horizon(self) -> str:
+        """``"open loop"`` or ``"k steps ahead"``, in words."""
+        return "open loop" if self.steps is None else f"{self.steps} step{'s' * (self.steps != 1)} ahead"
 
     @property
     def error(self) -> np.ndarray:
@@ -297,6 +341,10 @@ class Prediction:
             cols[f"{o}_predicted"] = self.predicted[:, j]
             cols[f"{o}_lower"] = self.predicted[:, j] - 2 * self.sd[:, j]
             cols[f"{o}_upper"] = self.predicted[:, j] + 2 * self.sd[:, j]
+            if self.sd_noise is not None:
+                cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
+            if self.sd_parameters is not None:
+                cols[f"{o}_sd_parameters"] = self.sd_parameters[:, j]
         return pd.DataFrame(cols)
 
     def write(self, path: str | os.PathLike) -> None:
@@ -318,41 +366,116 @@ class Prediction:
 
 
 def prediction(
-    model: ModelLike, frame: pd.DataFrame, constants: Mapping[str, float] | None = None
+    model: ModelLike,
+    frame: pd.DataFrame,
+    constants: Mapping[str, float] | None = None,
+    steps: int | None = None,
+    parameters: bool = True,
 ) -> Prediction:
-    """Open-loop prediction of ``model`` on data with a two-sigma band.
+    """Open-loop (or ``steps``-ahead) prediction of ``model`` on data with a two-sigma band.
 
-    The band comes from the model's noise levels when it has them (a likelihood fit: process
-    noise accumulated along the prediction plus measurement noise,
-    :func:`rczone.estimation.validation.open_loop_band`), else from the open-loop RMSE of the fit
-    that produced the model (constant), else there is none (NaN).
+    The band has two parts (:mod:`rczone.estimation.forecast`):
+
+    * the noise: from the model's noise levels when it has them (a likelihood fit: process noise
+      accumulated along the prediction plus measurement noise), else, open loop, from the
+      open-loop RMSE of the least-squares fit that produced the model (constant), else none;
+    * the estimates: their covariance saved with a fitted model (``provenance["covariance"]``),
+      carried to the prediction by the delta method (``parameters=False`` leaves it out).
+
+    Parameters
+    ----------
+    steps : int, optional
+        Predict ``y[j]`` from the measurements up to ``j - steps`` (Kalman filter; needs the
+        model's noise levels). Default: open loop from the first measurement.
     """
+    from rczone.estimation.forecast import noise_band, parameter_sd
+
     zm = as_model(model)
     data = dataset(zm, frame, constants)
     net = zm.network
-    theta = dict(zm.theta)
-    if any(k.startswith("sigma_") for k in zm.noise):
-        from rczone.estimation.parameters import NOISE_DEFAULTS, noise_parameter_names
-
-        values = {**theta, **zm.noise}
-        for n in noise_parameter_names(net):
-            if n.startswith("sigma_w_") and n not in values:
-                values[n] = 0.0
-            elif n.startswith("sigma_x0_") and n not in values:
-                values[n] = NOISE_DEFAULTS["sigma_x0"]
-            elif n.startswith("sigma_v") and n not in values:
-                values[n] = 0.0
-        y_hat, sd = open_loop_band(net, values, data)
-        source = "the model's noise levels"
+    values = {**zm.theta, **noise_values(zm)}
+    has_noise = any(k.startswith("sigma_") for k in zm.noise)
+    if steps is not None and not has_noise:
+        raise DataError(
+            f"a {steps}-step prediction needs the model's noise levels; fit the model by ML"
+            " (rczone fit --method ml --save-model ...) or predict open loop"
+        )
+    sources = []
+    if has_noise:
+        y_hat, sd = noise_band(net, values, data, steps)
+        sources.append("the model's noise levels")
     else:
-        y_hat = open_loop_error(net, theta, data).y_hat
+        y_hat = open_loop_error(net, dict(zm.theta), data).y_hat
         rmse = zm.provenance.get("rmse_K") if zm.provenance.get("method") == "ls" else None
         if isinstance(rmse, (int, float)) and np.isfinite(rmse):
             sd = np.full_like(y_hat, float(rmse))
-            source = "the open-loop RMSE of the least-squares fit"
+            sources.append("the open-loop RMSE of the least-squares fit")
         else:
             sd = np.full_like(y_hat, np.nan)
-            source = "none: the model has no noise levels (fit it by ML for a band)"
-    if not np.all(np.isfinite(y_hat)):
+    if not np.all(np.isfinite(y_hat[steps or 0 :])):
         raise DataError("the model's prediction is not finite; its values are not usable on these data")
-    return Prediction(data.t, data.y, y_hat, sd, net.outputs, source)
+    sd_par = None
+    cov = saved_covariance(zm) if parameters else None
+    if cov is not None:
+        names, matrix = cov
+        if has_noise:
+
+            def predictor(v: Mapping[str, float]) -> np.ndarray:
+                return noise_band(net, v, data, steps)[0]
+        else:
+
+            def predictor(v: Mapping[str, float]) -> np.ndarray:
+                return open_loop_error(net, v, data).y_hat
+
+        sd_par = parameter_sd(predictor, values, names, matrix)
+        sources.append("the estimates' covariance")
+    total = sd if sd_par is None else np.sqrt(np.where(np.isfinite(sd), sd**2, 0.0) + sd_par**2)
+    source = (
+        " and ".join(sources) if sources else "none: the model has no noise levels (fit it by ML for a band)"
+    )
+    return Prediction(data.t, data.y, y_hat, total, net.outputs, source, sd, sd_par, steps)
+
+
+def noise_values(zm: ZoneModel) -> dict[str, float]:
+    """The model's noise levels completed with the defaults for those it has none of (empty without any)."""
+    if not any(k.startswith("sigma_") for k in zm.noise):
+        return {}
+    from rczone.estimation.parameters import NOISE_DEFAULTS, noise_parameter_names
+
+    values = dict(zm.noise)
+    for n in noise_parameter_names(zm.network):
+        if n.startswith("sigma_w_") and n not in values:
+            values[n] = 0.0
+        elif n.startswith("sigma_x0_") and n not in values:
+            values[n] = NOISE_DEFAULTS["sigma_x0"]
+        elif n.startswith("sigma_v") and n not in values:
+            values[n] = 0.0
+    return values
+
+
+def saved_covariance(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:
+    """The estimates' covariance a fit saved with the model, restricted to what moves a prediction.
+
+    Only the model's base parameters and noise levels are kept (the initial state of the
+    calibration data says nothing about other data). None when the model has none, or none of
+    its entries is usable. A malformed entry (a model file is untrusted) is an error.
+    """
+    cov = zm.provenance.get("covariance")
+    if cov is None:
+        return None
+    try:
+        names = [str(n) for n in cov["names"]]
+        matrix = np.array(
+            [[np.nan if v is None else float(v) for v in row] for row in cov["matrix"]], dtype=float
+        )
+        if matrix.shape != (len(names), len(names)):
+            raise ValueError
+    except (KeyError, TypeError, ValueError):
+        raise DataError(
+            f"model {zm.label!r}: its saved covariance is malformed (expected names and a square matrix)"
+        ) from None
+    known = {*zm.theta, *noise_values(zm)}
+    keep = [i for i, n in enumerate(names) if n in known and np.isfinite(matrix[i, i])]
+    if not keep:
+        return None
+    return [names[i] for i in keep], matrix[np.ix_(keep, keep)]

@@ -27,11 +27,16 @@ class InputShapeError(RczoneError, ValueError):
     """An array passed to a simulation or cost has the wrong shape or content."""
 
 
+class OutputError(RczoneError, OSError):
+    """A result cannot be written where asked (a folder for a file, read-only, disk full...)."""
+
+
 class DataError(RczoneError, ValueError):
-    """Measured data cannot be used as given (missing column, bad unit, bad timestamps...)."""
+    """Data or a file a user handed in cannot be used as given (missing column, bad unit, bad
+    timestamps, a malformed column map or manifest...)."""
 
 
-class ModelFileError(RczoneError, ValueError):
+class ModelFileError(DataError):
     """A model file (TOML written by a person, or JSON saved by rczone) cannot be used as given."""
 
 

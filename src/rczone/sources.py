@@ -9,9 +9,11 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from rczone.errors import DataError
+from rczone.estimation.data import MIN_MEASURED
 
 
 def read_frame(
@@ -26,7 +28,9 @@ def read_frame(
     ``m``, ``Q`` and ``Tsd`` or the five surroundings), or any trend log described by a TOML
     ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``). ``signals``
     (name -> quantity, :meth:`rczone.models.ZoneModel.signal_quantities`) are the model's: without a
-    map, the columns named as them are read in SI units, and the ``required`` ones must exist.
+    map, the columns named as them are read in SI units, and the ``required`` ones must exist. A
+    record with fewer than :data:`~rczone.estimation.data.MIN_MEASURED` measured ``Ti`` samples
+    is an error: it would fit anything.
     """
     from rczone.data import load_zone_data
 
@@ -39,4 +43,13 @@ def read_frame(
         raise DataError(
             f"data file {str(path)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
         )
-    return load_zone_data(path, column_map, signals=signals, required=required).to_frame()
+    frame = load_zone_data(path, column_map, signals=signals, required=required).to_frame()
+    if "Ti" in frame:
+        measured = int(np.isfinite(frame["Ti"].to_numpy(float)).sum())
+        if measured < MIN_MEASURED:
+            raise DataError(
+                f"{path}: only {measured} of {len(frame)} samples have a measured room temperature Ti;"
+                f" at least {MIN_MEASURED} are needed (rczone.estimation.data.MIN_MEASURED): use a longer"
+                " record with fewer gaps"
+            )
+    return frame

@@ -44,8 +44,9 @@ def _parameter_table(r, title: str):
     from rich.table import Table
 
     table = Table(title=title)
-    for c in ("parameter", "estimate", "unit", "std. error", "construction", "ratio", "flag"):
-        table.add_column(c)
+    table.add_column("parameter", no_wrap=True)
+    for c in ("estimate", "unit", "std. error", "construction", "ratio", "flag"):
+        table.add_column(c, overflow="fold")
     search = r.search
     for n in r.names:
         c = r.construction[n]
@@ -56,7 +57,7 @@ def _parameter_table(r, title: str):
             flags.append("[red]at bound[/]")
         elif r.at_bound[n]:
             flags.append("[dim]at floor[/]")
-        if not math.isfinite(se):
+        if not math.isfinite(se) and not r.at_bound[n]:
             flags.append("[red]no std. error[/]")
         if search is not None and search.n_best >= 2 and n in search.spread:
             lo, hi = search.spread[n]
@@ -183,6 +184,8 @@ def fit(
         f"open-loop RMSE {cal.open_loop.rmse_K:.3f} K, max {cal.open_loop.max_abs_K:.3f} K;"
         f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K; {r.n_evals} evaluations"
     )
+    for line in _residual_lines(cal):
+        out.print(line)
     used = cal.model.provenance.get("constants") or {}
     if used:
         out.print("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in used.items()))
@@ -223,6 +226,8 @@ def fit(
             open_loop_rmse_K=cal.open_loop.rmse_K,
             open_loop_max_error_K=cal.open_loop.max_abs_K,
             ljung_box_p=cal.residuals.p_value,
+            innovations=cal.innovations.to_dict() if cal.innovations is not None else None,
+            open_loop_residuals=cal.open_loop_residuals.to_dict() if cal.open_loop_residuals else None,
             constants=used,
             identifiability={
                 k: {"verdict": v.verdict, "reason": v.reason} for k, v in diag.parameters.items()
@@ -247,6 +252,31 @@ def fit(
             " checking the warnings above"
         )
         raise typer.Exit(EXIT_UNTRUSTED)
+
+
+def _residual_lines(cal) -> list[str]:
+    """What the residuals say: the innovations of an ML fit, or the labelled open-loop error of LS."""
+    an = cal.innovations or cal.open_loop_residuals
+    if an is None:
+        return []
+    lines = []
+    for o in an.outputs:
+        lag = f"{an.lags_h[1] * 60:.0f} min" if an.lags_h[1] < 1 else f"{an.lags_h[1]:.2g} h"
+        if an.kind == "innovations":
+            verdict = "[green]white[/]" if o.white else "[red]not white[/]"
+            head = f"innovations of {esc(o.output)} (one-step, standardized): {verdict},"
+        else:
+            head = f"open-loop residuals of {esc(o.output)} (not expected to be white: fit by ML to test):"
+        text = (
+            f"{head} Ljung-Box p = {o.p_value:.2g} over {o.lb_lags} lags, ACF at {lag} {o.acf[1]:.2f},"
+            f" cumulative periodogram {'inside' if o.periodogram.inside_band else 'outside'} its band"
+        )
+        worst = o.worst_input()
+        if worst is not None and an.kind == "innovations":
+            name, value, k = worst
+            text += f"; largest input cross-correlation {esc(name)} {value:.2f} at {k * an.dt_s / 3600:.2g} h"
+        lines.append(text)
+    return lines
 
 
 def _save(zm, path: Path) -> None:
@@ -322,18 +352,35 @@ def predict(
     report_dir: Annotated[
         Path | None, typer.Option("--report", help="Folder for report.html with the prediction plot.")
     ] = None,
+    steps: Annotated[
+        int | None,
+        typer.Option(
+            "--steps",
+            help="Predict each sample this many steps ahead from the Kalman filter (needs a model fitted"
+            " by ML); default open loop.",
+        ),
+    ] = None,
 ) -> None:
-    """Simulate a model open loop on DATA: the error, the series and a band of plus or minus two sigma."""
-    from rczone.calibrate import prediction
+    """Predict DATA with a model, open loop or k steps ahead: the error, the series and a 2-sigma band.
 
+    The band adds the process and measurement noise of a model fitted by ML (or the RMSE of an
+    LS fit) and the uncertainty of the estimates saved with a fitted model.
+    """
+    import numpy as np
+
+    from rczone.calibrate import prediction
+    from rczone.errors import ParameterError
+
+    if steps is not None and steps < 1:
+        raise ParameterError(f"--steps must be a positive integer, got {steps}")
     zm = model(model_file)
     frame = read_frame(data, column_map, zm)
     label = data_label(data)
-    pred = prediction(zm, frame, constants(const))
+    pred = prediction(zm, frame, constants(const), steps=steps)
     console = out_console(json_out)
     for j, o in enumerate(zm.network.outputs):
         console.print(
-            f"{esc(label)}: {esc(o)} open-loop RMSE {pred.rmse_K[j]:.3f} K, max error {pred.max_abs_K[j]:.3f} K;"
+            f"{esc(label)}: {esc(o)} {pred.horizon} RMSE {pred.rmse_K[j]:.3f} K, max error {pred.max_abs_K[j]:.3f} K;"
             f" {pred.coverage[j]:.0%} of the measurements inside the 2-sigma band ({esc(pred.band_source)})"
         )
     if out is not None:
@@ -357,6 +404,13 @@ def predict(
                 if len(pred.max_abs_K) == 1
                 else dict(zip(pred.outputs, map(float, pred.max_abs_K))),
                 "band": pred.band_source,
+                "horizon": pred.horizon,
+                "steps": pred.steps,
                 "coverage_2sigma": dict(zip(pred.outputs, map(float, pred.coverage))),
+                "mean_sd_K": {
+                    part: {o: float(np.nanmean(a[:, j])) for j, o in enumerate(pred.outputs)}
+                    for part, a in (("noise", pred.sd_noise), ("estimates", pred.sd_parameters))
+                    if a is not None and np.isfinite(a).any()
+                },
             },
         )

@@ -32,7 +32,8 @@ def models(ctx: typer.Context) -> None:
     table = Table(
         title="Built-in models (`--model NAME`; any model file .toml or saved model .json works too)"
     )
-    for c in ("name", "states", "inputs", "estimated by default", "what"):
+    table.add_column("name", no_wrap=True)
+    for c in ("states", "inputs", "estimated by default", "what"):
         table.add_column(c, overflow="fold")
     for name, text in builtin_models():
         net = load_model(name).network

@@ -9,7 +9,11 @@ import json
 import sys
 from collections.abc import Iterable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from rczone.cli.console import escape
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -17,14 +21,24 @@ if TYPE_CHECKING:  # pragma: no cover
 
     from rczone.models import ZoneModel
 
-#: Exit codes of every command (documented in the README).
+#: A user's string (file, column or zone name) made safe to print through rich markup.
+esc = escape
+
+#: Exit codes of every command (documented in the README and in :func:`rczone.cli.main.main`).
 EXIT_OK = 0
-EXIT_CHECK_FAILED = 1
-EXIT_USER_ERROR = 2
-EXIT_UNTRUSTED = 3
-EXIT_ZONES_FAILED = 4
-EXIT_INFRASTRUCTURE = 5
-EXIT_INTERRUPTED = 130
+EXIT_CHECK_FAILED = 1  # rczone validate: a reference check failed
+EXIT_USER_ERROR = 2  # a mistake in the input or an unwritable output: one line on stderr
+EXIT_UNTRUSTED = 3  # a fit finished but is flagged untrustworthy (all outputs written)
+EXIT_ZONES_FAILED = 4  # fit-many: some zones failed with their own errors (stored)
+EXIT_INFRASTRUCTURE = 5  # fit-many: some tasks could not run (lost worker...); the next run retries
+EXIT_INTERRUPTED = 130  # Ctrl-C
+
+#: Options several commands share (declare a command's parameter with these types).
+ColumnMapOption = Annotated[Path | None, typer.Option("--columns", help="TOML column map for trend logs.")]
+ConstantsOption = Annotated[
+    list[str] | None,
+    typer.Option("--const", help="Hold an input constant, NAME=VALUE in SI units (repeatable), e.g. Q=50."),
+]
 
 MODEL_HELP = (
     "Model: a built-in name (`rczone models` lists them, e.g. second-order-paper, TiTe+heater+solar),"
@@ -90,13 +104,6 @@ def write_json(json_out: Path | None, payload: Any) -> None:
         sys.stdout.flush()
     else:
         write_json_atomic(json_out, payload)
-
-
-def esc(text: object) -> str:
-    """A user's string (a file or column name) made safe to print through rich markup."""
-    from rich.markup import escape
-
-    return escape(str(text))
 
 
 def data_label(path: Path) -> str:

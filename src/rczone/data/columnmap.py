@@ -17,7 +17,7 @@ the close name), so a typo never silently drops a setting::
 
     [time]
     column = "Timestamp"          # default "time"
-    format = "auto"               # "auto" | "iso" | "seconds"  (seconds = Unix epoch, UTC)
+    format = "auto"               # "auto" | "iso" | "seconds" | "milliseconds" (Unix epoch, UTC)
     timezone = "America/New_York" # IANA zone of naive local stamps and of the night window
                                   # (default "UTC"; a fixed offset is e.g. "Etc/GMT+5" = UTC-5)
     ambiguous = "infer"           # repeated local hour at the end of DST:
@@ -66,7 +66,6 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 import zoneinfo
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -74,6 +73,7 @@ from pathlib import Path
 
 from rczone.data.units import DEFAULT_AIR_DENSITY, SI_UNITS, canonical_unit
 from rczone.errors import DataError, did_you_mean
+from rczone.textfiles import read_toml
 
 KNOWN_CHANNELS = {
     "Ti": ("temperature", "room"),
@@ -96,7 +96,7 @@ _ROLE_OF_QUANTITY = {
 }
 AMBIGUOUS = ("infer", "first", "second", "drop", "raise")
 NONEXISTENT = ("raise", "shift_forward", "drop")
-TIME_FORMATS = ("auto", "iso", "seconds")
+TIME_FORMATS = ("auto", "iso", "seconds", "milliseconds")
 DEFAULT_MAX_GAP = 1800.0
 
 _TOP_KEYS = (
@@ -204,12 +204,7 @@ def read_column_map(path: str | Path, signals: Mapping[str, str] | None = None) 
         For invalid TOML or any invalid setting (the message names the key).
     """
     path = Path(path)
-    with path.open("rb") as fh:
-        try:
-            doc = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise DataError(f"column map {path}: invalid TOML: {exc}") from None
-    return parse_column_map(doc, source=str(path), signals=signals)
+    return parse_column_map(read_toml(path, "column map"), source=str(path), signals=signals)
 
 
 def _check_keys(table: Mapping, allowed: Sequence[str], where: str, source: str) -> None:
@@ -319,9 +314,10 @@ def parse_column_map(
     if "columns" not in doc:
         raise DataError(f"column map {source}: missing the [columns] table naming the channels")
     cols = doc["columns"]
-    _check_keys(cols, list(cols), "[columns]", source)
     surr = doc.get("surroundings", {})
-    _check_keys(surr, list(surr), "[surroundings]", source)
+    for table, where in ((cols, "[columns]"), (surr, "[surroundings]")):
+        if not isinstance(table, Mapping):
+            raise DataError(f"column map {source}: {where} must be a table, got {type(table).__name__}")
     channels = [_channel(n, s, source, "[columns]", False, signals) for n, s in cols.items()]
     if not channels:
         raise DataError(f"column map {source}: [columns] is empty; map at least 'Ti'")
@@ -336,6 +332,15 @@ def parse_column_map(
     if "Tsd" in surr:
         raise DataError(f"column map {source}: 'Tsd' cannot be a surrounding; it is their mean")
     channels += [_channel(n, s, source, "[surroundings]", True) for n, s in surr.items()]
+    by_column: dict[str, str] = {}
+    for ch in channels:
+        if ch.column is not None and ch.column in by_column:
+            raise DataError(
+                f"column map {source}: column {ch.column!r} is mapped to both {by_column[ch.column]!r} and"
+                f" {ch.name!r}; each channel needs its own column"
+            )
+        if ch.column is not None:
+            by_column[ch.column] = ch.name
 
     time = doc.get("time", {})
     long = doc.get("long", {})
@@ -384,8 +389,9 @@ def default_column_map(
     """The map used when none is given (the CLI's default layout).
 
     Without ``signals``: columns ``time`` (seconds or ISO 8601), ``Ti``, ``To``, ``Ts``, ``m``
-    (kg/s), ``Q`` (W), and either ``Tsd`` or the five ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw``,
-    all temperatures in degC. When ``Tsd`` is present it is used as is and any of the five
+    (kg/s), optionally ``Q`` (W; without it commands hold the paper's 50 W constant), and either
+    ``Tsd`` or the five ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw``, all temperatures in degC. When
+    ``Tsd`` is present it is used as is and any of the five
     also present are loaded as plain channels; otherwise Tsd is the mean of the five.
 
     With ``signals`` (channel name -> quantity, the signals of the model the data are for):
@@ -423,7 +429,7 @@ def default_column_map(
                 " columns or give a column map"
             )
         return ColumnMap(channels=tuple(channels), time_column=time, source=source)
-    required = ["time", "Ti", "To", "Ts", "m", "Q"]
+    required = ["time", "Ti", "To", "Ts", "m"]  # Q is optional: 50 W held constant
     if "Tsd" in present:
         required.append("Tsd")
     else:

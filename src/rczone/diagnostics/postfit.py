@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from rczone.errors import ParameterError
 from rczone.estimation import FitResult
@@ -39,7 +39,7 @@ from rczone.models import ZoneModel
 from rczone.network import RCNetwork
 
 #: Rise of the tempered negative log-likelihood that a 95 % profile interval allows.
-PROFILE_THRESHOLD = 0.5 * float(chi2.ppf(0.95, 1))
+PROFILE_THRESHOLD = 0.5 * float(chdtri(1, 0.05))  # chi2(1) 95 % quantile
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize
-from scipy.stats import qmc
 
 from rczone.errors import ParameterError
 from rczone.estimation.costs import Objective
@@ -258,8 +257,9 @@ def latin_hypercube_starts(
     half = np.where(spec.log, math.log(spread), 0.25 * (hi_b - lo_b))
     lo = np.maximum(lo_b, centre - half)
     hi = np.minimum(hi_b, centre + half)
-    sampler = qmc.LatinHypercube(d=spec.n_free, rng=rng)
-    unit = sampler.random(n_starts - 1)
+    from rczone.estimation.search import latin_hypercube
+
+    unit = latin_hypercube(n_starts - 1, spec.n_free, rng)
     # keep starts strictly inside the bounds (the logit transform needs it)
     unit = 1e-6 + (1 - 2e-6) * unit
     out[1:] = spec.to_theta(lo + unit * (hi - lo))

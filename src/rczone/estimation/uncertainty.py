@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from rczone.errors import ParameterError
 from rczone.estimation.parameters import ParameterSpec
@@ -227,7 +227,7 @@ def profile(
         sub_obj = dataclasses.replace(objective, spec=sub)
         out = minimize_from(sub_obj, sub, rest, optimizer)
         costs[k], others[k] = out.cost, out.end
-    thr = costs.min() + 0.5 * chi2.ppf(level, 1)
+    thr = costs.min() + 0.5 * chdtri(1, 1.0 - level)  # chi2(1) quantile
     return Profile(name, grid, costs, others, _crossings(grid, costs, thr))
 
 

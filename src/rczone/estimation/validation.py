@@ -16,11 +16,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtrc
 
 from rczone.errors import InputShapeError, ParameterError
 from rczone.estimation.costs import filter_arrays, run_filter, simulate_output
 from rczone.estimation.data import Dataset
+from rczone.estimation.innovations import acf, ljung_box_q
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
 from rczone.network import RCNetwork
 
@@ -171,12 +172,7 @@ def ljung_box(residuals: np.ndarray, n_lags: int = 20, dof: int = 0) -> Residual
         raise ParameterError(f"n_lags must be between 1 and n-2 = {n - 2}, got {n_lags}")
     if not 0 <= dof < n_lags:
         raise ParameterError(f"dof must be in [0, n_lags), got {dof}")
-    r = r - r.mean()
-    c0 = float(r @ r) / n
-    if c0 == 0:
-        raise ParameterError("the residuals are constant; their autocorrelation is undefined")
-    lags = np.arange(1, n_lags + 1)
-    acf = np.array([float(r[:-k] @ r[k:]) / n / c0 for k in lags])
-    q = float(n * (n + 2) * np.sum(acf**2 / (n - lags)))
-    p = float(chi2.sf(q, n_lags - dof))
-    return ResidualTest(lags, acf, q, p, p > 0.05)
+    r_k = acf(r, n_lags)[1:]
+    q = ljung_box_q(r_k, n)
+    p = float(chdtrc(n_lags - dof, q))  # chi2 survival function
+    return ResidualTest(np.arange(1, n_lags + 1), r_k, q, p, p > 0.05)

@@ -54,7 +54,7 @@ parameter used only in ties takes the kind of the ties that use it. Units: resis
 parameter's unit. The free parameters of a fit are, by default, every resistance, capacitance and
 gain not marked ``fixed`` (and the noise levels for ML).
 
-Model files are untrusted input: size (1 MB), encoding (UTF-8), nesting, names, numbers (finite),
+Model files are untrusted input: size, encoding (UTF-8), nesting (:mod:`rczone.textfiles`), names, numbers (finite),
 units and tie expressions (bounded arithmetic, evaluated by rczone, never executed) are checked,
 and every problem is one :class:`~rczone.errors.ModelFileError` naming the file and the key.
 """
@@ -62,13 +62,12 @@ and every problem is one :class:`~rczone.errors.ModelFileError` naming the file 
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from rczone.errors import ModelFileError, RczoneError, did_you_mean
-from rczone.models.zone import ModelInputs, ZoneModel, read_model_text
+from rczone.models.zone import ModelInputs, ZoneModel, read_model_document
 from rczone.network import CP_AIR, HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 from rczone.network.network import HEAT_INPUT_UNITS
 from rczone.network.parameters import expression_names
@@ -169,13 +168,7 @@ def read_model_file(path: str | Path) -> ZoneModel:
         One line naming the file and the key, for anything that is not a valid model.
     """
     p = Path(path)
-    text = read_model_text(p)
-    try:
-        doc = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelFileError(f"model file {str(p)!r} is not valid TOML: {exc}") from None
-    except RecursionError:
-        raise ModelFileError(f"model file {str(p)!r} is nested too deeply to be a model") from None
+    doc = read_model_document(p, "TOML")
     return model_from_document(doc, source=str(p), default_name=p.stem)
 
 

@@ -22,7 +22,6 @@ names the field, never a model that predicts NaN.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -42,8 +41,6 @@ from rczone.network.serialize import network_from_dict, network_to_dict
 from rczone.simulation import SimulationResult, foh, simulate, zoh
 
 FORMAT = "rczone-model/1"
-#: A model file larger than this is refused before it is parsed.
-MAX_MODEL_FILE_BYTES = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -454,8 +451,10 @@ class ZoneModel:
             else:
                 raise ModelFileError("'inputs' must be an object")
             return cls(network_from_dict(d["network"]), dict(theta), dict(prov), inputs, dict(noise), source)
+        except ModelFileError as exc:
+            raise ModelFileError(f"{where}: {str(exc).removeprefix('model: ')}") from None
         except RczoneError as exc:
-            raise type(exc)(f"{where}: {exc}") from None
+            raise ModelFileError(f"{where}: {exc}") from None
         except (TypeError, AttributeError, ValueError) as exc:
             raise ModelFileError(f"{where}: malformed ({exc})") from None
 
@@ -463,43 +462,22 @@ class ZoneModel:
     def load(cls, path: str | os.PathLike) -> ZoneModel:
         """Read a model written by :meth:`save` (any model file: :func:`rczone.models.load_model`)."""
         p = Path(path)
-        return cls.from_dict(parse_json(read_model_text(p), p), str(p))
+        return cls.from_dict(read_model_document(p, "JSON"), str(p))
 
 
-def _no_constant(name: str) -> float:
-    raise ModelFileError(f"model files must not contain {name} (JSON has no such number)")
+def read_model_document(path: Path, kind: str) -> object:
+    """The parsed document of a model file (``kind`` "TOML" or "JSON"), every read problem one line.
 
+    The checks of :mod:`rczone.textfiles` (a folder in place of the file, not UTF-8, too large,
+    nested too deeply, not valid TOML or JSON) become :class:`ModelFileError`.
+    """
+    from rczone.textfiles import read_json, read_toml
 
-def read_model_text(path: Path) -> str:
-    """The text of a model file, checked: it exists, is a file, is not huge and is UTF-8."""
     if not path.exists():
         raise ModelFileError(f"model file {str(path)!r} does not exist")
-    if path.is_dir():
-        raise ModelFileError(f"model file {str(path)!r} is a folder, not a file")
     try:
-        size = path.stat().st_size
-        if size > MAX_MODEL_FILE_BYTES:
-            raise ModelFileError(
-                f"model file {str(path)!r} is {size} bytes, larger than the limit of {MAX_MODEL_FILE_BYTES}"
-            )
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ModelFileError(f"model file {str(path)!r} cannot be read: {exc.strerror or exc}") from None
-    try:
-        return raw.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ModelFileError(
-            f"model file {str(path)!r} is not UTF-8 text (byte {exc.start}); save it as UTF-8"
-        ) from None
-
-
-def parse_json(text: str, path: Path) -> object:
-    """JSON of a model file; NaN/Infinity, syntax errors and absurd nesting are errors."""
-    try:
-        return json.loads(text, parse_constant=_no_constant)
-    except json.JSONDecodeError as exc:
-        raise ModelFileError(
-            f"model file {str(path)!r} is not valid JSON: {exc.msg} at line {exc.lineno}"
-        ) from None
-    except RecursionError:
-        raise ModelFileError(f"model file {str(path)!r} is nested too deeply to be a model") from None
+        return read_toml(path, "model file") if kind == "TOML" else read_json(path, "model file")
+    except ModelFileError:
+        raise
+    except DataError as exc:
+        raise ModelFileError(str(exc)) from None

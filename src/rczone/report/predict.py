@@ -22,8 +22,24 @@ def prediction_figure(pred: Prediction, title: str = "") -> Figure:
         hi = pred.predicted[:, j] + 2 * pred.sd[:, j]
         if np.isfinite(pred.sd[:, j]).any():
             ax.fill_between(h, lo, hi, color="#90cdf4", alpha=0.5, lw=0, label="±2 σ")
+        if (
+            pred.sd_parameters is not None
+            and pred.sd_noise is not None
+            and np.isfinite(pred.sd_noise[:, j]).any()
+        ):
+            # the part of the band the estimates' uncertainty alone would give
+            sp = pred.sd_parameters[:, j]
+            ax.fill_between(
+                h,
+                pred.predicted[:, j] - 2 * sp,
+                pred.predicted[:, j] + 2 * sp,
+                color="#2c5282",
+                alpha=0.35,
+                lw=0,
+                label="±2 σ from the estimates",
+            )
         ax.plot(h, pred.measured[:, j], color="black", lw=1.0, label="measured")
-        ax.plot(h, pred.predicted[:, j], color="#2b6cb0", lw=1.3, label="predicted (open loop)")
+        ax.plot(h, pred.predicted[:, j], color="#2b6cb0", lw=1.3, label=f"predicted ({pred.horizon})")
         ax.set_ylabel(f"{o} (°C)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="best")
@@ -43,17 +59,28 @@ def prediction_figure(pred: Prediction, title: str = "") -> Figure:
 def prediction_report(pred: Prediction, data_name: str, model_name: str) -> Report:
     """A report with the prediction plot and its error statistics."""
     rep = Report(f"Prediction of {model_name} on {data_name}")
-    rep.paragraph(f"Open-loop simulation from the first measurement; band: {html.escape(pred.band_source)}.")
-    rows = [
-        {
+    what = (
+        "Open-loop simulation from the first measurement"
+        if pred.steps is None
+        else f"Each sample predicted {pred.horizon} from the Kalman filter's estimate of the state"
+    )
+    rep.paragraph(f"{what}; band: {html.escape(pred.band_source)}.")
+    rows = []
+    for j, o in enumerate(pred.outputs):
+        row = {
             "output": o,
             "RMSE (K)": float(pred.rmse_K[j]),
             "max error (K)": float(pred.max_abs_K[j]),
             "inside ±2σ": f"{pred.coverage[j]:.0%}" if np.isfinite(pred.coverage[j]) else "no band",
         }
-        for j, o in enumerate(pred.outputs)
-    ]
-    rep.table(rows, "Open-loop error", digits=3)
+        for key, part in (
+            ("mean σ, noise (K)", pred.sd_noise),
+            ("mean σ, estimates (K)", pred.sd_parameters),
+        ):
+            if part is not None and np.isfinite(part[:, j]).any():
+                row[key] = float(np.nanmean(part[:, j]))
+        rows.append(row)
+    rep.table(rows, f"Prediction error ({pred.horizon})", digits=3)
     rep.figure(
         "prediction", prediction_figure(pred, f"{model_name} on {data_name}"), "Measured and predicted"
     )
