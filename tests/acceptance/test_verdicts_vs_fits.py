@@ -6,8 +6,8 @@ point chosen by diagnose) and then fitted by LS, with the paper's free set and w
 (which also estimates the wall's initial temperature). With the paper's fit, a parameter the nights
 call identifiable must be recovered and one no night calls identifiable must not be (criteria in
 :mod:`tests.acceptance.survey`). With the default fit, what diagnose calls identifiable is recovered
-and summer's closed-loop failure remains; on winter nights diagnose is conservative (see
-``docs/identifiability.md``). The truth is independent of
+and summer's closed-loop failure of Rw remains; on other closed-loop cases diagnose can be
+conservative (see ``docs/identifiability.md``). The truth is independent of
 rczone's fitting code: the virtual building's true construction, aggregated the paper's way
 (steady state) and, for the structural allowance, the exact layered-wall admittance at the test's
 periods (:mod:`tests.acceptance.truth`).
@@ -54,11 +54,11 @@ def _check_agreement(summaries) -> None:
         assert summaries["reduced", "autumn forced", name].consensus == "identifiable"
         for regime in ("summer closed-loop", "winter closed-loop"):
             assert summaries["reduced", regime, name].consensus == "not identifiable"
-        # the default fit fails on summer nights as the paper's does ...
-        assert not summaries["default", "summer closed-loop", name].recovered
-        # ... but lands within the structural allowance on winter nights, where diagnose is
-        # conservative: the worst-case model-error bias it guards against does not happen there
-        assert summaries["default", "winter closed-loop", name].recovered
+    # the paper's failure mode survives rczone's default fit: summer Rw far below the truth. Beyond
+    # that the default fit (which estimates the wall's initial state) often lands within the
+    # structural allowance on closed-loop nights that diagnose calls not identifiable: diagnose is
+    # conservative there (docs/identifiability.md), which is not asserted, as it depends on the search
+    assert not summaries["default", "summer closed-loop", "Rw"].recovered
 
 
 def test_verdicts_agree_with_fits(fast):
