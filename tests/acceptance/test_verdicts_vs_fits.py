@@ -25,13 +25,13 @@ FAST_SEEDS = range(100, 108)
 SLOW_SEEDS = range(200, 230)
 
 
-def _summaries(seeds) -> dict[tuple[str, str, str], object]:
+def _summaries(seeds, fits=tuple(FITS)) -> dict[tuple[str, str, str], object]:
     """``(fit, regime, parameter)`` -> summary."""
     truth = steady_state_equivalent()
     out = {}
     for regime in REGIMES:
-        outcomes = [night_outcome(regime, s) for s in seeds]
-        for fit in FITS:
+        outcomes = [night_outcome(regime, s, fits) for s in seeds]
+        for fit in fits:
             for name in FREE:
                 out[fit, regime, name] = summarize(outcomes, name, truth[name], fit)
     return out
@@ -39,7 +39,7 @@ def _summaries(seeds) -> dict[tuple[str, str, str], object]:
 
 @pytest.fixture(scope="module")
 def fast():
-    return _summaries(FAST_SEEDS)
+    return _summaries(FAST_SEEDS, ("reduced",))  # the default fit: the slow test (time)
 
 
 def _check_agreement(summaries) -> None:
@@ -54,11 +54,12 @@ def _check_agreement(summaries) -> None:
         assert summaries["reduced", "autumn forced", name].consensus == "identifiable"
         for regime in ("summer closed-loop", "winter closed-loop"):
             assert summaries["reduced", regime, name].consensus == "not identifiable"
-    # the paper's failure mode survives rczone's default fit: summer Rw far below the truth. Beyond
-    # that the default fit (which estimates the wall's initial state) often lands within the
-    # structural allowance on closed-loop nights that diagnose calls not identifiable: diagnose is
-    # conservative there (docs/identifiability.md), which is not asserted, as it depends on the search
-    assert not summaries["default", "summer closed-loop", "Rw"].recovered
+    if ("default", "summer closed-loop", "Rw") in summaries:
+        # the paper's failure mode survives rczone's default fit: summer Rw far below the truth.
+        # Beyond that the default fit (which estimates the wall's initial state) often lands within
+        # the structural allowance on closed-loop nights diagnose calls not identifiable: diagnose
+        # is conservative there (docs/identifiability.md); not asserted, it depends on the search
+        assert not summaries["default", "summer closed-loop", "Rw"].recovered
 
 
 def test_verdicts_agree_with_fits(fast):

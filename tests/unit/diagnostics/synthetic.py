@@ -27,6 +27,7 @@ def night(mode: str, seed: int = 0, hours: float = 12.0, theta: dict | None = No
     m = np.full(n, 0.05 if mode == "closed-loop" else 0.12)
     Ts = np.empty(n)
     x = np.array([22.0, 22.0])
+    Phi, G = zoh(*ss.matrices(m[0]), 60.0)  # the flow is constant all night
     Ti = np.empty(n)
     for k in range(n):
         Ti[k] = x[0]
@@ -35,8 +36,6 @@ def night(mode: str, seed: int = 0, hours: float = 12.0, theta: dict | None = No
         else:
             Ts[k] = 35.0 if (t[k] // 7200) % 2 == 0 else 12.0
         if k + 1 < n:
-            A, B = ss.matrices(m[k])
-            Phi, G = zoh(A, B, 60.0)
             x = Phi @ x + G @ np.array([To[k], Tsd[k], Ts[k], Q[k]])
     Ti_meas = Ti + 0.03 * rng.standard_normal(n)
     return pd.DataFrame({"time": t, "Ti": Ti_meas, "To": To, "Tsd": Tsd, "Ts": Ts, "m": m, "Q": Q})
