@@ -23,12 +23,10 @@ import pandas as pd
 
 from rczone.errors import DataError, did_you_mean
 from rczone.frequency import FrequencyResponse, frequency_response, gain_error
+from rczone.models.paper import SURROUNDINGS
 from rczone.network import RCNetwork
 from rczone.simulation import simulate
 from rczone.simulation.initial import output_consistent_state
-
-#: The surrounding spaces of the paper's zone; ``Tsd`` is their mean.
-SURROUNDINGS = ("Tf", "Tc", "Tn1", "Tn2", "Thw")
 
 
 def model_arrays(

@@ -17,6 +17,7 @@ from rczone import datasets
 from rczone.atomic import write_json_atomic
 from rczone.comparison import TimeComparison, compare_frequency, compare_time, input_variation
 from rczone.models import get_model
+from rczone.models.paper import Q_PAPER
 from rczone.models.reduction import F_PER_K, PAPER_DU_K, band_matched_model
 from rczone.network import RCNetwork
 from rczone.report import Report
@@ -41,8 +42,6 @@ VARIANTS = (
     "first-order",
     "first-order-band",
 )
-#: Constant internal gain used in every time-domain simulation (the paper's Q = 50 W).
-Q_PAPER = 50.0
 #: The paper's unknowns (section IV: theta = [Cr, Rw], the initial state taken from the data), plus
 #: the noise levels a likelihood fit needs.
 PAPER_FREE = {

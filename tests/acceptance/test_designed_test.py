@@ -28,8 +28,8 @@ def test_design_respects_the_limits():
     assert res.within_band
     assert s["start_s"].iloc[0] == 0.0 and s["end_s"].iloc[-1] == pytest.approx(12 * 3600.0)
     assert (s["end_s"] - s["start_s"]).min() >= LIMITS.min_hold_s
-    assert s["Ts"].between(*LIMITS.ts_range).all() and s["m"].between(*LIMITS.m_range).all()
-    assert LIMITS.band[0] <= res.ti_predicted.min() and res.ti_predicted.max() <= LIMITS.band[1]
+    assert s["Ts"].between(*LIMITS.ranges["Ts"]).all() and s["m"].between(*LIMITS.ranges["m"]).all()
+    assert LIMITS.band[0] <= res.predicted.min() and res.predicted.max() <= LIMITS.band[1]
 
 
 # ---- playback ------------------------------------------------------------------------------------

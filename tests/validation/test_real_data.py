@@ -31,8 +31,11 @@ def test_real_data_fits_validate_on_held_out_data(tmp_path):
     assert mod.main(["--shared", str(SHARED), "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "real_data.json").read_text())
     bm = res["bacher_madsen_prbs"]
-    # PRBS heating excites the building: every R and C identifiable, the fit carries over to held-out data
-    assert all(v["verdict"] == "identifiable" for v in bm["diagnose"].values())
+    # PRBS heating excites the building: no R or C is out of reach (diagnosed at a quick fit's estimates,
+    # Rie is "weak": a 0.2 K model error could shift it by a factor 1.7, and the LS and ML fits below
+    # differ by 1.6 on it), and the fit carries over to held-out data
+    verdicts = [v["verdict"] for v in bm["diagnose"].values()]
+    assert "not identifiable" not in verdicts and verdicts.count("identifiable") >= 3
     for method in ("ls", "ml"):
         assert bm["methods"][method]["validation_rmse_K"] < 1.0
     # LEEC: frozen-logger hours are excluded, and the closed-loop classroom data cannot pin down every R, C

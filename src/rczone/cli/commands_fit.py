@@ -221,17 +221,10 @@ def fit(
     if report_dir or json_out:
         from rczone.diagnostics import diagnose
 
-        rc = [n for n in r.names if n in zm.network.parameters]
-        if rc and len(zm.network.outputs) == 1:
+        rc = [n for n in r.names if n in zm.network.parameters and cal.model.theta[n] > 0]
+        if rc:
             diag = diagnose(
-                zm.network,
-                frame.rename(columns={zm.network.outputs[0]: "Ti"})
-                if zm.network.outputs[0] != "Ti"
-                else frame,
-                free=rc,
-                theta=dict(cal.model.theta),
-                constants=used,
-                heat_input=None,
+                cal.model, frame, free=rc, constants=used, heat_input=None, operating_point="model"
             )
     if json_out:
         payload = r.to_dict()

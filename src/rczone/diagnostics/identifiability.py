@@ -1,14 +1,15 @@
-"""Local and global identifiability of RC parameters from a data set, before any fit.
+"""Local and global identifiability of RC parameters from a data set, before relying on a fit.
 
-Three pieces of evidence are combined into a verdict per free parameter:
+Four pieces of evidence are combined into a verdict per free parameter:
 
 1. **Fisher information** from exact output sensitivities (:mod:`rczone.simulation.sensitivity`)
-   with respect to ``log(theta)``, at the prior operating point (construction values). The
-   nuisance directions a real fit must also absorb are included and marginalized out: the
-   unknown initial state of every node and an unknown constant heat gain (the paper had to guess
-   Q = 50 W). Output errors in buildings are dominated by model error that is correlated over
-   tens of minutes, so the information of ``N`` samples is counted as that of
-   ``N * dt / correlation_time`` independent ones (documented, configurable).
+   with respect to ``log(theta)``, every output of the model stacked
+   (:mod:`rczone.diagnostics.fisher`). The nuisance directions a real fit must also absorb are
+   marginalized out: the unknown initial state of every node and the unknown constant offset of
+   every heat input that is only guessed (a constant in the data, such as the paper's Q = 50 W).
+   Output errors in buildings are dominated by model error that is correlated over tens of
+   minutes, so the information of ``N`` samples is counted as that of ``N * dt / correlation_time``
+   independent ones (documented, configurable).
 2. **Robustness to model error**: a low-order model never matches a real room exactly (rczone's
    own model-order study finds 0.2--0.5 K between the 2nd-order and the full-scale model on
    ordinary nights). Least squares turns a model error ``e(t)`` into a parameter bias
@@ -23,6 +24,13 @@ Three pieces of evidence are combined into a verdict per free parameter:
    times smaller (or larger) -- the paper's failure mode.
 4. **Data indicators** (:mod:`rczone.diagnostics.indicators`) to explain the cause in plain words.
 
+**Operating point.** Sensitivities are local: they are taken where the parameters are. The model's
+own values are used when they *reproduce the data*: an open-loop simulation at them, with the
+nuisances re-fitted (as a fit would), leaves a residual of at most :data:`CONSISTENT_FACTOR` times
+the error level ``sqrt(sigma_K^2 + model_error_K^2)``. Otherwise a quick least-squares fit
+(:func:`rczone.calibrate.calibrate` without standard errors) is run first and the analysis is done
+at its estimates. The report says which was used, and the residual of each.
+
 References
 ----------
 .. [1] Lin, Middelkoop, Barooah, IEEE CDC 2012, section IV.
@@ -34,19 +42,29 @@ References
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
-from rczone.comparison import model_arrays
+from rczone.diagnostics.fisher import (
+    check_free,
+    marginal_fisher,
+    nuisance_responses,
+    project_out,
+    rms,
+    sample_weight,
+)
 from rczone.diagnostics.indicators import DataIndicators, data_indicators
 from rczone.errors import ParameterError, did_you_mean
+from rczone.estimation import Dataset
+from rczone.estimation.costs import initial_state
+from rczone.models import ZoneModel
 from rczone.network import RCNetwork
 from rczone.network.parameters import expression_names
 from rczone.simulation import simulate
-from rczone.simulation.initial import output_consistent_state
 from rczone.simulation.sensitivity import output_sensitivities
 
 IDENTIFIABLE, WEAK, NOT_IDENTIFIABLE = "identifiable", "weak", "not identifiable"
@@ -59,13 +77,27 @@ SE_NOT_IDENTIFIABLE = 1.0
 BIAS_IDENTIFIABLE = 0.5
 #: ... and above which it is not identifiable.
 BIAS_NOT_IDENTIFIABLE = 1.0
+#: A zone whose difference to a surrounding temperature is typically below this (or varies by less)
+#: sends a heat flow through the resistance between them that an unknown gain can mimic, K.
+STEADY_DIFFERENCE_K = 1.0
 #: |correlation| above which two parameters are reported as confounded.
 CORR_CONFOUNDED = 0.95
+#: The model's values reproduce the data when the residual of an open-loop simulation at them,
+#: after re-fitting the nuisances, is at most this many times ``sqrt(sigma_K^2 + model_error_K^2)``.
+CONSISTENT_FACTOR = 2.0
+#: Ways of choosing the operating point (see :func:`diagnose`).
+OPERATING_POINTS = ("auto", "model", "fit")
+#: Parameter kinds diagnose looks at by default (analysed in log space, so their value must be > 0).
+DIAGNOSED_KINDS = ("resistance", "capacitance", "gain")
 
 
 @dataclass(frozen=True)
 class ParameterVerdict:
-    """The verdict on one free parameter, with the evidence and a plain-words reason."""
+    """The verdict on one free parameter, with the evidence and a plain-words reason.
+
+    ``value`` is the parameter at the operating point, ``construction`` the model's declared
+    (construction) value.
+    """
 
     name: str
     verdict: str
@@ -78,9 +110,68 @@ class ParameterVerdict:
     rms_change_tenth_K: float
     rms_change_tenfold_K: float
     worst_case_bias: float = 0.0
+    value: float = math.nan
 
     def to_dict(self) -> dict:
         return {k: v for k, v in vars(self).items() if k != "name"}
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """Where the sensitivities were taken, and why.
+
+    Attributes
+    ----------
+    source : {"model", "fit"}
+        The model's own values, or the estimates of a quick least-squares fit.
+    theta : dict of str to float
+        Base parameter values used.
+    initial_state : dict of str to float
+        Initial state of the simulation the analysis linearizes (degC).
+    residual_K : float
+        RMS of the data minus the open-loop simulation at the model's values, after re-fitting
+        the nuisances (initial state, guessed heat-gain offsets), K.
+    threshold_K : float
+        The largest residual for which the model's values count as reproducing the data.
+    fit_residual_K : float
+        The same residual at the quick fit's estimates (NaN without a fit).
+    reason : str
+        The choice in words.
+    fit_free : tuple of str
+        Parameters the quick fit estimated (empty without a fit).
+    """
+
+    source: str
+    theta: dict[str, float]
+    initial_state: dict[str, float]
+    residual_K: float
+    threshold_K: float
+    fit_residual_K: float = math.nan
+    reason: str = ""
+    fit_free: tuple[str, ...] = ()
+
+    @property
+    def residual_used_K(self) -> float:
+        """Residual at the values the analysis used."""
+        return self.fit_residual_K if self.source == "fit" else self.residual_K
+
+    @property
+    def reproduces_data(self) -> bool:
+        """Whether the values used reproduce the data within the threshold."""
+        return bool(self.residual_used_K <= self.threshold_K)
+
+    def to_dict(self) -> dict:
+        return {
+            "source": self.source,
+            "theta": dict(self.theta),
+            "initial_state": dict(self.initial_state),
+            "residual_K": self.residual_K,
+            "threshold_K": self.threshold_K,
+            "fit_residual_K": None if math.isnan(self.fit_residual_K) else self.fit_residual_K,
+            "reproduces_data": self.reproduces_data,
+            "reason": self.reason,
+            "fit_free": list(self.fit_free),
+        }
 
 
 @dataclass(frozen=True)
@@ -99,6 +190,16 @@ class IdentifiabilityReport:
     correlation : ndarray, shape (P, P)
     condition_number : float
         Of the column-scaled sensitivity matrix including nuisances.
+    sigma_K : float
+    n_effective : float
+        Independent samples the information is counted for, over all outputs.
+    indicators : DataIndicators
+    operating_point : OperatingPoint
+    outputs : tuple of str
+        The model's outputs, all of which entered the analysis.
+    signals : DataFrame
+        ``time`` and the model's signals over the samples analysed (SI units), for reports.
+    settings : dict
     """
 
     parameters: dict[str, ParameterVerdict]
@@ -110,12 +211,17 @@ class IdentifiabilityReport:
     sigma_K: float
     n_effective: float
     indicators: DataIndicators
+    operating_point: OperatingPoint | None = None
+    outputs: tuple[str, ...] = ()
+    signals: pd.DataFrame | None = field(default=None, repr=False)
     settings: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {
             "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
             "free": list(self.names),
+            "outputs": list(self.outputs),
+            "operating_point": self.operating_point.to_dict() if self.operating_point else None,
             "fisher_log": self.fisher.tolist(),
             "expected_rel_se": dict(zip(self.names, self.expected_se.tolist(), strict=True)),
             "correlation": self.correlation.tolist(),
@@ -148,34 +254,138 @@ def parameter_boundaries(network: RCNetwork, name: str) -> tuple[str, ...]:
     return tuple(dict.fromkeys(out))
 
 
-def _nuisance_columns(
-    ss, t, u, m, heat_input: str | None, initial_state: bool = True
-) -> tuple[np.ndarray, list[str]]:
-    """Output responses to each initial state (zero input) and to a unit constant heat gain."""
-    cols, names = [np.zeros(t.size)], ["none"]  # a zero column keeps shapes valid with no nuisance
-    zero = np.zeros_like(u)
-    mm = m if m.shape[1] else None
-    for i, s in enumerate(ss.state_names if initial_state else ()):
-        e = np.zeros(ss.n_states)
-        e[i] = 1.0
-        cols.append(simulate(ss, t, zero, mm, x0=e).y[:, 0])
-        names.append(f"x0[{s}]")
-    if heat_input is not None and heat_input in ss.input_names:
-        uq = zero.copy()
-        uq[:, ss.input_names.index(heat_input)] = 1.0
-        cols.append(simulate(ss, t, uq, mm, x0=np.zeros(ss.n_states)).y[:, 0])
-        names.append(f"offset[{heat_input}]")
-    return np.column_stack(cols), names
+def guessed_heat_inputs(network: RCNetwork, data: Dataset) -> tuple[str, ...]:
+    """Heat inputs (W) that are constant over the data: a guess (a default, a constant), not a measurement."""
+    out = []
+    for h in network.heat_inputs:
+        if h.unit != "W":
+            continue
+        col = data.u[:, network.input_names.index(h.name)]
+        col = col[np.isfinite(col)]
+        if col.size and np.all(col == col[0]):
+            out.append(h.name)
+    return tuple(out)
 
 
-def _refit_residual(delta: np.ndarray, nuis: np.ndarray) -> float:
-    """RMS of ``delta`` after removing its least-squares projection on the nuisance columns."""
-    coef, *_ = np.linalg.lstsq(nuis, delta, rcond=None)
-    return float(np.sqrt(np.mean((delta - nuis @ coef) ** 2)))
+def default_diagnosed(network: RCNetwork, theta: Mapping[str, float]) -> list[str]:
+    """The model's free resistances, capacitances and (positive) gains: what a fit estimates."""
+    return [n for n in network.default_free if network.parameters[n].kind in DIAGNOSED_KINDS and theta[n] > 0]
+
+
+def _stack(a: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """Measured samples of every output, stacked: ``a`` (N, ny, ...) -> (n_measured, ...)."""
+    return a[ok]
+
+
+def _residual(
+    network: RCNetwork,
+    theta: Mapping[str, float],
+    values: Mapping[str, float],
+    data: Dataset,
+    offsets: Sequence[str],
+) -> tuple[float, np.ndarray]:
+    """RMS of data minus simulation after re-fitting initial state and offsets; and the initial state."""
+    ss = network.state_space(theta)
+    x0 = initial_state(ss, values, data)
+    mm = data.m if data.m.shape[1] else None
+    y = simulate(ss, data.t, data.u, mm, x0=x0).y
+    ok = np.isfinite(data.y)
+    nuis, _ = nuisance_responses(ss, data.t, data.u, data.m, offsets)
+    return rms(project_out(_stack(data.y - y, ok), _stack(nuis, ok))), x0
+
+
+def choose_operating_point(
+    zm: ZoneModel,
+    frame: pd.DataFrame,
+    data: Dataset,
+    free: Sequence[str],
+    sigma_K: float,
+    model_error_K: float,
+    offsets: Sequence[str],
+    mode: str = "auto",
+    constants: Mapping[str, float] | None = None,
+    seed: int = 0,
+) -> OperatingPoint:
+    """The model's values if they reproduce the data, else a quick fit's estimates (see the module notes).
+
+    Parameters
+    ----------
+    zm : ZoneModel
+        Its ``theta`` is the candidate.
+    frame : DataFrame
+        The data (for the fit).
+    data : Dataset
+        The model's signals taken from ``frame``.
+    free : sequence of str
+        Parameters diagnosed; the quick fit estimates these and the model's default free ones.
+    mode : {"auto", "model", "fit"}
+        ``"model"`` always uses the model's values, ``"fit"`` always fits first.
+    """
+    net = zm.network
+    theta = dict(zm.theta)
+    threshold = CONSISTENT_FACTOR * math.hypot(sigma_K, model_error_K)
+    r_model, x0 = _residual(net, theta, {}, data, offsets)
+    states = dict(zip(net.state_names, map(float, x0), strict=True))
+    what = "after re-fitting the initial state" + (" and the heat-gain offset" if offsets else "")
+    if mode == "model" or (mode == "auto" and r_model <= threshold):
+        how = "as asked" if mode == "model" else f"they reproduce the data within {threshold:.2f} K"
+        reason = f"the model's values ({how}: residual {r_model:.2f} K RMS {what})"
+        return OperatingPoint("model", theta, states, r_model, threshold, reason=reason)
+    from rczone.calibrate import calibrate
+    from rczone.estimation.fit import default_free
+
+    fit_free = tuple(dict.fromkeys((*default_free(net, "ls"), *free)))
+    cal = calibrate(zm, frame, "ls", free=fit_free, constants=constants, uncertainty=False, seed=seed)
+    fitted = dict(cal.model.theta)
+    x0_values = dict(cal.model.provenance.get("initial_state") or {})
+    r_fit, x0 = _residual(net, fitted, x0_values, data, offsets)
+    if mode == "fit":
+        why = "as asked"
+    else:
+        why = f"the model's values miss the data by {r_model:.2f} K RMS {what}, more than {threshold:.2f} K"
+    reason = f"a quick least-squares fit ({why}; residual {r_fit:.2f} K RMS at the fit)"
+    if r_fit > threshold:
+        reason += (
+            f"; even the fit misses the data by more than {threshold:.2f} K, so the model error is larger"
+            " than assumed: read the verdicts with caution, or raise the model error"
+        )
+    states = dict(zip(net.state_names, map(float, x0), strict=True))
+    return OperatingPoint("fit", fitted, states, r_model, threshold, r_fit, reason, fit_free)
+
+
+def _indicator_frame(zm: ZoneModel, frame: pd.DataFrame, data: Dataset) -> pd.DataFrame:
+    """``time`` and the model's signals (and the columns averaged into an input) over ``data``'s samples."""
+    out = pd.DataFrame({"time": data.t})
+    for names, arr in ((data.input_names, data.u), (data.flow_names, data.m), (data.output_names, data.y)):
+        for j, n in enumerate(names):
+            out[n] = arr[:, j]
+    t = frame["time"].to_numpy(float)
+    rows = (t >= data.t[0]) & (t <= data.t[-1])
+    if rows.sum() == data.n_samples:
+        for cols in zm.inputs.mean_of.values():
+            for c in cols:
+                if c in frame and c not in out:
+                    out[c] = frame[c].to_numpy(float)[rows]
+    return out
+
+
+def _check_settings(sigma_K: float, correlation_time_s: float, model_error_K: float, mode: str) -> None:
+    if not (sigma_K > 0 and correlation_time_s > 0 and model_error_K >= 0) or not all(
+        map(math.isfinite, (sigma_K, correlation_time_s, model_error_K))
+    ):
+        raise ParameterError(
+            f"sigma_K and correlation_time_s must be > 0 and model_error_K >= 0 (finite), got {sigma_K},"
+            f" {correlation_time_s}, {model_error_K}"
+        )
+    if mode not in OPERATING_POINTS:
+        raise ParameterError(
+            f"operating_point must be one of {', '.join(OPERATING_POINTS)}, got {mode!r}; "
+            + did_you_mean(str(mode), OPERATING_POINTS)
+        )
 
 
 def diagnose(
-    network: RCNetwork,
+    model: ZoneModel | RCNetwork | str,
     frame: pd.DataFrame,
     free: Sequence[str] | None = None,
     theta: Mapping[str, float] | None = None,
@@ -183,77 +393,101 @@ def diagnose(
     correlation_time_s: float = 1800.0,
     model_error_K: float = 0.2,
     constants: Mapping[str, float] | None = None,
-    heat_input: str | None = "Q",
+    heat_input: str | Sequence[str] | None = "auto",
     initial_state_nuisance: bool = True,
+    operating_point: str = "auto",
+    seed: int = 0,
 ) -> IdentifiabilityReport:
-    """Tell whether ``frame`` can identify the ``free`` parameters of ``network``.
+    """Tell whether ``frame`` can identify the ``free`` parameters of ``model``.
 
     Parameters
     ----------
-    network : RCNetwork
+    model : ZoneModel, RCNetwork or str
+        A model (its values and input conventions are used), a bare network or a built-in name /
+        model file (:func:`rczone.models.load_model`).
     frame : DataFrame
-        ``time`` (s), ``Ti`` and the model's inputs (``Tsd`` may be derived from the five
-        surroundings).
+        ``time`` (s) or a DatetimeIndex, and the model's signals by name (the model's conventions
+        fill inputs the data lack, e.g. a default heat gain or a mean of surrounding rooms). Every
+        output of the model is used; missing output samples are skipped.
     free : sequence of str, optional
-        Free base parameters; default every base resistance and capacitance.
+        Parameters to diagnose; default the model's free resistances, capacitances and gains.
     theta : mapping, optional
-        Prior operating point; default the construction (declared) values.
+        Values replacing the model's own (the candidate operating point).
     sigma_K : float
-        Output error level the fit must see through (sensor noise plus model error), K.
+        Output error level a fit must see through (sensor noise plus model error), K.
     correlation_time_s : float
         Correlation time of that error; information is counted per this many seconds.
     model_error_K : float
         RMS structural error the model may have on these data, K; the verdict requires the
         worst-case bias it can cause to be small (see the module notes). 0 disables the check.
     constants : mapping, optional
-        Inputs held constant instead of read from the frame (e.g. ``{"Q": 50.0}``).
-    heat_input : str or None
-        Heat input whose unknown constant offset is a nuisance (None to disable).
+        Inputs held constant instead of read from the frame (SI units).
+    heat_input : "auto", str, sequence of str or None
+        Heat inputs whose unknown constant offset is a nuisance: ``"auto"`` every heat input (W)
+        that is constant over the data (a guess, such as a default gain), or the names, or None.
     initial_state_nuisance : bool
         Treat the initial state as unknown (a fit that estimates it, or starts from a guess).
+    operating_point : {"auto", "model", "fit"}
+        Where the analysis is done: ``"auto"`` the model's values if they reproduce the data
+        (module notes), else a quick least-squares fit's estimates; ``"model"`` the model's values
+        regardless; ``"fit"`` always the quick fit's.
+    seed : int
+        Seed of the quick fit's global search.
 
     Returns
     -------
     IdentifiabilityReport
     """
-    if not sigma_K > 0 or not correlation_time_s > 0 or not model_error_K >= 0:
-        raise ParameterError(
-            f"sigma_K and correlation_time_s must be > 0 and model_error_K >= 0, got {sigma_K},"
-            f" {correlation_time_s}, {model_error_K}"
-        )
+    from rczone.calibrate import dataset, frame_from
+    from rczone.models import load_model
+
+    _check_settings(sigma_K, correlation_time_s, model_error_K, operating_point)
+    zm = load_model(model)
+    if theta:
+        zm = zm.with_values(theta)
+    net = zm.network
     if free is None:
-        free = [
-            n
-            for n, p in network.parameters.items()
-            if not p.is_tied and p.kind in ("resistance", "capacitance")
-        ]
-    for n in free:
-        if n not in network.parameters:
-            raise ParameterError(f"unknown free parameter {n!r}; " + did_you_mean(n, network.parameters))
+        free = default_diagnosed(net, zm.theta)
     free = list(free)
-    vals = network.values(theta)
-    t, u, m = model_arrays(network, frame, constants)
-    y = frame["Ti"].to_numpy(float)
-    ok = np.isfinite(y)
-    ss = network.state_space(theta)
-    mm = m if m.shape[1] else None
-    x0 = output_consistent_state(ss, u[0], m[0] if m.shape[1] else 0.0, float(y[ok][0]))
-    sens = output_sensitivities(network, theta, free, t, u, mm, x0=x0)
-    S = sens.dy[ok, 0, :]
-    nuis, _ = _nuisance_columns(ss, t, u, m, heat_input, initial_state_nuisance)
-    nuis = nuis[ok]
+    if not free:
+        raise ParameterError(f"model {zm.label!r} has no free parameter to diagnose; name some with free")
+    check_free(net, free)
+    frame = frame_from(frame)
+    data = dataset(zm, frame, constants)
+    if heat_input == "auto":
+        offsets = guessed_heat_inputs(net, data)
+    else:
+        offsets = (heat_input,) if isinstance(heat_input, str) else tuple(heat_input or ())
+        for h in offsets:
+            if h not in net.input_names:
+                raise ParameterError(
+                    f"heat_input {h!r} is not an input of the model; " + did_you_mean(h, net.input_names)
+                )
+    op = choose_operating_point(
+        zm, frame, data, free, sigma_K, model_error_K, offsets, operating_point, constants, seed
+    )
+    check_free(net, free, op.theta)
+    theta = op.theta
+    vals = net.values(theta)
+    declared = net.values()
+    ss = net.state_space(theta)
+    t, u = data.t, data.u
+    mm = data.m if data.m.shape[1] else None
+    x0 = np.array([op.initial_state[s] for s in net.state_names])
+    ok = np.isfinite(data.y)
+    sens = output_sensitivities(net, theta, free, t, u, mm, x0=x0)
+    S = _stack(sens.dy, ok)
+    nuis_t, _ = nuisance_responses(ss, t, u, data.m, offsets, initial_state_nuisance)
+    nuis = _stack(nuis_t, ok)
     dt = float(np.median(np.diff(t)))
-    n_eff = ok.sum() * min(1.0, dt / correlation_time_s)
-    w = n_eff / ok.sum() / sigma_K**2
+    w = sample_weight(dt, sigma_K, correlation_time_s)
+    n_eff = int(ok.sum()) * min(1.0, dt / correlation_time_s)
     J = np.column_stack([S, nuis])
     scale = np.linalg.norm(J, axis=0)
-    used = scale > 0  # a nuisance column that is identically zero carries no information
+    used = scale > 0  # a nuisance that never shows in the outputs carries no information
     sv = np.linalg.svd(J[:, used] / scale[used], compute_uv=False)
     cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
-    F_all = w * (J.T @ J)
-    P = len(free)
-    Fff, Ffn, Fnn = F_all[:P, :P], F_all[:P, P:], F_all[P:, P:]
-    F = Fff - Ffn @ np.linalg.pinv(Fnn, rcond=1e-13) @ Ffn.T
+    F = marginal_fisher(S, nuis, w)
     cov = np.linalg.pinv(F, rcond=1e-14, hermitian=True)
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
     se[np.diag(F) <= 0] = np.inf
@@ -263,30 +497,26 @@ def diagnose(
     np.fill_diagonal(corr, 1.0)
     bias = se * (model_error_K / sigma_K) * np.sqrt(n_eff)
 
-    y0 = sens.y[ok, 0]
-    ind = data_indicators(frame)
+    y0 = _stack(sens.y, ok)
+    signals = _indicator_frame(zm, frame, data)
+    ind = data_indicators(
+        signals,
+        output=net.outputs[0],
+        surroundings=[c for c in signals if c in net.boundaries or _averaged(zm, c)],
+        inputs=(*net.input_names, *net.flow_names),
+        flow=net.flow_names[0] if net.flow_names else None,
+    )
+    words = _Words(net, offsets, declared, vals)
     verdicts = {}
     for j, name in enumerate(free):
         changes = []
         for factor in (0.1, 10.0):
-            alt = simulate(
-                network.state_space({**_base(network, theta), name: vals[name] * factor}), t, u, mm, x0=x0
-            )
-            changes.append(_refit_residual(alt.y[ok, 0] - y0, nuis))
-        others = [(abs(corr[j, k]), free[k]) for k in range(P) if k != j]
+            alt = simulate(net.state_space({**theta, name: vals[name] * factor}), t, u, mm, x0=x0)
+            changes.append(rms(project_out(_stack(alt.y, ok) - y0, nuis)))
+        others = [(abs(corr[j, k]), free[k]) for k in range(len(free)) if k != j]
         rho, partner = max(others) if others else (0.0, None)
         verdicts[name] = _verdict(
-            network,
-            name,
-            float(se[j]),
-            rho,
-            partner,
-            changes,
-            sigma_K,
-            ind,
-            vals[name],
-            float(bias[j]),
-            model_error_K,
+            words, name, float(se[j]), rho, partner, changes, sigma_K, ind, float(bias[j]), model_error_K
         )
     return IdentifiabilityReport(
         verdicts,
@@ -298,21 +528,66 @@ def diagnose(
         sigma_K,
         float(n_eff),
         ind,
+        op,
+        tuple(net.outputs),
+        signals,
         {
             "correlation_time_s": correlation_time_s,
             "model_error_K": model_error_K,
-            "heat_offset_nuisance": heat_input,
-            "constants": dict(constants or {}),
+            "heat_offset_nuisance": list(offsets),
+            "initial_state_nuisance": initial_state_nuisance,
+            "constants": zm.constants_used(frame, constants),
+            "samples": data.n_samples,
+            "model": zm.label,
         },
     )
 
 
-def _base(network: RCNetwork, theta: Mapping[str, float] | None) -> dict[str, float]:
-    return {k: v for k, v in network.values(theta).items() if not network.parameters[k].is_tied}
+def _averaged(zm: ZoneModel, column: str) -> bool:
+    """Whether ``column`` is one of the columns averaged into a boundary input (a surrounding space)."""
+    return any(column in cols for b, cols in zm.inputs.mean_of.items() if b in zm.network.boundaries)
+
+
+@dataclass(frozen=True)
+class _Words:
+    """What the verdicts say about the model: its signals in words, its construction and operating values."""
+
+    network: RCNetwork
+    offsets: tuple[str, ...]
+    construction: Mapping[str, float]
+    value: Mapping[str, float]
+
+    @property
+    def measured(self) -> str:
+        outs = self.network.outputs
+        return "the room temperature" if len(outs) == 1 else f"the measured temperatures ({', '.join(outs)})"
+
+    @property
+    def changes(self) -> str:
+        """``measured`` with the verb: "the room temperature changes", "the measured ... change"."""
+        return self.measured + (" changes" if len(self.network.outputs) == 1 else " change")
+
+    @property
+    def refitted(self) -> str:
+        return (
+            "the initial state and heat gain are re-fitted"
+            if self.offsets
+            else "the initial state is re-fitted"
+        )
+
+    @property
+    def actuators(self) -> str:
+        net = self.network
+        names = [
+            *dict.fromkeys(s.temperature for s in net.supply_air if s.temperature not in net.boundaries),
+            *net.flow_names,
+            *(h.name for h in net.heat_inputs if h.unit == "W"),
+        ]
+        return ", ".join(names) if names else "an input the building controls"
 
 
 def _verdict(
-    network: RCNetwork,
+    words: _Words,
     name: str,
     se: float,
     rho: float,
@@ -320,10 +595,10 @@ def _verdict(
     changes: list[float],
     sigma: float,
     ind: DataIndicators,
-    value: float,
     bias: float = 0.0,
     model_error: float = 0.0,
 ) -> ParameterVerdict:
+    network = words.network
     tenth, tenfold = changes
     indistinct = min(tenth, tenfold) < sigma
     if se < SE_IDENTIFIABLE and bias < BIAS_IDENTIFIABLE and not indistinct:
@@ -341,28 +616,37 @@ def _verdict(
     reasons, advice = [], []
     bounds = parameter_boundaries(network, name)
     sur = [s for s in ind.surroundings if s.name in bounds]
+    measured = words.measured
     if verdict != IDENTIFIABLE:
         if kind == "resistance" and sur:
             s = max(sur, key=lambda s: s.max_abs_diff_K)
             moved = f" and moved with it (correlation {s.correlation:.2f})" if s.correlation > 0.7 else ""
-            reasons.append(
-                f"the room stayed within {s.max_abs_diff_K:.1f} K of {s.name} (typically {s.median_abs_diff_K:.1f} K)"
-                f"{moved}, so the heat flow through {name} was too small to tell apart from an unknown heat gain"
-            )
+            if s.median_abs_diff_K < STEADY_DIFFERENCE_K:
+                reasons.append(
+                    f"the room stayed within {s.max_abs_diff_K:.1f} K of {s.name} (typically"
+                    f" {s.median_abs_diff_K:.1f} K){moved}, so the heat flow through {name} was too small to"
+                    " tell apart from an unknown heat gain"
+                )
+            elif s.std_diff_K < STEADY_DIFFERENCE_K:
+                reasons.append(
+                    f"the difference between the room and {s.name} hardly changed (standard deviation"
+                    f" {s.std_diff_K:.1f} K), so the heat flow through {name} was almost constant and cannot be"
+                    " told apart from an unknown heat gain"
+                )
             advice.append(
                 f"run a forced-response test that drives the room several K away from {s.name} for hours"
                 " (see `rczone design`)"
             )
         if tenth < sigma:
             reasons.append(
-                f"with {name} ten times smaller the room temperature changes by only {tenth:.2f} K RMS once the"
-                f" initial state and heat gain are re-fitted, below the {sigma:.2f} K error level, so a fit can"
+                f"with {name} ten times smaller {words.changes} by only {tenth:.2f} K RMS once"
+                f" {words.refitted}, below the {sigma:.2f} K error level, so a fit can"
                 f" return a value far below the true one and still match the data"
             )
         elif tenfold < sigma:
             reasons.append(
-                f"with {name} ten times larger the room temperature changes by only {tenfold:.2f} K RMS once the"
-                f" initial state and heat gain are re-fitted, below the {sigma:.2f} K error level"
+                f"with {name} ten times larger {words.changes} by only {tenfold:.2f} K RMS once"
+                f" {words.refitted}, below the {sigma:.2f} K error level"
             )
         if bias >= BIAS_IDENTIFIABLE and model_error > 0:
             reasons.append(
@@ -372,20 +656,20 @@ def _verdict(
             )
         if rho > CORR_CONFOUNDED and partner:
             reasons.append(
-                f"its effect on the room temperature is almost the same as that of {partner} (correlation"
+                f"its effect on {measured} is almost the same as that of {partner} (correlation"
                 f" {rho:.2f}), so the data fix only a combination of the two"
             )
             advice.append(
                 f"fix {partner} or {name} at its construction value, or excite the room differently"
             )
         if kind == "capacitance" and not reasons:
-            reasons.append(
-                "the room temperature did not change fast or far enough to show the thermal inertia"
-            )
-            advice.append("step the supply-air temperature or flow and hold each step for at least an hour")
+            reasons.append(f"{measured} did not change fast or far enough to show the thermal inertia")
+            advice.append(f"step {words.actuators} and hold each step for at least an hour")
         if not reasons:
             reasons.append(f"the expected relative standard error is {se:.0%}")
-        advice.append("or keep it at its construction value (fixed, or MAP with a prior)")
+        advice.append(
+            ("or " if advice else "") + "keep it at its construction value (fixed, or MAP with a prior)"
+        )
     else:
         reasons.append(
             f"the data determine it to about ±{_percent(se)} (expected relative standard error); even a model"
@@ -396,13 +680,14 @@ def _verdict(
         verdict=verdict,
         reason="; ".join(reasons),
         advice="; ".join(advice),
-        construction=float(value),
+        construction=float(words.construction[name]),
         expected_rel_se=float(se),
         most_correlated_with=partner,
         max_abs_correlation=float(rho),
         rms_change_tenth_K=float(tenth),
         rms_change_tenfold_K=float(tenfold),
         worst_case_bias=float(bias),
+        value=float(words.value[name]),
     )
 
 

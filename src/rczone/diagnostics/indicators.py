@@ -20,7 +20,7 @@ from rczone.errors import DataError, did_you_mean
 
 @dataclass(frozen=True)
 class SurroundingIndicator:
-    """How the room temperature relates to one surrounding temperature (K)."""
+    """How the zone temperature relates to one surrounding temperature (K)."""
 
     name: str
     correlation: float
@@ -89,29 +89,43 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def data_indicators(
     frame: pd.DataFrame,
-    surroundings: Sequence[str] = ("Tf", "Tc", "Tn1", "Tn2", "Thw", "Tsd"),
-    inputs: Sequence[str] = ("To", "Ts", "m", "Q"),
-    flow: str = "m",
+    output: str = "Ti",
+    surroundings: Sequence[str] = (),
+    inputs: Sequence[str] = (),
+    flow: str | None = None,
     flow_tol: float = 1e-3,
     min_stretch_s: float = 1800.0,
 ) -> DataIndicators:
-    """Compute :class:`DataIndicators` for a data frame with a ``time`` (s) and ``Ti`` column.
+    """Compute :class:`DataIndicators` for a data frame with a ``time`` (s) and an ``output`` column.
 
-    Columns that are absent are skipped (``Tsd`` is derived from the five surroundings when
-    they are present and it is not).
+    Parameters
+    ----------
+    frame : DataFrame
+    output : str
+        The zone temperature the surroundings are compared with.
+    surroundings : sequence of str
+        Temperatures around the zone (boundaries of the model: outdoors, neighbouring spaces).
+    inputs : sequence of str
+        Inputs whose spread is reported.
+    flow : str, optional
+        Supply flow whose constant stretches are reported.
+    flow_tol : float
+        Largest change between samples still counted as constant flow, kg/s.
+    min_stretch_s : float
+        Shortest constant-flow stretch reported, s.
+
+    Columns that are absent are skipped. :func:`rczone.diagnostics.diagnose` passes the model's
+    own signals.
     """
-    for c in ("time", "Ti"):
+    for c in ("time", output):
         if c not in frame:
             raise DataError(f"data have no {c!r} column; " + did_you_mean(c, frame.columns))
     t = frame["time"].to_numpy(float)
-    ti = frame["Ti"].to_numpy(float)
+    ti = frame[output].to_numpy(float)
     cols = {c: frame[c].to_numpy(float) for c in frame.columns}
-    five = ("Tf", "Tc", "Tn1", "Tn2", "Thw")
-    if "Tsd" not in cols and all(s in cols for s in five):
-        cols["Tsd"] = np.mean([cols[s] for s in five], axis=0)
     sur = []
     for name in surroundings:
-        if name not in cols:
+        if name not in cols or name == output:
             continue
         d = cols[name] - ti
         ok = np.isfinite(d)
@@ -129,7 +143,7 @@ def data_indicators(
             v = cols[name][np.isfinite(cols[name])]
             var.append(InputVariation(name, float(v.std()), float(v.max() - v.min())))
     stretches = []
-    if flow in cols:
+    if flow is not None and flow in cols:
         mv = cols[flow]
         same = np.r_[False, np.abs(np.diff(mv)) <= flow_tol]
         for i, j in _runs(same):

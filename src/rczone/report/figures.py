@@ -118,6 +118,28 @@ def data_overview(frame: pd.DataFrame, title: str = "") -> Figure:
     return fig
 
 
+def signals_overview(
+    frame: pd.DataFrame, panels: Sequence[tuple[str, Sequence[str]]], title: str = ""
+) -> Figure:
+    """Any model's signals over time: one panel per ``(y label, columns)``; absent columns are skipped."""
+    panels = [(label, [c for c in cols if c in frame]) for label, cols in panels]
+    panels = [(label, cols) for label, cols in panels if cols]
+    fig = Figure(figsize=(8.5, 1.2 + 1.5 * max(len(panels), 1)))
+    axes = fig.subplots(max(len(panels), 1), 1, sharex=True, squeeze=False)[:, 0]
+    h = _hours(frame["time"].to_numpy(float))
+    for ax, (label, cols) in zip(axes, panels, strict=False):
+        for c in cols:
+            ax.plot(h, frame[c].to_numpy(float), lw=1.0, label=c)
+        ax.set_ylabel(label)
+        ax.legend(fontsize=7, ncol=min(len(cols), 6), loc="best")
+        ax.grid(alpha=0.3)
+    axes[-1].set_xlabel("hours from start")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
 def fit_overview(t: np.ndarray, measured: np.ndarray, predicted: np.ndarray, title: str = "") -> Figure:
     """Measured and open-loop predicted room temperature, and the error."""
     fig = Figure(figsize=(8.5, 4.2))

@@ -1,16 +1,26 @@
-"""Verdicts on synthetic nights whose answer is known by construction."""
+"""Verdicts on synthetic data whose answer is known by construction, for the paper's and other models."""
+
+import math
 
 import numpy as np
+import pandas as pd
 import pytest
 
-from rczone.comparison import model_arrays
 from rczone.diagnostics import diagnose
-from rczone.diagnostics.identifiability import IDENTIFIABLE, NOT_IDENTIFIABLE, parameter_boundaries
-from rczone.errors import ParameterError
-from rczone.models import get_model
+from rczone.diagnostics.identifiability import (
+    CONSISTENT_FACTOR,
+    IDENTIFIABLE,
+    NOT_IDENTIFIABLE,
+    parameter_boundaries,
+)
+from rczone.errors import DataError, ParameterError
+from rczone.models import ModelInputs, ZoneModel, get_model, load_model
+from rczone.simulation import simulate
 from rczone.simulation.initial import output_consistent_state
 from rczone.simulation.sensitivity import output_sensitivities
-from tests.unit.diagnostics.synthetic import night
+from tests.unit.diagnostics.synthetic import family, heated, night
+
+TRUE = {"Rw": 0.025, "Cr": 1.5e6}  # far from construction (Rw 8.4e-3, Cr 4.5e5)
 
 
 @pytest.fixture(scope="module")
@@ -40,19 +50,25 @@ def test_fisher_is_symmetric_positive_definite_and_correlation_is_unit_diagonal(
     np.testing.assert_allclose(rep.fisher, rep.fisher.T, rtol=1e-10)
     assert np.all(np.linalg.eigvalsh(rep.fisher) > 0)
     np.testing.assert_allclose(np.diag(rep.correlation), 1.0)
-    assert rep.condition_number > 1
+    assert 1 < rep.condition_number < 1e6
 
 
 def test_parameter_boundaries_follow_ties_and_wall_chains(net):
     assert parameter_boundaries(net, "Rw") == ("Tsd",)
     assert parameter_boundaries(net, "Rwin") == ("To",)
+    assert parameter_boundaries(family("TiTe+heater").network, "Rie") == ("To",)
 
 
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
         ({"free": ["Rx"]}, r"unknown free parameter 'Rx'"),
+        ({"free": ["R1"]}, r"'R1' is tied"),
+        ({"free": []}, r"no free parameter"),
         ({"sigma_K": 0.0}, r"must be > 0"),
+        ({"model_error_K": float("nan")}, r"finite"),
+        ({"operating_point": "modle"}, r"did you mean 'model'"),
+        ({"heat_input": "Qx"}, r"heat_input 'Qx' is not an input"),
     ],
 )
 def test_bad_arguments(net, kwargs, match):
@@ -60,12 +76,17 @@ def test_bad_arguments(net, kwargs, match):
         diagnose(net, night("forced", hours=2), **kwargs)
 
 
+def test_missing_signal_names_the_model_and_the_hint(net):
+    with pytest.raises(DataError, match=r"needs input 'Ts'"):
+        diagnose(net, night("forced", hours=2).drop(columns=["Ts"]))
+
+
 def test_worst_case_bias_bounds_the_shift_a_structured_model_error_causes(net):
     """The bound is attained by a model error along the parameter's marginal sensitivity."""
     frame = night("forced", hours=4)
     free = ["Cr", "Rw"]
     rep = diagnose(net, frame, free=free, model_error_K=0.2, initial_state_nuisance=False, heat_input=None)
-    t, u, m = model_arrays(net, frame)
+    t, u, m, _ = load_model(net).signals(frame)
     ss = net.state_space()
     x0 = output_consistent_state(ss, u[0], m[0], float(frame["Ti"].iloc[0]))
     S = output_sensitivities(net, None, free, t, u, m, x0=x0).dy[:, 0, :]
@@ -90,3 +111,137 @@ def test_model_error_check_scales_linearly_and_can_be_disabled(net):
     assert b.worst_case_bias == pytest.approx(3 * a.worst_case_bias, rel=1e-12)
     off = diagnose(net, frame, free=["Cr", "Rw"], model_error_K=0.0).parameters["Rw"]
     assert off.worst_case_bias == 0.0
+
+
+# ---- the operating point ---------------------------------------------------------------------
+
+
+def test_the_models_values_are_used_when_they_reproduce_the_data(net):
+    rep = diagnose(net, night("forced", hours=6), free=["Cr", "Rw"])
+    op = rep.operating_point
+    assert op.source == "model" and op.reproduces_data and "reproduce the data" in op.reason
+    assert op.residual_K < 0.05  # the data's own noise (0.03 K) plus nothing
+    assert op.threshold_K == pytest.approx(CONSISTENT_FACTOR * math.hypot(0.1, 0.2))
+    assert op.theta == pytest.approx(dict(load_model(net).theta))
+    assert rep.parameters["Rw"].value == rep.parameters["Rw"].construction
+
+
+def test_the_consistency_residual_refits_the_initial_state_and_the_guessed_gain(net):
+    """Noise-free data from the model's values, but a warmer wall at the start and a gain of 350 W, not
+    the 50 W the data say: a fit absorbs both exactly, so the residual is zero."""
+    frame = night("forced", hours=6)
+    zm = load_model(net)
+    t, u, m, _ = zm.signals(frame)
+    u[:, net.input_names.index("Q")] = 350.0
+    frame["Ti"] = simulate(net.state_space(), t, u, m, x0=np.array([22.0, 25.0])).y[:, 0]
+    op = diagnose(zm, frame, free=["Cr", "Rw"]).operating_point
+    assert op.source == "model" and op.residual_K < 1e-9
+    # without the offset the 300 W error shows
+    rep = diagnose(zm, frame, free=["Cr", "Rw"], heat_input=None, operating_point="model")
+    assert rep.operating_point.residual_K > 0.05 and rep.settings["heat_offset_nuisance"] == []
+
+
+def test_values_that_miss_the_data_are_replaced_by_a_quick_fit(net):
+    frame = night("forced", seed=2, hours=8, theta=TRUE)
+    rep = diagnose(net, frame, free=["Cr", "Rw"])
+    op = rep.operating_point
+    assert op.source == "fit" and op.residual_K > op.threshold_K > op.fit_residual_K
+    assert "quick least-squares fit" in op.reason and op.fit_free == ("Cr", "Rw", "x0_Tw")
+    # the fit lands on the values the data were made with (known by construction)
+    for k, v in TRUE.items():
+        assert op.theta[k] == pytest.approx(v, rel=0.05)
+        assert rep.parameters[k].value == pytest.approx(v, rel=0.05)
+        assert rep.parameters[k].construction == pytest.approx(net.values()[k])
+    assert rep.to_dict()["operating_point"]["source"] == "fit"
+
+
+def test_the_operating_point_can_be_forced(net):
+    frame = night("forced", seed=2, hours=8, theta=TRUE)
+    kept = diagnose(net, frame, free=["Cr", "Rw"], operating_point="model").operating_point
+    assert kept.source == "model" and not kept.reproduces_data and "as asked" in kept.reason
+    fitted = diagnose(net, night("forced", hours=4), free=["Cr", "Rw"], operating_point="fit").operating_point
+    assert fitted.source == "fit" and "as asked" in fitted.reason
+    # theta replaces the model's values: the true ones reproduce the data
+    assert diagnose(net, frame, free=["Cr", "Rw"], theta=TRUE).operating_point.source == "model"
+
+
+def test_a_model_that_misses_even_after_the_fit_says_so(net):
+    frame = night("forced", hours=6)
+    frame["Ti"] += np.where(frame["time"] % 3600 < 1800, 1.5, -1.5)  # no RC model makes this square wave
+    op = diagnose(net, frame, free=["Cr", "Rw"]).operating_point
+    assert op.source == "fit" and not op.reproduces_data and "read the verdicts with caution" in op.reason
+
+
+# ---- any model, any outputs ------------------------------------------------------------------
+
+
+def test_a_heated_zone_under_prbs_is_identifiable_and_an_idle_one_is_not():
+    zm = family("TiTe+heater")
+    prbs = diagnose(zm, heated(zm, "prbs"))
+    assert prbs.names == ("Ci", "Ce", "Rie", "Rea")
+    assert all(v.verdict == IDENTIFIABLE for v in prbs.parameters.values())
+    assert prbs.settings["heat_offset_nuisance"] == []  # the heater is measured, its power varies
+    idle = diagnose(zm, heated(zm, "idle"))
+    assert idle.settings["heat_offset_nuisance"] == ["Ph"]  # a constant power is only a guess
+    assert {v.verdict for v in idle.parameters.values()} == {NOT_IDENTIFIABLE}
+    assert "stayed within" not in idle.parameters["Rea"].reason  # the room was 10 K from outdoors
+
+
+def test_every_output_adds_its_information():
+    """With no nuisances, the Fisher matrix of two outputs is the sum of each output's."""
+    both = family("TiTe+heater", ("Ti", "Te"))
+    frame = heated(both, "prbs", hours=24, noise=0.0)  # starts at rest: every model starts alike
+    kw = {"heat_input": None, "initial_state_nuisance": False, "operating_point": "model"}
+    f2 = diagnose(both, frame, **kw).fisher
+    f_ti = diagnose(family("TiTe+heater", ("Ti",)), frame, **kw).fisher
+    f_te = diagnose(family("TiTe+heater", ("Te",)), frame, **kw).fisher
+    np.testing.assert_allclose(f2, f_ti + f_te, rtol=1e-9)
+    rep = diagnose(both, heated(both, "prbs", hours=24))
+    assert rep.outputs == ("Ti", "Te") and rep.to_dict()["outputs"] == ["Ti", "Te"]
+    assert rep.n_effective == pytest.approx(2 * 289 * 300.0 / 1800.0)
+
+
+def test_missing_output_samples_are_skipped():
+    """Against a plain loop over the measured samples of each output."""
+    both = family("TiTe+heater", ("Ti", "Te"))
+    frame = heated(both, "prbs", hours=24)
+    frame.loc[frame.index[len(frame) // 2 :], "Te"] = np.nan
+    frame.loc[frame.index[5:9], "Ti"] = np.nan
+    rep = diagnose(both, frame, heat_input=None, initial_state_nuisance=False, operating_point="model")
+    n_measured = int(frame[["Ti", "Te"]].notna().to_numpy().sum())
+    assert rep.n_effective == pytest.approx(n_measured * 300.0 / 1800.0)
+    net = both.network
+    x0 = np.array([rep.operating_point.initial_state[s] for s in net.state_names])
+    u = frame[list(net.input_names)].to_numpy()
+    dy = output_sensitivities(net, both.theta, rep.names, frame["time"].to_numpy(), u, None, x0=x0).dy
+    expected = np.zeros((4, 4))
+    for k in range(len(frame)):
+        for j, o in enumerate(net.outputs):
+            if np.isfinite(frame[o].iloc[k]):
+                expected += np.outer(dy[k, j], dy[k, j])
+    np.testing.assert_allclose(rep.fisher, expected * (300.0 / 1800.0) / 0.1**2, rtol=1e-9)
+
+
+def test_a_heat_gain_default_of_any_name_is_the_nuisance():
+    base = family("TiTe+gain")
+    zm = ZoneModel(base.network, base.theta, inputs=ModelInputs(defaults={"Q": 150.0}), source="office")
+    frame = heated(family("TiTe+heater"), "prbs").drop(columns=["Ph"])  # To only, Q from the default
+    rep = diagnose(zm, frame, operating_point="model")
+    assert rep.settings["heat_offset_nuisance"] == ["Q"] and rep.settings["constants"] == {"Q": 150.0}
+
+
+def test_a_datetime_index_is_accepted(net):
+    frame = night("forced", hours=3)
+    stamped = frame.drop(columns=["time"]).set_index(
+        pd.Timestamp("2026-10-24 18:00", tz="UTC") + pd.to_timedelta(frame["time"], unit="s")
+    )
+    a = diagnose(net, frame, free=["Cr", "Rw"]).expected_se
+    np.testing.assert_allclose(diagnose(net, stamped, free=["Cr", "Rw"]).expected_se, a)
+
+
+def test_a_parameter_at_zero_is_left_out_by_default_and_refused_by_name():
+    zm = family("TiTe+heater+solar", theta={"Aw": 0.0})
+    frame = heated(family("TiTe+heater"), "prbs", hours=12).assign(Ps=100.0)
+    assert "Aw" not in diagnose(zm, frame, operating_point="model").names
+    with pytest.raises(ParameterError, match=r"'Aw' is 0; the analysis is in log\(Aw\)"):
+        diagnose(zm, frame, free=["Ci", "Aw"], operating_point="model")

@@ -16,7 +16,7 @@ def frame():
 
 
 def test_indicators_measure_differences_correlation_and_flow_stretches():
-    ind = data_indicators(frame())
+    ind = data_indicators(frame(), "Ti", surroundings=("Tn1", "Tc", "Tf"), inputs=("m", "Ts", "Q"), flow="m")
     n1 = ind.surrounding("Tn1")
     assert n1.max_abs_diff_K == pytest.approx(0.5) and n1.median_abs_diff_K == pytest.approx(0.5)
     assert n1.correlation == pytest.approx(1.0) and n1.std_diff_K == pytest.approx(0.0, abs=1e-12)
@@ -35,5 +35,13 @@ def test_indicators_measure_differences_correlation_and_flow_stretches():
 def test_missing_required_column():
     with pytest.raises(DataError, match=r"no 'Ti' column; did you mean 'ti'"):
         data_indicators(pd.DataFrame({"time": [0.0, 1.0], "ti": [1.0, 2.0]}))
+    with pytest.raises(DataError, match=r"no 'Tz' column"):
+        data_indicators(frame(), output="Tz")
+
+
+def test_any_output_and_no_flow():
+    ind = data_indicators(frame().rename(columns={"Ti": "T_room"}), "T_room", surroundings=("Tn1",))
+    assert ind.surrounding("Tn1").max_abs_diff_K == pytest.approx(0.5)
+    assert ind.constant_flow_stretches == () and ind.inputs == ()
     with pytest.raises(DataError, match=r"no indicator for 'Tn2'"):
-        data_indicators(frame()).surrounding("Tn2")
+        data_indicators(frame(), surroundings=("Tn1",)).surrounding("Tn2")

@@ -95,3 +95,22 @@ def test_cli_fit_check_on_other_data_writes_checks(tmp_path, capsys):
     assert set(checks["profiles"]) == {"Cr", "Rw"} and str(tmp_path / "b.csv") in checks["validation"]
     assert "disagree beyond their standard errors" in capsys.readouterr().out
     assert "can the estimates be trusted?" in (tmp_path / "rep" / "report.html").read_text()
+
+
+def test_profiles_work_for_any_model_and_every_output():
+    """A heated zone with two measured nodes (one with gaps): the profiles are curved around the estimates."""
+    from tests.unit.diagnostics.synthetic import family, heated
+
+    truth = {"Rea": 0.03, "Ci": 2e6}
+    both = family("TiTe+heater", ("Ti", "Te"), theta=truth)
+    frame = heated(both, "prbs", hours=24)
+    frame.loc[frame.index[::3], "Te"] = float("nan")  # an output with missing samples
+    cal = calibrate(family("TiTe+heater", ("Ti", "Te")), frame, method="ls")
+    checks = profile_checks(cal.model, frame, cal.result, names=["Ci", "Rea"], factor=1.25, n_points=11)
+    for name, c in checks.items():
+        est = cal.result.estimates[name]
+        assert not c.flat and c.interval[0] < est < c.interval[1], (name, c.interval)
+        assert c.interval[1] / c.interval[0] < 1.2 and est == pytest.approx(truth[name], rel=0.05)
+    assert far_from_construction(cal.result, factor=1.2) == pytest.approx(
+        {"Ci": cal.result.estimates["Ci"] / 1e6, "Rea": cal.result.estimates["Rea"] / 0.02}
+    )
