@@ -15,8 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
-from rczone.estimation.kalman import kalman_nll
-from rczone.kernels.kalman import interval_groups, kalman_nll_rc2
+from rczone.estimation.kalman import kalman_filter_reference, kalman_nll_rc2
 from rczone.kernels.propagate import propagate_kernel
 from rczone.kernels.rankone import simulate_rank_one
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
@@ -29,6 +28,7 @@ from rczone.simulation.discretize import (
     spectral_transition,
     symmetrizing_scale,
 )
+from rczone.simulation.intervals import interval_groups
 from rczone.simulation.simulate import propagate_reference, transition_matrices, transition_matrices_expm
 
 RTOL = 1e-10
@@ -193,7 +193,7 @@ def reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold):
         else:
             Phi[k], G0[k], G1[k] = foh(A, B, dt)
         Qd[k] = van_loan_doubling(A, Qc, dt)
-    return kalman_nll(Phi, G0, G1, Qd, np.arange(K), u, y, x0, P0, ss.C, ss.D, R)
+    return kalman_filter_reference(Phi, G0, G1, Qd, np.arange(K), u, y, x0, P0, ss.C, ss.D, R).nll
 
 
 def filter_problem(rng: np.random.Generator, p: int, N: int) -> tuple[np.ndarray, ...]:
