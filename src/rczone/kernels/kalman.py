@@ -8,9 +8,11 @@ processing, exact for diagonal ``R`` [2]_): each observed output is a scalar upd
 output (NaN) is skipped on its own, and no matrix is inverted.
 
 Its plain-NumPy twin, :func:`rczone.estimation.kalman.kalman_filter_reference`, is written
-from the same step functions (:func:`update_step`, :func:`predict_step` there and here) and
-is what the tests compare this one with; both are compared with a brute-force
-multivariate-normal density.
+from the same two step functions (``update_step``: one scalar measurement update;
+``predict_step``: the time update), which the sample loop here carries out in place (marked
+by comments): a numba call with array arguments costs reference counting on every array,
+which for a few states is several times the arithmetic of the step itself. The tests compare
+the two filters, and both with a brute-force multivariate-normal density.
 
 Forward sensitivities [3]_: for ``q`` parameter directions the derivatives of everything the
 filter carries (``dx``, ``dP``) are propagated alongside by the product rule, given the
@@ -54,218 +56,12 @@ from numba import njit
 #: Default relative tolerance at which the predicted covariance counts as stationary.
 STEADY_RTOL = 1e-14
 
-#: Floating-point freedoms of the step functions: sums may be reassociated (vectorized) and
-#: products fused with additions; NaN and infinities keep their IEEE meaning (missing data).
+#: Floating-point freedoms of the filter: sums may be reassociated (vectorized) and products
+#: fused with additions; NaN and infinities keep their IEEE meaning (missing data).
 FAST = {"reassoc", "contract"}
 
 
 @njit(cache=True, error_model="numpy", fastmath=FAST)
-def update_step(
-    x: np.ndarray,
-    P: np.ndarray,
-    c: np.ndarray,
-    r: float,
-    e: float,
-    dx: np.ndarray,
-    dP: np.ndarray,
-    dc: np.ndarray,
-    dr: np.ndarray,
-    de0: np.ndarray,
-    kg: np.ndarray,
-    dkg: np.ndarray,
-    pc: np.ndarray,
-    dpc: np.ndarray,
-    ds: np.ndarray,
-    de: np.ndarray,
-    grad: np.ndarray,
-    fim: np.ndarray,
-    has_dc: bool,
-) -> float:
-    """Scalar measurement update of one output, in place; returns ``-log`` of its density term.
-
-    ``e = y - d'u - c'x`` is the innovation, ``s = c'Pc + r`` its variance,
-    ``k = Pc / s`` the gain; ``x += k e``, ``P -= k (Pc)'`` (kept exactly symmetric).
-    Derivatives along each direction ``j``: ``de = de0_j - dc_j'x - c'dx_j`` (``de0`` holds
-    ``-dd_j'u``), ``ds = c'dP_j c + 2 dc_j'Pc + dr_j``, ``dk = (dPc - k ds)/s``,
-    ``dx_j += dk e + k de``, ``dP_j -= dk (Pc)' + k (dPc)'``, and ``grad`` accumulates the
-    derivative of ``0.5 (log s + e^2/s)``, ``fim`` the diagonal of its Fisher information
-    ``de^2/s + 0.5 (ds/s)^2``. The gain and its derivatives are left in ``kg`` and
-    ``dkg``, those of ``s`` in ``ds`` (kept for the steady state); ``pc``, ``dpc``, ``de`` are
-    scratch.
-
-    Returns ``s``, or ``nan`` when it is not positive (an invalid model).
-    """
-    n = x.shape[0]
-    q = dx.shape[0]
-    s = r
-    for i in range(n):
-        acc = 0.0
-        for j in range(n):
-            acc += P[i, j] * c[j]
-        pc[i] = acc
-        s += c[i] * acc
-    if not s > 0.0:
-        return math.nan
-    inv = 1.0 / s
-    for i in range(n):
-        kg[i] = pc[i] * inv
-    for d in range(q):
-        # dPc = dP c + P dc, ds = c'dPc + dc'Pc + dr, de = de0 - dc'x - c'dx (all at the old values)
-        sd = dr[d]
-        ed = de0[d]
-        for i in range(n):
-            acc = 0.0
-            for j in range(n):
-                acc += dP[d, i, j] * c[j]
-            if has_dc:
-                for j in range(n):
-                    acc += P[i, j] * dc[d, j]
-                sd += dc[d, i] * pc[i]
-                ed -= dc[d, i] * x[i]
-            dpc[d, i] = acc
-            sd += c[i] * acc
-            ed -= c[i] * dx[d, i]
-        ds[d] = sd
-        de[d] = ed
-    for d in range(q):
-        sd = ds[d]
-        ed = de[d]
-        grad[d] += 0.5 * sd * inv + e * ed * inv - 0.5 * e * e * sd * inv * inv
-        fim[d] += ed * ed * inv + 0.5 * sd * sd * inv * inv
-        for i in range(n):
-            dk = (dpc[d, i] - kg[i] * sd) * inv
-            dkg[d, i] = dk
-            dx[d, i] += dk * e + kg[i] * ed
-        for i in range(n):
-            for j in range(i, n):
-                v = dP[d, i, j] - dkg[d, i] * pc[j] - kg[i] * dpc[d, j]
-                dP[d, i, j] = v
-                dP[d, j, i] = v
-    for i in range(n):
-        x[i] += kg[i] * e
-    for i in range(n):
-        for j in range(i, n):
-            v = P[i, j] - kg[i] * pc[j]
-            P[i, j] = v
-            P[j, i] = v
-    return s
-
-
-@njit(cache=True, error_model="numpy", fastmath=FAST)
-def predict_step(
-    x: np.ndarray,
-    P: np.ndarray,
-    Phi: np.ndarray,
-    Qd: np.ndarray,
-    drive: np.ndarray,
-    dx: np.ndarray,
-    dP: np.ndarray,
-    dPhi: np.ndarray,
-    dQd: np.ndarray,
-    ddrive: np.ndarray,
-    dyn: np.ndarray,
-    covariance: bool,
-    T: np.ndarray,
-    X: np.ndarray,
-    Y: np.ndarray,
-    xn: np.ndarray,
-) -> None:
-    """Time update in place: ``x = Phi x + drive``, ``P = Phi P Phi' + Qd`` and the derivatives.
-
-    ``dx_j = dPhi_j x + Phi dx_j + ddrive_j``; ``dP_j = dPhi_j P Phi' + Phi P dPhi_j' + Phi dP_j Phi'
-    + dQd_j``; ``dyn[j]`` is False when ``dPhi_j = 0`` (its terms are skipped). With
-    ``covariance`` False only the means move (open loop, or a stationary covariance).
-    ``T, X, Y`` (n, n) and ``xn`` (n,) are scratch.
-    """
-    n = x.shape[0]
-    q = dx.shape[0]
-    for d in range(q):
-        for i in range(n):
-            acc = ddrive[d, i]
-            for j in range(n):
-                acc += Phi[i, j] * dx[d, j]
-            if dyn[d]:
-                for j in range(n):
-                    acc += dPhi[d, i, j] * x[j]
-            xn[i] = acc
-        for i in range(n):
-            dx[d, i] = xn[i]
-    for i in range(n):
-        acc = drive[i]
-        for j in range(n):
-            acc += Phi[i, j] * x[j]
-        xn[i] = acc
-    for i in range(n):
-        x[i] = xn[i]
-    if not covariance:
-        return
-    # T = Phi P (also for the derivative terms); P = T Phi' + Qd
-    for i in range(n):
-        for j in range(n):
-            T[i, j] = 0.0
-        for k in range(n):
-            a = Phi[i, k]
-            for j in range(n):
-                T[i, j] += a * P[k, j]
-    for d in range(q):
-        # X = Phi P dPhi' (its transpose is dPhi P Phi'), Y = Phi dP
-        if dyn[d]:
-            for i in range(n):
-                for j in range(n):
-                    acc = 0.0
-                    for k in range(n):
-                        acc += T[i, k] * dPhi[d, j, k]
-                    X[i, j] = acc
-        for i in range(n):
-            for j in range(n):
-                Y[i, j] = 0.0
-            for k in range(n):
-                a = Phi[i, k]
-                for j in range(n):
-                    Y[i, j] += a * dP[d, k, j]
-        for i in range(n):
-            for j in range(i, n):
-                acc = dQd[d, i, j]
-                for k in range(n):
-                    acc += Y[i, k] * Phi[j, k]
-                if dyn[d]:
-                    acc += X[i, j] + X[j, i]
-                dP[d, i, j] = acc
-                dP[d, j, i] = acc
-    for i in range(n):
-        for j in range(i, n):
-            acc = Qd[i, j]
-            for k in range(n):
-                acc += T[i, k] * Phi[j, k]
-            P[i, j] = acc
-            P[j, i] = acc
-
-
-@njit(cache=True, error_model="numpy")
-def _copy_state(P: np.ndarray, dP: np.ndarray, P_to: np.ndarray, dP_to: np.ndarray) -> None:
-    n = P.shape[0]
-    for i in range(n):
-        for j in range(n):
-            P_to[i, j] = P[i, j]
-    for d in range(dP.shape[0]):
-        for i in range(n):
-            for j in range(n):
-                dP_to[d, i, j] = dP[d, i, j]
-
-
-@njit(cache=True, error_model="numpy")
-def _repeats(P: np.ndarray, P_prev: np.ndarray, rtol: float) -> bool:
-    """Whether ``P`` equals ``P_prev`` to ``rtol`` relative to its largest entry."""
-    big = 0.0
-    diff = 0.0
-    for i in range(P.shape[0]):
-        for j in range(P.shape[1]):
-            big = max(big, abs(P[i, j]))
-            diff = max(diff, abs(P[i, j] - P_prev[i, j]))
-    return diff <= rtol * big
-
-
-@njit(cache=True, error_model="numpy")
 def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int, np.ndarray, np.ndarray]:
     """Run the filter over all samples; ``-log L`` without ``0.5 n log 2 pi``, and its gradient.
 
@@ -305,6 +101,19 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
     fim : ndarray, shape (q,)
         Diagonal of the Fisher information of the parameters, ``sum de^2/s + 0.5 (ds/s)^2``
         over the observed outputs [3]_: the curvature optimizers scale their variables with.
+
+    Notes
+    -----
+    ``update_step`` for output ``o`` with ``c = C[o]``: ``e = y - d'u - c'x``, ``s = c'Pc + r``,
+    ``k = Pc / s``, ``x += k e``, ``P -= k (Pc)'`` (kept exactly symmetric); along each
+    direction ``j``: ``de = -dd_j'u - dc_j'x - c'dx_j``, ``ds = c'dP_j c + 2 dc_j'Pc + dr_j``,
+    ``dk = (dPc - k ds)/s``, ``dx_j += dk e + k de``, ``dP_j -= dk (Pc)' + k (dPc)'``; the
+    gradient gains the derivative of ``0.5 (log s + e^2/s)``.
+
+    ``predict_step`` with the matrices of interval ``w``: ``x = Phi x + drive``,
+    ``P = Phi P Phi' + Qd``; ``dx_j = dPhi_j x + Phi dx_j + ddrive_j``,
+    ``dP_j = dPhi_j P Phi' + Phi P dPhi_j' + Phi dP_j Phi' + dQd_j`` (the ``dPhi`` terms skipped
+    for directions that leave the dynamics unchanged).
     """
     Phi, G0, G1, Qd, which = model
     dPhi, dG0, dG1, dQd = sens
@@ -346,14 +155,13 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
     dpc = np.empty((q, n))
     ds = np.empty(q)
     de = np.empty(q)
-    de0 = np.zeros(q)
     drive = np.empty(n)
     ddrive = np.zeros((q, n))
     T = np.empty((n, n))
     X = np.empty((n, n))
     Y = np.empty((n, n))
     xn = np.empty(n)
-    # gains of each output (kept for the steady state) and the covariance the steady state left
+    # gains of each output (kept for the steady state) and the covariances the steady state needs
     kg = np.zeros((ny, n))
     dkg = np.zeros((ny, q, n))
     sg = np.ones(ny)
@@ -424,58 +232,100 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
             if steady and mask != steady_mask:
                 steady = False
             if not steady:
-                _copy_state(P, dP, P_prev, dP_prev)
-            for j in range(ny):
-                if not mask & (1 << j):
-                    continue
-                e = y[k, j]
-                for i in range(p):
-                    e -= D[j, i] * u[k, i]
                 for i in range(n):
-                    e -= C[j, i] * x[i]
-                if has_dd:
-                    for d in range(q):
-                        acc = 0.0
+                    for j in range(n):
+                        P_prev[i, j] = P[i, j]
+                        for d in range(q):
+                            dP_prev[d, i, j] = dP[d, i, j]
+            for o in range(ny):
+                if not mask & (1 << o):
+                    continue
+                e = y[k, o]
+                for i in range(p):
+                    e -= D[o, i] * u[k, i]
+                for i in range(n):
+                    e -= C[o, i] * x[i]
+                # de = -dd'u - dc'x - c'dx (at the values before this update)
+                for d in range(q):
+                    ed = 0.0
+                    if has_dd:
                         for i in range(p):
-                            acc -= dD[j, d, i] * u[k, i]
-                        de0[d] = acc
-                if steady:
-                    s = sg[j]
-                    inv = 1.0 / s
-                    for d in range(q):
-                        ed = de0[d]
-                        for i in range(n):
-                            ed -= C[j, i] * dx[d, i]
-                            if has_dc:
-                                ed -= dC[j, d, i] * x[i]
-                        sd = dsg[j, d]
-                        grad[d] += 0.5 * sd * inv + e * ed * inv - 0.5 * e * e * sd * inv * inv
-                        fim[d] += ed * ed * inv + 0.5 * sd * sd * inv * inv
-                        for i in range(n):
-                            dx[d, i] += dkg[j, d, i] * e + kg[j, i] * ed
+                            ed -= dD[o, d, i] * u[k, i]
                     for i in range(n):
-                        x[i] += kg[j, i] * e
-                else:
-                    s = update_step(
-                        x, P, C[j], r[j], e, dx, dP, dC[j], dr[j], de0, kg[j], dkg[j], pc, dpc, ds, de, grad, fim,
-                        has_dc,
-                    )  # fmt: skip
+                        ed -= C[o, i] * dx[d, i]
+                    if has_dc:
+                        for i in range(n):
+                            ed -= dC[o, d, i] * x[i]
+                    de[d] = ed
+                if not steady:
+                    # ---- update_step: s = c'Pc + r, k = Pc/s, and the derivatives
+                    s = r[o]
+                    for i in range(n):
+                        acc = 0.0
+                        for j in range(n):
+                            acc += P[i, j] * C[o, j]
+                        pc[i] = acc
+                        s += C[o, i] * acc
                     if not s > 0.0:
                         return math.nan, -1, grad, fim
-                    sg[j] = s
-                    lg[j] = math.log(s)
+                    inv = 1.0 / s
+                    for i in range(n):
+                        kg[o, i] = pc[i] * inv
                     for d in range(q):
-                        dsg[j, d] = ds[d]
-                nll += 0.5 * (lg[j] + e * e / sg[j])
+                        # dPc = dP c + P dc, ds = c'dPc + dc'Pc + dr
+                        sd = dr[o, d]
+                        for i in range(n):
+                            acc = 0.0
+                            for j in range(n):
+                                acc += dP[d, i, j] * C[o, j]
+                            if has_dc:
+                                for j in range(n):
+                                    acc += P[i, j] * dC[o, d, j]
+                                sd += dC[o, d, i] * pc[i]
+                            dpc[d, i] = acc
+                            sd += C[o, i] * acc
+                        dsg[o, d] = sd
+                        for i in range(n):
+                            dkg[o, d, i] = (dpc[d, i] - kg[o, i] * sd) * inv
+                        for i in range(n):
+                            for j in range(i, n):
+                                v = dP[d, i, j] - dkg[o, d, i] * pc[j] - kg[o, i] * dpc[d, j]
+                                dP[d, i, j] = v
+                                dP[d, j, i] = v
+                    for i in range(n):
+                        for j in range(i, n):
+                            v = P[i, j] - kg[o, i] * pc[j]
+                            P[i, j] = v
+                            P[j, i] = v
+                    sg[o] = s
+                    lg[o] = math.log(s)
+                # the state update, likelihood term and gradient (steady or not)
+                s = sg[o]
+                inv = 1.0 / s
+                for d in range(q):
+                    sd = dsg[o, d]
+                    ed = de[d]
+                    grad[d] += 0.5 * sd * inv + e * ed * inv - 0.5 * e * e * sd * inv * inv
+                    fim[d] += ed * ed * inv + 0.5 * sd * sd * inv * inv
+                    for i in range(n):
+                        dx[d, i] += dkg[o, d, i] * e + kg[o, i] * ed
+                for i in range(n):
+                    x[i] += kg[o, i] * e
+                nll += 0.5 * (lg[o] + e * e * inv)
                 n_obs += 1
             if not steady:
-                _copy_state(P, dP, P_filt, dP_filt)
+                for i in range(n):
+                    for j in range(n):
+                        P_filt[i, j] = P[i, j]
+                        for d in range(q):
+                            dP_filt[d, i, j] = dP[d, i, j]
         if keep_xf:
             for i in range(n):
                 xf_out[k, i] = x[i]
         if k == N - 1:
             break
         w = which[k]
+        # ---- predict_step: the means
         for i in range(n):
             acc = 0.0
             for j in range(p):
@@ -485,25 +335,101 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
                     acc += G1[w, i, j] * u[k + 1, j]
             drive[i] = acc
         for d in range(q):
-            if dyn[d]:
-                for i in range(n):
-                    acc = 0.0
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += Phi[w, i, j] * dx[d, j]
+                if dyn[d]:
+                    for j in range(n):
+                        acc += dPhi[w, d, i, j] * x[j]
                     for j in range(p):
                         acc += dG0[w, d, i, j] * u[k, j]
                     if foh:
                         for j in range(p):
                             acc += dG1[w, d, i, j] * u[k + 1, j]
-                    ddrive[d, i] = acc
+                xn[i] = acc
+            for i in range(n):
+                dx[d, i] = xn[i]
+        for i in range(n):
+            acc = drive[i]
+            for j in range(n):
+                acc += Phi[w, i, j] * x[j]
+            xn[i] = acc
+        for i in range(n):
+            x[i] = xn[i]
+        if open_loop:
+            continue
         if steady and w != steady_key:
             # leave the steady state from its filtered covariance
             steady = False
-            _copy_state(P_filt, dP_filt, P, dP)
-        covariance = not open_loop and not steady
-        predict_step(x, P, Phi[w], Qd[w], drive, dx, dP, dPhi[w], dQd[w], ddrive, dyn, covariance, T, X, Y, xn)
-        if covariance and steady_rtol > 0.0 and w == prev_key and mask == prev_mask:
-            steady = _repeats(P, P_prev, steady_rtol)
+            for i in range(n):
+                for j in range(n):
+                    P[i, j] = P_filt[i, j]
+                    for d in range(q):
+                        dP[d, i, j] = dP_filt[d, i, j]
+        if steady:
+            prev_key = w
+            prev_mask = mask
+            continue
+        # ---- predict_step: the covariance, T = Phi P (also for the derivative terms)
+        for i in range(n):
+            for j in range(n):
+                T[i, j] = 0.0
+            for a in range(n):
+                f = Phi[w, i, a]
+                for j in range(n):
+                    T[i, j] += f * P[a, j]
+        for d in range(q):
+            # X = Phi P dPhi' (its transpose is dPhi P Phi'), Y = Phi dP
+            if dyn[d]:
+                for i in range(n):
+                    for j in range(n):
+                        acc = 0.0
+                        for a in range(n):
+                            acc += T[i, a] * dPhi[w, d, j, a]
+                        X[i, j] = acc
+            for i in range(n):
+                for j in range(n):
+                    Y[i, j] = 0.0
+                for a in range(n):
+                    f = Phi[w, i, a]
+                    for j in range(n):
+                        Y[i, j] += f * dP[d, a, j]
+            for i in range(n):
+                for j in range(i, n):
+                    acc = dQd[w, d, i, j]
+                    for a in range(n):
+                        acc += Y[i, a] * Phi[w, j, a]
+                    if dyn[d]:
+                        acc += X[i, j] + X[j, i]
+                    dP[d, i, j] = acc
+                    dP[d, j, i] = acc
+        for i in range(n):
+            for j in range(i, n):
+                acc = Qd[w, i, j]
+                for a in range(n):
+                    acc += T[i, a] * Phi[w, j, a]
+                P[i, j] = acc
+                P[j, i] = acc
+        # the steady state: the same interval and observed outputs as before, and P repeats
+        if steady_rtol > 0.0 and w == prev_key and mask == prev_mask:
+            steady = True
+            big = 0.0
+            diff = 0.0
+            for i in range(n):
+                for j in range(n):
+                    big = max(big, abs(P[i, j]))
+                    diff = max(diff, abs(P[i, j] - P_prev[i, j]))
+            steady = diff <= steady_rtol * big
             for d in range(q):
-                steady = steady and _repeats(dP[d], dP_prev[d], steady_rtol)
+                if steady:
+                    big = 0.0
+                    diff = 0.0
+                    for i in range(n):
+                        for j in range(n):
+                            big = max(big, abs(dP[d, i, j]))
+                            diff = max(diff, abs(dP[d, i, j] - dP_prev[d, i, j]))
+                    steady = diff <= steady_rtol * big
             if steady:
                 steady_key = w
                 steady_mask = mask

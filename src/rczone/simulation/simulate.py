@@ -163,9 +163,12 @@ def propagate(
 def propagate_reference(
     Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray, x0: np.ndarray
 ) -> np.ndarray:
-    """Plain NumPy version of :func:`propagate` (the reference the compiled kernel is tested against)."""
+    """Plain NumPy version of :func:`propagate` (the reference the compiled kernel is tested against).
+
+    Complex matrices are allowed (complex-step differentiation).
+    """
     N = u.shape[0]
-    x = np.empty((N, x0.shape[0]))
+    x = np.empty((N, x0.shape[0]), np.result_type(Phi, G0, G1, u, x0))
     x[0] = x0
     for k in range(N - 1):
         w = which[k]
