@@ -42,7 +42,11 @@ FOUR_ZONE_NOISE = {
     **{f"sigma_w_W{i}": 1e-4 for i in range(1, 5)},
     **{f"sigma_x0_{s}{i}": 0.5 for s in "TW" for i in range(1, 5)},
 }
-FOUR_ZONE_FREE = [*FOUR_ZONE_TRUTH, *(f"sigma_v_T{i}" for i in range(1, 5)), *(f"sigma_w_T{i}" for i in range(1, 5))]
+FOUR_ZONE_FREE = [
+    *FOUR_ZONE_TRUTH,
+    *(f"sigma_v_T{i}" for i in range(1, 5)),
+    *(f"sigma_w_T{i}" for i in range(1, 5)),
+]
 
 
 def four_zones() -> RCNetwork:
@@ -59,7 +63,8 @@ def four_zones() -> RCNetwork:
         if i < ROOMS:
             res.append(Resistor(f"T{i}", f"T{i + 1}", "Rp"))
     params = [
-        Parameter(n, "capacitance" if n.startswith("C") else "resistance", v) for n, v in FOUR_ZONE_TRUTH.items()
+        Parameter(n, "capacitance" if n.startswith("C") else "resistance", v)
+        for n, v in FOUR_ZONE_TRUTH.items()
     ]
     params += [Parameter(f"Rh{i}", "resistance", expr=f"Rw{i}/2") for i in range(1, ROOMS + 1)]
     return RCNetwork(
@@ -75,13 +80,21 @@ def four_zones() -> RCNetwork:
 
 
 def simulate_stochastic(
-    net: RCNetwork, t: np.ndarray, u: np.ndarray, noise: dict[str, float], x0: np.ndarray, rng, hold: str = "zoh"
+    net: RCNetwork,
+    t: np.ndarray,
+    u: np.ndarray,
+    noise: dict[str, float],
+    x0: np.ndarray,
+    rng,
+    hold: str = "zoh",
 ) -> np.ndarray:
     """Measurements of the exactly discretized stochastic model (process and measurement noise), shape (N, ny)."""
     ss = net.state_space()
     sw = np.array([noise[f"sigma_w_{s}"] for s in ss.state_names])
     keys = np.column_stack([np.diff(t)])
-    Phi, G0, G1, Qd = interval_discretization(ss.A, ss.N, ss.B, ss.M, ss.capacities, keys, hold, np.diag(sw**2))
+    Phi, G0, G1, Qd = interval_discretization(
+        ss.A, ss.N, ss.B, ss.M, ss.capacities, keys, hold, np.diag(sw**2)
+    )
     names = ["sigma_v"] if len(ss.output_names) == 1 else [f"sigma_v_{o}" for o in ss.output_names]
     sv = np.array([noise[n] for n in names])
     x = np.empty((t.size, ss.n_states))
@@ -142,7 +155,9 @@ def peer_network() -> RCNetwork:
 def peer_data(n: int = 720, seed: int = 5) -> Dataset:
     """``n`` half-hourly samples of the peer model at the published estimates (FOH inputs)."""
     rng = np.random.default_rng(seed)
-    net = peer_network().replace_parameters([Parameter(k, ("resistance" if k[0] == "R" else "capacitance"), v) for k, v in PEER_TRUTH.items()])
+    net = peer_network().replace_parameters(
+        [Parameter(k, ("resistance" if k[0] == "R" else "capacitance"), v) for k, v in PEER_TRUTH.items()]
+    )
     t = np.arange(n) * 1800.0
     h = t / 3600.0
     To = 10 + 6 * np.sin(2 * np.pi * (h - 9) / 24) + np.cumsum(0.05 * rng.standard_normal(n))

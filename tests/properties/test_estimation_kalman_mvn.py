@@ -17,7 +17,12 @@ from scipy.linalg import expm
 from scipy.stats import multivariate_normal
 
 from rczone.errors import InputShapeError
-from rczone.estimation.kalman import kalman_filter_arrays, kalman_filter_reference, kalman_nll, stochastic_matrices
+from rczone.estimation.kalman import (
+    kalman_filter_arrays,
+    kalman_filter_reference,
+    kalman_nll,
+    stochastic_matrices,
+)
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 
 NET = RCNetwork(
@@ -52,7 +57,9 @@ X0 = np.array([21.0, 18.0])
 P0 = np.diag([0.3**2, 0.5**2])
 
 
-def brute_force_logpdf(y: np.ndarray, C: np.ndarray, R: np.ndarray, hold: str, D: np.ndarray | None = None) -> float:
+def brute_force_logpdf(
+    y: np.ndarray, C: np.ndarray, R: np.ndarray, hold: str, D: np.ndarray | None = None
+) -> float:
     ss = NET.state_space()
     n, N = 2, T.size
     Phis, means = [], [X0]
@@ -138,7 +145,11 @@ def test_three_outputs_each_missing_on_its_own_equal_dense_mvn(hold: str) -> Non
     assert twin.nll == pytest.approx(ref, abs=1e-10)
     assert compiled.nll == pytest.approx(ref, abs=1e-10)
     assert kalman_nll(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R) == pytest.approx(ref, abs=1e-10)
-    for a, b in ((twin.innovations, compiled.innovations), (twin.S, compiled.S), (twin.x_filt, compiled.x_filt)):
+    for a, b in (
+        (twin.innovations, compiled.innovations),
+        (twin.S, compiled.S),
+        (twin.x_filt, compiled.x_filt),
+    ):
         np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
     np.testing.assert_array_equal(np.isnan(compiled.innovations), np.isnan(y))
 

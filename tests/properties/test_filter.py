@@ -1,4 +1,4 @@
-"""The compiled Kalman filter against its NumPy twin, and the fused 2-state kernel against both.
+"""The compiled Kalman filters against their NumPy twin: the general one, the modal one, the fused 2-state kernel.
 
 References: :func:`rczone.estimation.kalman.kalman_filter_reference` (plain NumPy, same step
 functions, no steady-state shortcut) fed with the NumPy discretization of
@@ -21,8 +21,10 @@ from rczone.estimation.kalman import (
     kalman_nll_rc2,
     stochastic_matrices,
 )
-from rczone.kernels.kalman import kalman_filter
-from rczone.simulation.intervals import interval_groups
+from rczone.kernels.discretize import modal_matrices
+from rczone.kernels.kalman import kalman_filter, kalman_filter_modal
+from rczone.simulation.discretize import symmetrizing_scale
+from rczone.simulation.intervals import interval_groups, unique_rows
 from tests.netfactory import random_network
 
 RTOL = 1e-10
@@ -85,7 +87,7 @@ def _compiled_nll(args: tuple, steady_rtol: float) -> float:
     Phi, G0, G1, Qd, which, u, y, x0, P0, C, D, R = args
     K, n, p, ny = Phi.shape[0], x0.size, u.shape[1], y.shape[1]
     outs = (np.empty((0, ny)), np.empty((0, ny, 0)), np.empty((0, n)), np.empty((0, n)), np.empty((0, n, n)))
-    nll, n_obs, _, _ = kalman_filter(
+    nll, _, _, _ = kalman_filter(
         (Phi, G0, G1, Qd, which.astype(np.int64)),
         (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n))),
         (C, D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))),
@@ -133,3 +135,30 @@ def test_fused_two_state_kernel_equals_the_general_filter(seed, n_massless, hold
     fused = kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R, hold, e, groups)
     assert fused == pytest.approx(general.nll, rel=RTOL, abs=RTOL)
     np.testing.assert_allclose(e, general.innovations[:, 0], rtol=1e-9, atol=1e-9)
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.integers(3, 6),
+    st.integers(0, 2),
+    st.integers(1, 3),
+    st.sampled_from(["zoh", "foh"]),
+)
+def test_modal_filter_equals_the_numpy_twin(seed, n_cap, n_massless, n_outputs, hold):
+    """Flows constant over stretches (few coordinate changes), irregular steps, outputs missing alone."""
+    rng = np.random.default_rng(seed)
+    net = random_network(rng, n_cap, n_massless, 2, min(n_outputs, n_cap + n_massless))
+    ss, t, m, u, y, x0, P0, Qc, R = problem(rng, net, 90)
+    m = np.repeat(m[::15], 15, axis=0)[: t.size]  # a damper held for 15 samples at a time
+    args = (*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R)
+    ref = kalman_filter_reference(*args)
+    keys = np.column_stack([np.diff(t), m[:-1]])
+    uniq, _, which = unique_rows(keys)
+    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+    modal = modal_matrices(ss.A, ss.N, ss.B, ss.M, uniq, np.diag(Qc).copy(), scale, hold == "foh")
+    nll, n_obs = kalman_filter_modal(
+        modal, scale, which, (ss.C, ss.D, np.diag(R).copy()), (x0, P0), (u, y), hold == "foh"
+    )
+    assert n_obs == ref.n_obs
+    assert nll + 0.5 * n_obs * np.log(2 * np.pi) == pytest.approx(ref.nll, rel=RTOL, abs=RTOL)

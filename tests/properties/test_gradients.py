@@ -60,7 +60,20 @@ def complex_initial_state(ss: BilinearStateSpace, values: dict, data: Dataset) -
     if not all(nm in values for nm in names):
         A = ss.A + np.tensordot(data.m[0], ss.N, axes=1)
         B = ss.B + np.tensordot(data.m[0], ss.M, axes=1)
-        meas = {i: j for i, j in measured_states(BilinearStateSpace(*(np.real(a) for a in (ss.A, ss.N, ss.B, ss.M, ss.C, ss.D)), ss.state_names, ss.input_names, ss.flow_names, ss.output_names, ss.capacities)).items() if math.isfinite(data.y[0, j])}
+        meas = {
+            i: j
+            for i, j in measured_states(
+                BilinearStateSpace(
+                    *(np.real(a) for a in (ss.A, ss.N, ss.B, ss.M, ss.C, ss.D)),
+                    ss.state_names,
+                    ss.input_names,
+                    ss.flow_names,
+                    ss.output_names,
+                    ss.capacities,
+                )
+            ).items()
+            if math.isfinite(data.y[0, j])
+        }
         for i, j in meas.items():
             x[i] = data.y[0, j]
         free = [i for i in range(n) if i not in meas]
@@ -111,7 +124,9 @@ def complex_step_gradient(obj: Objective, eta: np.ndarray) -> np.ndarray:
     g = np.empty(spec.n_free)
     for j, name in enumerate(spec.names):
         values = {k: complex(v) for k, v in spec.values(theta).items()}
-        values[name] = theta[j] * complex(math.cos(H_CS), math.sin(H_CS)) if spec.log[j] else theta[j] + 1j * H_CS
+        values[name] = (
+            theta[j] * complex(math.cos(H_CS), math.sin(H_CS)) if spec.log[j] else theta[j] + 1j * H_CS
+        )
         g[j] = complex_cost(obj, values).imag / H_CS
     return g
 
@@ -158,7 +173,9 @@ def problem(seed: int, n_cap: int, n_massless: int, n_outputs: int, method: str,
     st.sampled_from(["ls", "ml", "map"]),
     st.sampled_from(["zoh", "foh"]),
 )
-def test_gradient_equals_complex_step_and_finite_differences(seed, n_cap, n_massless, n_outputs, method, hold):
+def test_gradient_equals_complex_step_and_finite_differences(
+    seed, n_cap, n_massless, n_outputs, method, hold
+):
     obj, eta = problem(seed, n_cap, n_massless, n_outputs, method, hold)
     assert obj.gradient_engine == ("general" if n_massless else "compiled")
     value, grad = obj.value_and_gradient(eta)

@@ -162,7 +162,9 @@ def test_the_checks_see_imports_inside_functions_and_relative_ones(tmp_path: Pat
         (pkg / sub).mkdir(parents=True)
         (pkg / sub / "__init__.py").write_text("")
     (pkg / "__init__.py").write_text("")
-    (pkg / "kernels" / "loop.py").write_text("def f():\n    from ..estimation import costs\n    return costs\n")
+    (pkg / "kernels" / "loop.py").write_text(
+        "def f():\n    from ..estimation import costs\n    return costs\n"
+    )
     (pkg / "estimation" / "costs.py").write_text("import rczone.kernels.loop\n")
     graph = unit_graph(pkg)
     assert graph["kernels"] == {"estimation"}

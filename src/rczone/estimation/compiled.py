@@ -20,6 +20,8 @@ from __future__ import annotations
 import numpy as np
 
 from rczone.estimation.parameters import measurement_noise_names
+from rczone.kernels.kalman import STEADY_RTOL
+from rczone.kernels.problem import cost_z
 from rczone.network.parameters import proportional_base
 from rczone.simulation.discretize import SYMMETRY_RTOL
 
@@ -98,7 +100,11 @@ def compiled_problem(objective) -> tuple | None:
             return None
         elements.append(sl)
     noise = []
-    for group in (measurement_noise_names(net.outputs), [f"sigma_w_{s}" for s in states], [f"sigma_x0_{s}" for s in states]):
+    for group in (
+        measurement_noise_names(net.outputs),
+        [f"sigma_w_{s}" for s in states],
+        [f"sigma_x0_{s}" for s in states],
+    ):
         if objective.method == "ls":
             noise.append((np.full(len(group), -1, dtype=np.int64), np.zeros(len(group))))
             continue
@@ -111,12 +117,12 @@ def compiled_problem(objective) -> tuple | None:
     x0_idx = np.array([spec.names.index(n) if n in spec.names else -1 for n in x0_names], dtype=np.int64)
     x0_k = np.array([1.0 if n in spec.names else float(spec.fixed.get(n, 0.0)) for n in x0_names])
     prior = np.flatnonzero(
-        np.array([k in ("resistance", "capacitance") for k in spec.kinds], dtype=bool) & np.isfinite(spec.construction)
+        np.array([k in ("resistance", "capacitance") for k in spec.kinds], dtype=bool)
+        & np.isfinite(spec.construction)
     )
     keys, which = data.intervals
     groups = np.empty(0, dtype=np.int64) if data.interval_groups is None else data.interval_groups
     fused = len(states) == 2 and len(net.outputs) == 1
-    from rczone.kernels.kalman import STEADY_RTOL
 
     def c(a, dtype=None):  # writable contiguous copies: one compiled specialization for every caller
         return np.array(a, dtype=dtype, order="C", copy=True)
@@ -140,8 +146,6 @@ def compiled_problem(objective) -> tuple | None:
 
 def compiled_cost(problem: tuple, eta: np.ndarray) -> float:
     """The compiled cost at optimizer values ``eta`` (for tests and checks)."""
-    from rczone.kernels.problem import cost_z
-
     lo, hi, _ = problem[4]
     f = (np.asarray(eta, dtype=float) - lo) / (hi - lo)
     with np.errstate(divide="ignore"):

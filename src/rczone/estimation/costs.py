@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rczone.errors import ParameterError
+from rczone.estimation.compiled import compiled_problem
 from rczone.estimation.data import Dataset
 from rczone.estimation.engines import (
     ENGINES,
@@ -55,6 +56,7 @@ from rczone.estimation.engines import (
     trapezoid_sse,
 )
 from rczone.estimation.parameters import ParameterSpec
+from rczone.kernels.problem import cost_theta, evaluate
 from rczone.network import RCNetwork
 
 __all__ = [
@@ -182,12 +184,12 @@ class Objective:
             raise ParameterError(f"likelihood_weight must be in (0, 1], got {self.likelihood_weight!r}")
         if self.engine not in ("auto", *ENGINES):
             raise ParameterError(f"engine must be 'auto' or one of {ENGINES}, got {self.engine!r}")
-        from rczone.estimation.compiled import compiled_problem
-
         packed = compiled_problem(self)
         rule = choose_engine(len(self.network.state_names), len(self.network.outputs), packed is not None)
         engine = rule if self.engine == "auto" else self.engine
-        if engine in ("rc2-fused", "compiled") and (packed is None or (engine == "rc2-fused" and rule != engine)):
+        if engine in ("rc2-fused", "compiled") and (
+            packed is None or (engine == "rc2-fused" and rule != engine)
+        ):
             raise ParameterError(
                 f"engine {engine!r} does not apply to this problem (the rules choose {rule!r});"
                 " see rczone.estimation.engines"
@@ -210,8 +212,6 @@ class Objective:
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
         if self._packed is not None:
-            from rczone.kernels.problem import cost_theta
-
             return float(cost_theta(np.asarray(theta, dtype=np.float64), self._packed))
         if self.engine == "reference":
             return self.reference_cost(theta)
@@ -225,10 +225,12 @@ class Objective:
         """
         theta = np.asarray(theta, dtype=np.float64)
         if self.gradient_engine == "compiled":
-            from rczone.kernels.problem import evaluate
-
             j, g, c = evaluate(theta, self._packed, True)
-            return (float(j), g, c) if math.isfinite(j) else (math.inf, np.zeros(theta.size), np.zeros(theta.size))
+            return (
+                (float(j), g, c)
+                if math.isfinite(j)
+                else (math.inf, np.zeros(theta.size), np.zeros(theta.size))
+            )
         return self._general(theta, True)
 
     def _general(self, theta: np.ndarray, want_grad: bool) -> tuple[float, np.ndarray, np.ndarray]:
@@ -237,7 +239,9 @@ class Objective:
         wrt = self.spec.names if want_grad else ()
         zero = np.zeros(theta.size)
         try:
-            j, g, c = general_cost(self.network, values, self.data, self.hold, "ls" if self.method == "ls" else "ml", wrt)
+            j, g, c = general_cost(
+                self.network, values, self.data, self.hold, "ls" if self.method == "ls" else "ml", wrt
+            )
         except (ParameterError, np.linalg.LinAlgError):
             return math.inf, zero, zero
         if not want_grad:
@@ -256,11 +260,15 @@ class Objective:
         """Cost at physical values ``theta`` by the reference engine (plain NumPy)."""
         values = self.spec.values(theta)
         try:
-            j = reference_cost(self.network, values, self.data, self.hold, "ls" if self.method == "ls" else "ml")
+            j = reference_cost(
+                self.network, values, self.data, self.hold, "ls" if self.method == "ls" else "ml"
+            )
         except (ParameterError, np.linalg.LinAlgError):
             return math.inf
         if self.method == "map":
-            j = self.likelihood_weight * j + log_prior_penalty(self.spec, np.asarray(theta, dtype=float), self.prior_spread)
+            j = self.likelihood_weight * j + log_prior_penalty(
+                self.spec, np.asarray(theta, dtype=float), self.prior_spread
+            )
         return j if math.isfinite(j) else math.inf
 
     def __call__(self, eta: np.ndarray) -> float:

@@ -34,8 +34,16 @@ import numpy as np
 
 from rczone.errors import ParameterError
 from rczone.estimation.data import Dataset
+from rczone.estimation.kalman import (
+    FilterOutput,
+    kalman_filter_arrays,
+    kalman_filter_reference,
+    stochastic_matrices,
+)
 from rczone.estimation.parameters import measurement_noise_names
-from rczone.estimation.kalman import FilterOutput, kalman_filter_arrays, kalman_filter_reference, stochastic_matrices
+from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
+from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, kalman_filter_modal, modal_pays
+from rczone.kernels.problem import trapezoid
 from rczone.network import BilinearStateSpace, RCNetwork
 from rczone.simulation.discretize import symmetrizing_scale
 from rczone.simulation.simulate import propagate, propagate_reference, transition_matrices
@@ -126,7 +134,9 @@ def network_theta(network: RCNetwork, values: Mapping[str, float]) -> dict[str, 
     return {n: values[n] for n in network.free_parameter_names if n in values}
 
 
-def noise_values(ss: BilinearStateSpace, values: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def noise_values(
+    ss: BilinearStateSpace, values: Mapping[str, float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(sigma_w, sigma_x0, sigma_v)`` from ``values``: per state, per state, per output; validated."""
     try:
         sw = np.array([values[f"sigma_w_{n}"] for n in ss.state_names], dtype=float)
@@ -184,7 +194,9 @@ def run_filter(
 # ----------------------------------------------------------------------------- the reference engine
 
 
-def reference_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str, method: str) -> float:
+def reference_cost(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str, method: str
+) -> float:
     """``J_LS`` (``method="ls"``) or ``-log L`` in plain NumPy: the reference engine."""
     if method == "ls":
         ss = network.state_space(network_theta(network, values))
@@ -264,10 +276,6 @@ def general_cost(
     numpy.linalg.LinAlgError
         For a singular steady state or a non-positive innovation variance.
     """
-    from rczone.kernels.discretize import interval_derivatives, interval_matrices
-    from rczone.kernels.kalman import STEADY_RTOL, kalman_filter
-    from rczone.kernels.problem import trapezoid
-
     theta = network_theta(network, values)
     ss = network.state_space(theta)
     n, p, ny, nf = ss.n_states, ss.n_inputs, ss.C.shape[0], ss.n_flows
@@ -311,10 +319,26 @@ def general_cost(
         mats, dmats = interval_derivatives(A, N, B, M, dA0, dN, dB0, dM, keys, qc, dqc, foh, not ls)
     else:
         scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+        if scale is not None and not ls and modal_pays(which, n):
+            modal = modal_matrices(A, N, B, M, keys, qc, scale, foh)
+            init = (x0, np.diag(sx**2))
+            nll, n_obs = kalman_filter_modal(
+                modal, scale, which, (f(ss.C), f(ss.D), f(r)), init, (f(data.u), f(data.y)), foh
+            )
+            if n_obs < 0:
+                raise np.linalg.LinAlgError(
+                    "an innovation variance is not positive: the noise model is invalid"
+                )
+            return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
         scale = np.empty(0) if scale is None else scale
         mats = interval_matrices(A, N, B, M, keys, qc, scale, foh, not ls)
         K = keys.shape[0]
-        dmats = (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n)))
+        dmats = (
+            np.empty((K, 0, n, n)),
+            np.empty((K, 0, n, p)),
+            np.empty((K, 0, n, p)),
+            np.empty((K, 0, n, n)),
+        )
     N_t = data.n_samples
     y = f(data.y, dtype=float)
     if ls:

@@ -40,6 +40,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from rczone.errors import InputShapeError
+from rczone.kernels.kalman import STEADY_RTOL, kalman_filter
+from rczone.kernels.rc2 import nll_rc2
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import SYMMETRY_RTOL, interval_discretization, symmetrizing_scale
 from rczone.simulation.intervals import interval_keys, unique_rows
@@ -93,13 +95,13 @@ def measurement_variances(R: np.ndarray) -> np.ndarray:
     R = np.asarray(R)
     if R.ndim != 2 or R.shape[0] != R.shape[1]:
         raise InputShapeError(f"R must be a square (ny, ny) matrix, got shape {R.shape}")
-    off = R - np.diag(np.diag(R))
-    if np.any(off != 0):
+    d = np.diagonal(R)
+    if np.count_nonzero(R) != np.count_nonzero(d):
         raise InputShapeError(
             "R must be diagonal: the measurement noise of each output is independent (one sigma_v per"
             " output); correlated measurement noise is not supported"
         )
-    return np.ascontiguousarray(np.diag(R))
+    return np.array(d)
 
 
 @dataclass(frozen=True, eq=False)
@@ -228,8 +230,6 @@ def _compiled(
     Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, outputs: bool, hold: str = ""
 ) -> tuple[float, int, tuple]:
     """Run :func:`rczone.kernels.kalman.kalman_filter` on the arrays of :func:`stochastic_matrices`."""
-    from rczone.kernels.kalman import STEADY_RTOL, kalman_filter
-
     f = np.ascontiguousarray
     r = measurement_variances(R)
     N, ny = y.shape
@@ -246,11 +246,30 @@ def _compiled(
             np.empty((N, ny, ny)),
         )
     else:
-        outs = (np.empty((0, ny)), np.empty((0, ny, 0)), *(np.empty((0, n)),) * 2, np.empty((0, n, n)), np.empty((0, ny, ny)))
+        outs = (
+            np.empty((0, ny)),
+            np.empty((0, ny, 0)),
+            *(np.empty((0, n)),) * 2,
+            np.empty((0, n, n)),
+            np.empty((0, ny, ny)),
+        )
     nll, n_obs, _, _ = kalman_filter(
-        (f(Phi, dtype=float), f(Gamma0, dtype=float), f(Gamma1, dtype=float), f(Qd, dtype=float), f(which, dtype=np.int64)),
+        (
+            f(Phi, dtype=float),
+            f(Gamma0, dtype=float),
+            f(Gamma1, dtype=float),
+            f(Qd, dtype=float),
+            f(which, dtype=np.int64),
+        ),
         (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n))),
-        (f(C, dtype=float), f(D, dtype=float), r.astype(float), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))),
+        (
+            f(C, dtype=float),
+            f(D, dtype=float),
+            r.astype(float),
+            np.empty((ny, 0, n)),
+            np.empty((ny, 0, p)),
+            np.empty((ny, 0)),
+        ),
         (f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
         (f(u, dtype=float), f(y, dtype=float)),
         (foh, False, STEADY_RTOL),
@@ -382,9 +401,6 @@ def kalman_nll_rc2(
     -------
     float
     """
-    from rczone.kernels.kalman import STEADY_RTOL
-    from rczone.kernels.rc2 import nll_rc2
-
     if hold not in HOLDS:
         raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
     if ss.n_states != 2:

@@ -10,7 +10,9 @@ process-noise intensity ``Qc = diag(qc)``:
 * for RC networks (``diag(c) A`` symmetric, checked by the caller) these come from the
   symmetric eigen-decomposition: in closed form for two states (one Jacobi rotation,
   :func:`rc2_discretize`, also used per sample by the fused 2-state kernel), by LAPACK's
-  symmetric solver otherwise (:func:`spectral_discretize`);
+  symmetric solver otherwise (:func:`spectral_modal`, in modal coordinates, where ``Phi`` is
+  diagonal, for the modal filter of :mod:`rczone.kernels.kalman`; :func:`spectral_discretize`
+  in the original ones);
 * otherwise, and whenever derivatives are wanted, from matrix exponentials
   (:func:`expm_discretize`): the hold matrices from one block exponential, ``Qd`` by Van
   Loan's block exponential on a step short enough that ``e^{-A h}`` is harmless, then exact
@@ -69,36 +71,37 @@ def rc2_discretize(
     d: float,
     s0: float,
     s1: float,
+    is0: float,
+    is1: float,
     h: float,
-    B: np.ndarray,
     q0: float,
     q1: float,
     foh: bool,
-    Phi: np.ndarray,
-    G0: np.ndarray,
-    G1: np.ndarray,
-    Qd: np.ndarray,
-) -> None:
-    """Exact ``Phi, G0, G1, Qd`` of a 2-state RC model over ``h`` s, written into the outputs.
+) -> tuple:
+    """Exact discrete matrices of a 2-state RC model over ``h`` s, as 15 numbers.
 
     ``A = [[a, a01], [a10, d]]`` with ``diag(s)^2 A`` symmetric (``s = sqrt(capacities)``), so
     ``S = diag(s) A diag(s)^{-1}`` is symmetric; its eigen-decomposition is one Jacobi
     rotation in closed form [2]_, without cancellation for nearly equal eigenvalues. Two
     ``expm1`` give every matrix; ``e^{(l_0 + l_1) h} - 1`` is formed exactly from them.
+    Scalars in, scalars out: the fused kernel calls this once per interval, and arrays passed
+    to a numba function cost reference counting on every call.
 
     Parameters
     ----------
-    B : ndarray, shape (2, p)
+    s0, s1, is0, is1 : float
+        ``sqrt`` of the capacities and their reciprocals (constant over a data set: no division here).
     q0, q1 : float
         Process-noise intensities of the two states, K^2/s.
-    Phi, Qd : ndarray, shape (2, 2)
-    G0, G1 : ndarray, shape (2, p)
-        ``G1`` is left untouched for ZOH.
+
+    Returns
+    -------
+    tuple of 15 floats
+        ``Phi`` (00, 01, 10, 11), ``H0`` and ``H1`` (each 00, 01, 10, 11) with ``G0 = H0 B`` and
+        ``G1 = H1 B`` (``H1 = 0`` for ZOH), ``Qd`` (00, 01, 11).
     """
-    p = B.shape[1]
-    r01 = s0 / s1
     # symmetric S and its rotation [[cs, sn], [-sn, cs]]
-    b = 0.5 * (a01 * r01 + a10 / r01)
+    b = 0.5 * (a01 * s0 * is1 + a10 * s1 * is0)
     if b == 0.0:
         tn = 0.0
     else:
@@ -110,7 +113,7 @@ def rc2_discretize(
     cs = 1.0 / math.sqrt(1.0 + tn * tn)
     sn = tn * cs
     # T = diag(s)^-1 V, U = T^-1 = V' diag(s)
-    T00, T01, T10, T11 = cs / s0, sn / s0, -sn / s1, cs / s1
+    T00, T01, T10, T11 = cs * is0, sn * is0, -sn * is1, cs * is1
     U00, U01, U10, U11 = cs * s0, -sn * s1, sn * s0, cs * s1
     x0 = (a - tn * b) * h
     x1 = (d + tn * b) * h
@@ -128,18 +131,6 @@ def rc2_discretize(
     else:
         ga0, ga1 = w10 * h, w11 * h
         gb0, gb1 = 0.0, 0.0
-    Phi[0, 0] = T00 * e0 * U00 + T01 * e1 * U10
-    Phi[0, 1] = T00 * e0 * U01 + T01 * e1 * U11
-    Phi[1, 0] = T10 * e0 * U00 + T11 * e1 * U10
-    Phi[1, 1] = T10 * e0 * U01 + T11 * e1 * U11
-    for j in range(p):
-        z0 = U00 * B[0, j] + U01 * B[1, j]
-        z1 = U10 * B[0, j] + U11 * B[1, j]
-        G0[0, j] = T00 * ga0 * z0 + T01 * ga1 * z1
-        G0[1, j] = T10 * ga0 * z0 + T11 * ga1 * z1
-        if foh:
-            G1[0, j] = T00 * gb0 * z0 + T01 * gb1 * z1
-            G1[1, j] = T10 * gb0 * z0 + T11 * gb1 * z1
     # W = U diag(q) U' weighted by (e^{(l_i + l_j) h} - 1)/(l_i + l_j); Qd = T W T'
     W00 = (U00 * U00 * q0 + U01 * U01 * q1) * (w10 * (0.5 * em0 + 1.0)) * h
     W01 = (U00 * U10 * q0 + U01 * U11 * q1) * phi1(x0 + x1, em0 + em1 + em0 * em1) * h
@@ -148,11 +139,88 @@ def rc2_discretize(
     v01 = T00 * W01 + T01 * W11
     v10 = T10 * W00 + T11 * W01
     v11 = T10 * W01 + T11 * W11
-    Qd[0, 0] = v00 * T00 + v01 * T01
-    q01 = v00 * T10 + v01 * T11
-    Qd[0, 1] = q01
-    Qd[1, 0] = q01
-    Qd[1, 1] = v10 * T10 + v11 * T11
+    return (
+        T00 * e0 * U00 + T01 * e1 * U10,
+        T00 * e0 * U01 + T01 * e1 * U11,
+        T10 * e0 * U00 + T11 * e1 * U10,
+        T10 * e0 * U01 + T11 * e1 * U11,
+        T00 * ga0 * U00 + T01 * ga1 * U10,
+        T00 * ga0 * U01 + T01 * ga1 * U11,
+        T10 * ga0 * U00 + T11 * ga1 * U10,
+        T10 * ga0 * U01 + T11 * ga1 * U11,
+        T00 * gb0 * U00 + T01 * gb1 * U10,
+        T00 * gb0 * U01 + T01 * gb1 * U11,
+        T10 * gb0 * U00 + T11 * gb1 * U10,
+        T10 * gb0 * U01 + T11 * gb1 * U11,
+        v00 * T00 + v01 * T01,
+        v00 * T10 + v01 * T11,
+        v10 * T10 + v11 * T11,
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def spectral_modal(
+    A: np.ndarray, B: np.ndarray, scale: np.ndarray, qc: np.ndarray, h: float, foh: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The exact discretization of an RC model in its modal coordinates ``xi = V' diag(scale) x``.
+
+    ``S = diag(scale) A diag(scale)^-1`` (symmetrized, which removes only rounding) is
+    ``V diag(lam) V'`` (LAPACK's symmetric solver). With ``T = diag(scale)^-1 V`` and
+    ``T^-1 = V' diag(scale)`` the identities of :mod:`rczone.simulation.discretize` read, in
+    ``xi``: ``Phi = diag(e^{lam h})``, ``G0 = diag(phi1 - phi2) T^-1 B``, ``G1 = diag(phi2) T^-1 B``
+    (``phi2 = 0`` for ZOH) and ``Qd = W o F`` with ``W = T^-1 Qc T^-T`` and
+    ``F_ij = (e^{(lam_i + lam_j) h} - 1)/(lam_i + lam_j)``, all evaluated with ``expm1``.
+
+    Returns
+    -------
+    V : ndarray, shape (n, n)
+    e : ndarray, shape (n,)
+        ``e^{lam h}``.
+    H0, H1 : ndarray, shape (n, p)
+        The hold matrices in modal coordinates.
+    Qm : ndarray, shape (n, n)
+        ``Qd`` in modal coordinates.
+    """
+    n = A.shape[0]
+    p = B.shape[1]
+    S = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            S[i, j] = 0.5 * (scale[i] * A[i, j] / scale[j] + scale[j] * A[j, i] / scale[i])
+    lam, V = np.linalg.eigh(S)
+    Ti = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            Ti[j, i] = V[i, j] * scale[i]
+    e = np.empty(n)
+    w1 = np.empty(n)
+    w2 = np.zeros(n)
+    for i in range(n):
+        x = lam[i] * h
+        em = math.expm1(x)
+        e[i] = em + 1.0
+        w1[i] = phi1(x, em) * h
+        if foh:
+            w2[i] = phi2(x, em) * h
+    TiB = np.empty((n, p))
+    matmul(Ti, B, TiB)
+    H0 = np.empty((n, p))
+    H1 = np.empty((n, p))
+    for i in range(n):
+        for j in range(p):
+            H0[i, j] = (w1[i] - w2[i]) * TiB[i, j]
+            H1[i, j] = w2[i] * TiB[i, j]
+    Qm = np.empty((n, n))
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for k in range(n):
+                acc += Ti[i, k] * qc[k] * Ti[j, k]
+            x = (lam[i] + lam[j]) * h
+            acc *= phi1(x, math.expm1(x)) * h
+            Qm[i, j] = acc
+            Qm[j, i] = acc
+    return V, e, H0, H1, Qm
 
 
 @njit(cache=True, error_model="numpy")
@@ -168,62 +236,31 @@ def spectral_discretize(
     G1: np.ndarray,
     Qd: np.ndarray,
 ) -> None:
-    """Exact ``Phi, G0, G1, Qd`` of an RC model from the eigen-decomposition of ``diag(scale) A diag(scale)^-1``.
-
-    The identities of :mod:`rczone.simulation.discretize` (``Phi = T e^{L h} T^{-1}``, hold
-    matrices with ``phi1``, ``phi2``, ``Qd = T (W o F) T'``), evaluated with ``expm1``.
-    """
+    """Exact ``Phi, G0, G1, Qd`` of an RC model: :func:`spectral_modal` brought back by ``T = diag(scale)^-1 V``."""
     n = A.shape[0]
     p = B.shape[1]
-    S = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            S[i, j] = 0.5 * (scale[i] * A[i, j] / scale[j] + scale[j] * A[j, i] / scale[i])
-    lam, V = np.linalg.eigh(S)
+    V, e, H0, H1, Qm = spectral_modal(A, B, scale, qc, h, foh)
     T = np.empty((n, n))
-    Ti = np.empty((n, n))
     for i in range(n):
         for j in range(n):
             T[i, j] = V[i, j] / scale[i]
-            Ti[j, i] = V[i, j] * scale[i]
-    em = np.empty(n)
-    w1 = np.empty(n)
-    w2 = np.empty(n)
-    for i in range(n):
-        x = lam[i] * h
-        em[i] = math.expm1(x)
-        w1[i] = phi1(x, em[i]) * h
-        w2[i] = phi2(x, em[i]) * h if foh else 0.0
-    TiB = np.empty((n, p))
-    matmul(Ti, B, TiB)
     for i in range(n):
         for j in range(n):
             acc = 0.0
             for k in range(n):
-                acc += T[i, k] * (em[k] + 1.0) * Ti[k, j]
-            Phi[i, j] = acc
+                acc += T[i, k] * e[k] * V[j, k]
+            Phi[i, j] = acc * scale[j]
         for j in range(p):
             a0 = 0.0
             a1 = 0.0
             for k in range(n):
-                a0 += T[i, k] * (w1[k] - w2[k]) * TiB[k, j]
-                a1 += T[i, k] * w2[k] * TiB[k, j]
+                a0 += T[i, k] * H0[k, j]
+                a1 += T[i, k] * H1[k, j]
             G0[i, j] = a0
             if foh:
                 G1[i, j] = a1
-    # W = Ti diag(qc) Ti', weighted elementwise, then Qd = T W T'
-    W = np.empty((n, n))
-    for i in range(n):
-        for j in range(i, n):
-            acc = 0.0
-            for k in range(n):
-                acc += Ti[i, k] * qc[k] * Ti[j, k]
-            x = (lam[i] + lam[j]) * h
-            acc *= phi1(x, math.expm1(x)) * h
-            W[i, j] = acc
-            W[j, i] = acc
     TW = np.empty((n, n))
-    matmul(T, W, TW)
+    matmul(T, Qm, TW)
     for i in range(n):
         for j in range(i, n):
             acc = 0.0
@@ -231,6 +268,32 @@ def spectral_discretize(
                 acc += TW[i, k] * T[j, k]
             Qd[i, j] = acc
             Qd[j, i] = acc
+
+
+@njit(cache=True, error_model="numpy")
+def modal_matrices(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    keys: np.ndarray,
+    qc: np.ndarray,
+    scale: np.ndarray,
+    foh: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`spectral_modal` of each distinct interval: ``V, e, H0, H1, Qm`` stacked on a first axis of length K."""
+    n = A0.shape[0]
+    p = B0.shape[1]
+    K = keys.shape[0]
+    V = np.empty((K, n, n))
+    e = np.empty((K, n))
+    H0 = np.empty((K, n, p))
+    H1 = np.empty((K, n, p))
+    Qm = np.empty((K, n, n))
+    for k in range(K):
+        A, B = _key_matrices(A0, N, B0, M, keys[k])
+        V[k], e[k], H0[k], H1[k], Qm[k] = spectral_modal(A, B, scale, qc, keys[k, 0], foh)
+    return V, e, H0, H1, Qm
 
 
 @njit(cache=True, error_model="numpy")
@@ -364,7 +427,7 @@ def _van_loan_doubling(
             s_ += abs(A[i, j])
         norm = max(norm, s_)
     norm *= dt
-    s = int(math.ceil(math.log2(norm / VAN_LOAN_NORM))) if norm > VAN_LOAN_NORM else 0
+    s = math.ceil(math.log2(norm / VAN_LOAN_NORM)) if norm > VAN_LOAN_NORM else 0
     h = dt * 0.5**s
     # directions that move Qd: A or qc
     act = np.zeros(q, dtype=np.int64)
@@ -536,10 +599,17 @@ def interval_matrices(
         A, B = _key_matrices(A0, N, B0, M, keys[k])
         h = keys[k, 0]
         if scale.shape[0] == 2:
-            rc2_discretize(
-                A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], h, B, qc[0], qc[1], foh,
-                Phi[k], G0[k], G1[k], Qd[k],
+            m = rc2_discretize(
+                A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1], h,
+                qc[0], qc[1], foh,
             )  # fmt: skip
+            Phi[k, 0, 0], Phi[k, 0, 1], Phi[k, 1, 0], Phi[k, 1, 1] = m[0], m[1], m[2], m[3]
+            Qd[k, 0, 0], Qd[k, 0, 1], Qd[k, 1, 0], Qd[k, 1, 1] = m[12], m[13], m[13], m[14]
+            for j in range(p):
+                G0[k, 0, j] = m[4] * B[0, j] + m[5] * B[1, j]
+                G0[k, 1, j] = m[6] * B[0, j] + m[7] * B[1, j]
+                G1[k, 0, j] = m[8] * B[0, j] + m[9] * B[1, j]
+                G1[k, 1, j] = m[10] * B[0, j] + m[11] * B[1, j]
         elif scale.shape[0] == n:
             spectral_discretize(A, B, scale, qc if noise else zero, h, foh, Phi[k], G0[k], G1[k], Qd[k])
         else:

@@ -31,7 +31,9 @@ from numba import njit
 
 #: ``theta_m`` of [1]_ Table 2.3: largest ``||A||_1`` for which the degree-m Padé approximant is
 #: accurate to the unit roundoff, for m = 3, 5, 7, 9, 13.
-_THETA = np.array([1.495585217958292e-2, 2.539398330063230e-1, 9.504178996162932e-1, 2.097847961257068, 5.371920351148152])
+_THETA = np.array(
+    [1.495585217958292e-2, 2.539398330063230e-1, 9.504178996162932e-1, 2.097847961257068, 5.371920351148152]
+)
 _DEGREES = np.array([3, 5, 7, 9, 13])
 #: Coefficients ``b_0 .. b_m`` of the degree-m diagonal Padé approximant of ``e^x`` (rows padded with 0).
 _PADE = np.zeros((5, 14))
@@ -89,7 +91,9 @@ def matmul(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
 
 
 @njit(cache=True, error_model="numpy")
-def _combine(out: np.ndarray, c: np.ndarray, mats: np.ndarray, first: int, step: int, idx: np.ndarray, diag: float) -> None:
+def _combine(
+    out: np.ndarray, c: np.ndarray, mats: np.ndarray, first: int, step: int, idx: np.ndarray, diag: float
+) -> None:
     """``out = sum_k c[idx[k]] mats[first + k step] + diag I`` over ``k < len(idx)``."""
     n = out.shape[0]
     for i in range(n):
@@ -201,7 +205,7 @@ def expm_frechet(A: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             break
     s = 0
     if deg == 4 and nrm > _THETA[4]:
-        s = max(0, int(math.ceil(math.log2(nrm / _THETA[4]))))
+        s = max(0, math.ceil(math.log2(nrm / _THETA[4])))
     scale = 0.5**s
     a = np.empty((n, n))
     e = np.empty((q, n, n))

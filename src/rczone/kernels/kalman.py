@@ -56,6 +56,9 @@ from numba import njit
 #: Default relative tolerance at which the predicted covariance counts as stationary.
 STEADY_RTOL = 1e-14
 
+#: The modal filter is used when at most this fraction of the intervals changes its matrices.
+MODAL_CHANGES = 0.25
+
 #: Floating-point freedoms of the filter: sums may be reassociated (vectorized) and products
 #: fused with additions; NaN and infinities keep their IEEE meaning (missing data).
 FAST = {"reassoc", "contract"}
@@ -153,10 +156,8 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
     # scratch
     pc = np.empty(n)
     dpc = np.empty((q, n))
-    ds = np.empty(q)
     de = np.empty(q)
     drive = np.empty(n)
-    ddrive = np.zeros((q, n))
     T = np.empty((n, n))
     X = np.empty((n, n))
     Y = np.empty((n, n))
@@ -436,3 +437,172 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
         prev_key = w
         prev_mask = mask
     return nll, n_obs, grad, fim
+
+
+@njit(cache=True, error_model="numpy", fastmath=FAST)
+def kalman_filter_modal(modal, scale, which, obs, init, data, foh: bool) -> tuple[float, int]:
+    """``-log L`` (without ``0.5 n log 2 pi``) and the observation count, in modal coordinates.
+
+    The filter of :func:`kalman_filter` for an RC model (no sensitivities, no intermediate
+    outputs) carried in the modal coordinates ``xi = V_k' diag(scale) x`` of the interval in
+    use (:func:`rczone.kernels.discretize.spectral_modal`), where ``Phi = diag(e)``: the time
+    update costs ``O(n^2)`` (``P_ij e_i e_j + Qm_ij``) instead of ``O(n^3)``, and so do the
+    scalar updates (with the output row ``c' diag(scale)^-1 V_k``). When the interval's matrices
+    change, the state moves to the new coordinates, ``xi = V_new' V_old xi``,
+    ``P = M P M'`` (``O(n^3)``, once per change). With flows constant over stretches (a damper
+    held for minutes) a likelihood costs ``O(n^2)`` per sample; a caller picks
+    :func:`kalman_filter` when the interval changes at most samples.
+
+    Parameters
+    ----------
+    modal : tuple
+        ``(V, e, H0, H1, Qm)`` of :func:`rczone.kernels.discretize.modal_matrices`.
+    scale : ndarray, shape (n,)
+        ``sqrt(capacities)``.
+    which : ndarray of int64, shape (N - 1,)
+    obs, init, data
+        ``(C, D, r)``, ``(x0, P0)``, ``(u, y)`` as in :func:`kalman_filter`.
+    foh : bool
+
+    Returns
+    -------
+    nll : float
+        NaN for an invalid model.
+    n_obs : int
+        -1 for an invalid model.
+    """
+    V, e, H0, H1, Qm = modal
+    C, D, r = obs
+    x0, P0 = init
+    u, y = data
+    N, ny = y.shape
+    n = x0.shape[0]
+    p = u.shape[1]
+    K = V.shape[0]
+    # output rows in the modal coordinates of each interval: c' diag(scale)^-1 V_k
+    Cm = np.empty((K, ny, n))
+    for w in range(K):
+        for o in range(ny):
+            for i in range(n):
+                acc = 0.0
+                for a in range(n):
+                    acc += C[o, a] / scale[a] * V[w, a, i]
+                Cm[w, o, i] = acc
+    cur = which[0] if N > 1 else 0
+    # xi = V' diag(scale) x, P = V' diag(scale) P0 diag(scale) V
+    xi = np.empty(n)
+    P = np.empty((n, n))
+    T = np.empty((n, n))
+    for i in range(n):
+        acc = 0.0
+        for a in range(n):
+            acc += V[cur, a, i] * scale[a] * x0[a]
+        xi[i] = acc
+        for j in range(n):
+            acc = 0.0
+            for a in range(n):
+                acc += V[cur, a, i] * scale[a] * P0[a, j] * scale[j]
+            T[i, j] = acc
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for a in range(n):
+                acc += T[i, a] * V[cur, a, j]
+            P[i, j] = acc
+            P[j, i] = acc
+    Mx = np.empty((n, n))
+    xn = np.empty(n)
+    pc = np.empty(n)
+    nll = 0.0
+    n_obs = 0
+    for k in range(N):
+        for o in range(ny):
+            yk = y[k, o]
+            if yk != yk:
+                continue
+            ev = yk
+            for i in range(p):
+                ev -= D[o, i] * u[k, i]
+            s = r[o]
+            for i in range(n):
+                ev -= Cm[cur, o, i] * xi[i]
+                acc = 0.0
+                for j in range(n):
+                    acc += P[i, j] * Cm[cur, o, j]
+                pc[i] = acc
+                s += Cm[cur, o, i] * acc
+            if not s > 0.0:
+                return math.nan, -1
+            inv = 1.0 / s
+            for i in range(n):
+                xi[i] += pc[i] * inv * ev
+            for i in range(n):
+                ki = pc[i] * inv
+                for j in range(i, n):
+                    v = P[i, j] - ki * pc[j]
+                    P[i, j] = v
+                    P[j, i] = v
+            nll += 0.5 * (math.log(s) + ev * ev * inv)
+            n_obs += 1
+        if k == N - 1:
+            break
+        w = which[k]
+        if w != cur:
+            # new coordinates: M = V_w' V_cur, xi = M xi, P = M P M'
+            for i in range(n):
+                for j in range(n):
+                    acc = 0.0
+                    for a in range(n):
+                        acc += V[w, a, i] * V[cur, a, j]
+                    Mx[i, j] = acc
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += Mx[i, j] * xi[j]
+                xn[i] = acc
+                for j in range(n):
+                    T[i, j] = 0.0
+                for a in range(n):
+                    f = Mx[i, a]
+                    for j in range(n):
+                        T[i, j] += f * P[a, j]
+            for i in range(n):
+                xi[i] = xn[i]
+                for j in range(i, n):
+                    acc = 0.0
+                    for a in range(n):
+                        acc += T[i, a] * Mx[j, a]
+                    P[i, j] = acc
+                    P[j, i] = acc
+            cur = w
+        # the time update, diagonal in these coordinates
+        for i in range(n):
+            acc = e[w, i] * xi[i]
+            for j in range(p):
+                acc += H0[w, i, j] * u[k, j]
+            if foh:
+                for j in range(p):
+                    acc += H1[w, i, j] * u[k + 1, j]
+            xi[i] = acc
+        for i in range(n):
+            ei = e[w, i]
+            for j in range(i, n):
+                v = P[i, j] * ei * e[w, j] + Qm[w, i, j]
+                P[i, j] = v
+                P[j, i] = v
+    return nll, n_obs
+
+
+@njit(cache=True, error_model="numpy")
+def modal_pays(which: np.ndarray, n: int) -> bool:
+    """Whether :func:`kalman_filter_modal` beats :func:`kalman_filter` (both ``-log L`` only).
+
+    A change of coordinates costs about three ``n^3`` products, a direct time update one and
+    a half; the modal filter wins for three or more states when at most
+    :data:`MODAL_CHANGES` of the intervals change their matrices.
+    """
+    changes = 0
+    for k in range(1, which.shape[0]):
+        if which[k] != which[k - 1]:
+            changes += 1
+    return n >= 3 and changes <= MODAL_CHANGES * which.shape[0]

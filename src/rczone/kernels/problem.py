@@ -14,8 +14,10 @@ proportional to one free parameter (the packing is
   given them (as :func:`rczone.estimation.costs.auto_initial_state`), unless ``x0`` values
   are given, and differentiates that too;
 * discretizes each distinct interval (:mod:`rczone.kernels.discretize`) and runs the filter
-  (:func:`rczone.kernels.kalman.kalman_filter`) with forward sensitivities, or the fused
-  2-state kernel (:func:`rczone.kernels.rc2.nll_rc2`) for values only where it applies;
+  (:func:`rczone.kernels.kalman.kalman_filter`) with forward sensitivities; for values only,
+  the fused 2-state kernel (:func:`rczone.kernels.rc2.nll_rc2`) where it applies, and the
+  modal filter (:func:`rczone.kernels.kalman.kalman_filter_modal`) for three or more states
+  whose intervals rarely change (:func:`rczone.kernels.kalman.modal_pays`);
 * returns ``J_LS`` (trapezoid rule on the open-loop errors, K^2 s), ``J_ML`` (``-log L``) or
   ``J_MAP`` (tempered likelihood plus log-normal prior) and its gradient in ``theta``.
 
@@ -47,9 +49,9 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.discretize import interval_derivatives, interval_matrices
+from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
-from rczone.kernels.kalman import kalman_filter
+from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays
 from rczone.kernels.rc2 import nll_rc2
 
 #: Problem kinds.
@@ -321,8 +323,12 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
                 return math.inf, grad, curv
     A0, N, B0, M = assemble(L, P, E, Gb0, Nf, Mf, res, cap)
     q = d if want_grad else 0
-    dA0, dN, dB0, dM = assemble_derivatives(L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_idx, cap_k, q)
-    x0, dx0, ok = initial_state(A0, N, B0, M, dA0, dN, dB0, dM, m[0], u[0], y[0], out_state, x0_given, x0v, x0_idx)
+    dA0, dN, dB0, dM = assemble_derivatives(
+        L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_idx, cap_k, q
+    )
+    x0, dx0, ok = initial_state(
+        A0, N, B0, M, dA0, dN, dB0, dM, m[0], u[0], y[0], out_state, x0_given, x0v, x0_idx
+    )
     if not ok:
         return math.inf, grad, curv
     qc = np.zeros(n)
@@ -361,6 +367,21 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
         if kind == LS:
             return trapezoid(t, e.reshape((N_t, 1)), np.empty((N_t, 1, 0)), grad, curv), grad, curv
         j = nll + 0.5 * n_obs * _LOG_2PI
+    elif q == 0 and kind != LS and modal_pays(which, n):
+        # values of larger models with flows constant over stretches: the modal filter
+        scale = np.empty(n)
+        for s in range(n):
+            scale[s] = math.sqrt(cap[s])
+        C = np.zeros((ny, n))
+        for s in range(ny):
+            C[s, out_state[s]] = 1.0
+        modal = modal_matrices(A0, N, B0, M, keys, qc, scale, foh)
+        nll, n_obs = kalman_filter_modal(
+            modal, scale, which, (C, np.zeros((ny, B0.shape[1])), r), (x0, P0), (u, y), foh
+        )
+        if n_obs < 0:
+            return math.inf, grad, curv
+        j = nll + 0.5 * n_obs * _LOG_2PI
     else:
         noise = kind != LS
         if q:
@@ -372,7 +393,12 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
             mats = interval_matrices(A0, N, B0, M, keys, qc, scale, foh, noise)
             K = keys.shape[0]
             p = B0.shape[1]
-            dmats = (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n)))
+            dmats = (
+                np.empty((K, 0, n, n)),
+                np.empty((K, 0, n, p)),
+                np.empty((K, 0, n, p)),
+                np.empty((K, 0, n, n)),
+            )
         p = B0.shape[1]
         C = np.zeros((ny, n))
         for s in range(ny):
@@ -389,7 +415,13 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
                 np.empty((0, n, n)), np.empty((0, ny, ny)),
             )  # fmt: skip
         nll, n_obs, g, fim = kalman_filter(
-            (Phi, G0, G1, Qd, which), dmats, obs, (x0, P0, dx0, dP0), (u, y), (foh, kind == LS, steady_rtol), outs
+            (Phi, G0, G1, Qd, which),
+            dmats,
+            obs,
+            (x0, P0, dx0, dP0),
+            (u, y),
+            (foh, kind == LS, steady_rtol),
+            outs,
         )
         if n_obs < 0:
             return math.inf, grad, curv

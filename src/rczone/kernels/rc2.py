@@ -6,8 +6,7 @@ filter. For two states the discrete matrices have a closed form
 (:func:`rczone.kernels.discretize.rc2_discretize`: one Jacobi rotation and two ``expm1``);
 this kernel computes them for every interval whose length or flows differ from the previous
 one (or once per group of equal intervals, :func:`rczone.simulation.intervals.interval_groups`)
-in a first pass without loop-carried dependencies, then runs the filter recursion unrolled
-for two states in a second. It is the general filter (:func:`rczone.kernels.kalman.kalman_filter`)
+in a first pass, then runs the filter recursion unrolled for two states in a second. It is the general filter (:func:`rczone.kernels.kalman.kalman_filter`)
 specialized by hand: the same sequential update and time update, the same steady-state rule,
 so the same ``-log L`` to rounding (tested against it); it is used only where it is measurably
 faster (``docs/performance.md``), and never for gradients.
@@ -115,17 +114,18 @@ def nll_rc2(
         return math.nan, -1
     s0 = math.sqrt(cap[0])
     s1 = math.sqrt(cap[1])
-    # pass 1: the discrete matrices of each slot (a group, or a run of equal intervals)
+    is0 = 1.0 / s0
+    is1 = 1.0 / s1
+    # pass 1: the slot of each interval (its group, or its run of equal intervals) and the
+    # discrete matrices of each slot, computed at its first interval
     n_int = max(n_t - 1, 0)
     slot = np.empty(n_int, dtype=np.int64)
-    table = groups.shape[0] > 0
-    if table:
-        n_slots = 1
+    n_slots = 0
+    if groups.shape[0] > 0:
         for k in range(n_int):
             slot[k] = groups[k]
             n_slots = max(n_slots, groups[k] + 1)
     else:
-        n_slots = 0
         for k in range(n_int):
             fresh = k == 0 or t[k + 1] - t[k] != t[k] - t[k - 1]
             for f in range(nf):
@@ -133,9 +133,9 @@ def nll_rc2(
             if fresh:
                 n_slots += 1
             slot[k] = n_slots - 1
-    Phi = np.empty((max(n_slots, 1), 2, 2))
-    Qd = np.empty((max(n_slots, 1), 2, 2))
-    G0 = np.empty((max(n_slots, 1), 2, p))
+    Phi = np.empty((max(n_slots, 1), 4))
+    Qd = np.empty((max(n_slots, 1), 3))
+    G0 = np.zeros((max(n_slots, 1), 2, p))
     G1 = np.zeros((max(n_slots, 1), 2, p))
     ready = np.zeros(max(n_slots, 1), dtype=np.bool_)
     B = np.empty((2, p))
@@ -157,12 +157,21 @@ def nll_rc2(
             for j in range(p):
                 B[0, j] += mf * M[f, 0, j]
                 B[1, j] += mf * M[f, 1, j]
-        rc2_discretize(a, a01, a10, d, s0, s1, t[k + 1] - t[k], B, qc[0], qc[1], foh, Phi[g], G0[g], G1[g], Qd[g])
-    # pass 2: the filter (sequential update and time update of rczone.kernels.kalman, unrolled)
+        mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], qc[0], qc[1], foh)
+        Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3] = mt[0], mt[1], mt[2], mt[3]
+        Qd[g, 0], Qd[g, 1], Qd[g, 2] = mt[12], mt[13], mt[14]
+        for j in range(p):
+            G0[g, 0, j] = mt[4] * B[0, j] + mt[5] * B[1, j]
+            G0[g, 1, j] = mt[6] * B[0, j] + mt[7] * B[1, j]
+            G1[g, 0, j] = mt[8] * B[0, j] + mt[9] * B[1, j]
+            G1[g, 1, j] = mt[10] * B[0, j] + mt[11] * B[1, j]
+    has_dd = False
+    for j in range(p):
+        has_dd = has_dd or dd[j] != 0.0
+    # pass 2: the filter (the sequential update and time update of rczone.kernels.kalman, unrolled)
     c0, c1 = c[0], c[1]
     x0_, x1_ = x0[0], x0[1]
     p00, p01, p11 = P0[0, 0], 0.5 * (P0[0, 1] + P0[1, 0]), P0[1, 1]
-    q00 = q01 = q11 = 0.0
     nll = 0.0
     n_obs = 0
     steady = False
@@ -170,7 +179,7 @@ def nll_rc2(
     steady_obs = False
     prev_slot = -1
     prev_obs = False
-    k0 = k1 = s = log_s = 0.0
+    k0 = k1 = s = inv_s = log_s = 0.0
     pp00 = pp01 = pp11 = 0.0  # predicted covariance of the previous sample
     pf00 = pf01 = pf11 = 0.0  # filtered covariance (to leave the steady state from)
     for k in range(n_t):
@@ -182,8 +191,9 @@ def nll_rc2(
             pp00, pp01, pp11 = p00, p01, p11
         if obs:
             innov = yk - c0 * x0_ - c1 * x1_
-            for j in range(p):
-                innov -= dd[j] * u[k, j]
+            if has_dd:
+                for j in range(p):
+                    innov -= dd[j] * u[k, j]
             if keep:
                 e_out[k] = innov
             if not steady:
@@ -201,14 +211,14 @@ def nll_rc2(
                 p11 -= k1 * pc1
             x0_ += k0 * innov
             x1_ += k1 * innov
-            nll += 0.5 * (log_s + innov * innov / s)
+            nll += 0.5 * (log_s + innov * innov * inv_s)
             n_obs += 1
         if not steady:
             pf00, pf01, pf11 = p00, p01, p11
         if k == n_t - 1:
             break
         g = slot[k]
-        f00, f01, f10, f11 = Phi[g, 0, 0], Phi[g, 0, 1], Phi[g, 1, 0], Phi[g, 1, 1]
+        f00, f01, f10, f11 = Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3]
         xn0 = f00 * x0_ + f01 * x1_
         xn1 = f10 * x0_ + f11 * x1_
         for j in range(p):
@@ -225,14 +235,13 @@ def nll_rc2(
             p00, p01, p11 = pf00, pf01, pf11
         if not steady:
             # P <- Phi P Phi' + Qd
-            q00, q01, q11 = Qd[g, 0, 0], Qd[g, 0, 1], Qd[g, 1, 1]
             a0 = f00 * p00 + f01 * p01
             a1 = f00 * p01 + f01 * p11
             b0 = f10 * p00 + f11 * p01
             b1 = f10 * p01 + f11 * p11
-            p00 = q00 + a0 * f00 + a1 * f01
-            p01 = q01 + a0 * f10 + a1 * f11
-            p11 = q11 + b0 * f10 + b1 * f11
+            p00 = Qd[g, 0] + a0 * f00 + a1 * f01
+            p01 = Qd[g, 1] + a0 * f10 + a1 * f11
+            p11 = Qd[g, 2] + b0 * f10 + b1 * f11
             if steady_rtol > 0.0 and g == prev_slot and obs == prev_obs:
                 big = max(abs(p00), abs(p01), abs(p11))
                 diff = max(abs(p00 - pp00), abs(p01 - pp01), abs(p11 - pp11))

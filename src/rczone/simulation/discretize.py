@@ -492,7 +492,11 @@ def interval_discretization(
         Bk = B + np.tensordot(keys[:, 1:], M, axes=1)
         lam, V = spectral_decomposition(Ak, scale)
         Phi, G0, G1 = spectral_transition(lam, V, scale, Bk, keys[:, 0], hold)
-        Qd = None if Qc is None else spectral_noise_covariance(lam, V, scale, np.asarray(Qc, dtype=float), keys[:, 0])
+        Qd = (
+            None
+            if Qc is None
+            else spectral_noise_covariance(lam, V, scale, np.asarray(Qc, dtype=float), keys[:, 0])
+        )
         return Phi, G0, G1, Qd
     n, p, K = A.shape[0], B.shape[1], keys.shape[0]
     dtype = np.result_type(A, N, B, M, float if Qc is None else Qc)
