@@ -48,6 +48,7 @@ from rczone.simulation.intervals import interval_keys, unique_rows
 from rczone.simulation.simulate import HOLDS
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
+_NO_GROUPS = np.empty(0, dtype=np.int64)
 
 
 def stochastic_matrices(
@@ -136,7 +137,7 @@ class FilterOutput:
 
 
 def update_step(x: np.ndarray, P: np.ndarray, c: np.ndarray, r: float, e: float) -> tuple:
-    """Scalar measurement update of one output (the twin of :func:`rczone.kernels.kalman.update_step`).
+    """Scalar measurement update of one output (the ``update_step`` of :func:`rczone.kernels.kalman.kalman_filter`).
 
     ``s = c'Pc + r``, ``k = Pc/s``, ``x + k e``, ``P - k (Pc)'``; returns ``(x, P, s)``.
     """
@@ -148,7 +149,7 @@ def update_step(x: np.ndarray, P: np.ndarray, c: np.ndarray, r: float, e: float)
 
 
 def predict_step(x: np.ndarray, P: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, drive: np.ndarray) -> tuple:
-    """Time update (the twin of :func:`rczone.kernels.kalman.predict_step`): ``(Phi x + drive, Phi P Phi' + Qd)``."""
+    """Time update (the ``predict_step`` of :func:`rczone.kernels.kalman.kalman_filter`): ``(Phi x + drive, Phi P Phi' + Qd)``."""
     P = Phi @ P @ Phi.T + Qd
     return Phi @ x + drive, 0.5 * (P + P.T)
 
@@ -417,29 +418,33 @@ def kalman_nll_rc2(
         or not innovations.flags.c_contiguous
     ):
         raise InputShapeError(f"innovations must be a contiguous float64 array of shape ({y.shape[0]},)")
+    Qc = np.asarray(Qc, dtype=np.float64)
+    if Qc.shape != (2, 2) or Qc[0, 1] != 0.0 or Qc[1, 0] != 0.0:
+        raise InputShapeError(f"Qc must be a diagonal (2, 2) matrix (process noise per state), got {Qc!r}")
     f = np.ascontiguousarray
-    # contiguous float64 everywhere: one compiled specialization serves every caller
+    # the state space's own arrays are contiguous float64 already; the data are made so (one
+    # compiled specialization serves every caller)
     nll, n_obs = nll_rc2(
-        f(ss.A, dtype=np.float64),
-        f(ss.N, dtype=np.float64),
-        f(ss.B, dtype=np.float64),
-        f(ss.M, dtype=np.float64),
-        f(ss.capacities, dtype=np.float64),
+        ss.A,
+        ss.N,
+        ss.B,
+        ss.M,
+        ss.capacities,
         f(t, dtype=np.float64),
         f(m, dtype=np.float64),
         f(u, dtype=np.float64),
         f(y[:, 0]),
         f(x0, dtype=np.float64),
         f(P0, dtype=np.float64),
-        f(ss.C[0], dtype=np.float64),
-        f(ss.D[0], dtype=np.float64),
+        ss.C[0],
+        ss.D[0],
         float(R[0, 0]),
-        f(measurement_variances(Qc), dtype=np.float64),
+        np.array([Qc[0, 0], Qc[1, 1]]),
         hold == "foh",
         SYMMETRY_RTOL,
         STEADY_RTOL,
         np.empty(0) if innovations is None else innovations,
-        np.empty(0, dtype=np.int64) if groups is None else groups,
+        _NO_GROUPS if groups is None else groups,
     )
     if n_obs == -2:
         raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")

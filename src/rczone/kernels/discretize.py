@@ -63,7 +63,7 @@ def phi2(x: float, em1: float) -> float:
     return (em1 - x) / (x * x)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def rc2_discretize(
     a: float,
     a01: float,

@@ -6,10 +6,11 @@ filter. For two states the discrete matrices have a closed form
 (:func:`rczone.kernels.discretize.rc2_discretize`: one Jacobi rotation and two ``expm1``);
 this kernel computes them for every interval whose length or flows differ from the previous
 one (or once per group of equal intervals, :func:`rczone.simulation.intervals.interval_groups`)
-in a first pass, then runs the filter recursion unrolled for two states in a second. It is the general filter (:func:`rczone.kernels.kalman.kalman_filter`)
-specialized by hand: the same sequential update and time update, the same steady-state rule,
-so the same ``-log L`` to rounding (tested against it); it is used only where it is measurably
-faster (``docs/performance.md``), and never for gradients.
+in a first pass, then runs the filter recursion unrolled for two states in a second. It is
+the general filter (:func:`rczone.kernels.kalman.kalman_filter`) specialized by hand: the
+same sequential update and time update, the same steady-state rule, so the same ``-log L``
+to rounding (tested against it); it is used only where it is measurably faster
+(``docs/performance.md``), and never for gradients.
 
 References
 ----------
@@ -46,7 +47,7 @@ def symmetric_rc2(A0: np.ndarray, N: np.ndarray, cap: np.ndarray, rtol: float) -
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def nll_rc2(
     A0: np.ndarray,
     N: np.ndarray,
@@ -138,33 +139,33 @@ def nll_rc2(
     G0 = np.zeros((max(n_slots, 1), 2, p))
     G1 = np.zeros((max(n_slots, 1), 2, p))
     ready = np.zeros(max(n_slots, 1), dtype=np.bool_)
-    B = np.empty((2, p))
     for k in range(n_int):
         g = slot[k]
         if ready[g]:
             continue
         ready[g] = True
         a, a01, a10, d = A0[0, 0], A0[0, 1], A0[1, 0], A0[1, 1]
-        for j in range(p):
-            B[0, j] = B0[0, j]
-            B[1, j] = B0[1, j]
         for f in range(nf):
             mf = m[k, f]
             a += mf * N[f, 0, 0]
             a01 += mf * N[f, 0, 1]
             a10 += mf * N[f, 1, 0]
             d += mf * N[f, 1, 1]
-            for j in range(p):
-                B[0, j] += mf * M[f, 0, j]
-                B[1, j] += mf * M[f, 1, j]
         mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], qc[0], qc[1], foh)
         Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3] = mt[0], mt[1], mt[2], mt[3]
         Qd[g, 0], Qd[g, 1], Qd[g, 2] = mt[12], mt[13], mt[14]
         for j in range(p):
-            G0[g, 0, j] = mt[4] * B[0, j] + mt[5] * B[1, j]
-            G0[g, 1, j] = mt[6] * B[0, j] + mt[7] * B[1, j]
-            G1[g, 0, j] = mt[8] * B[0, j] + mt[9] * B[1, j]
-            G1[g, 1, j] = mt[10] * B[0, j] + mt[11] * B[1, j]
+            # B(m) = B0 + sum m_f M_f, column j
+            b0 = B0[0, j]
+            b1 = B0[1, j]
+            for f in range(nf):
+                b0 += m[k, f] * M[f, 0, j]
+                b1 += m[k, f] * M[f, 1, j]
+            G0[g, 0, j] = mt[4] * b0 + mt[5] * b1
+            G0[g, 1, j] = mt[6] * b0 + mt[7] * b1
+            if foh:
+                G1[g, 0, j] = mt[8] * b0 + mt[9] * b1
+                G1[g, 1, j] = mt[10] * b0 + mt[11] * b1
     has_dd = False
     for j in range(p):
         has_dd = has_dd or dd[j] != 0.0
@@ -172,14 +173,17 @@ def nll_rc2(
     c0, c1 = c[0], c[1]
     x0_, x1_ = x0[0], x0[1]
     p00, p01, p11 = P0[0, 0], 0.5 * (P0[0, 1] + P0[1, 0]), P0[1, 1]
-    nll = 0.0
     n_obs = 0
     steady = False
     steady_slot = -1
     steady_obs = False
     prev_slot = -1
     prev_obs = False
-    k0 = k1 = s = inv_s = log_s = 0.0
+    k0 = k1 = s = inv_s = 0.0
+    log_sum = 0.0  # sum of log s over the updates before the steady state(s) ...
+    prod = 1.0  # ... with the product not yet logged
+    n_steady = 0  # updates in a steady state (each with the s of the steady state it is in)
+    sq_sum = 0.0  # sum e^2 / s
     pp00 = pp01 = pp11 = 0.0  # predicted covariance of the previous sample
     pf00 = pf01 = pf11 = 0.0  # filtered covariance (to leave the steady state from)
     for k in range(n_t):
@@ -187,6 +191,8 @@ def nll_rc2(
         obs = yk == yk
         if steady and obs != steady_obs:
             steady = False
+            log_sum += n_steady * math.log(s) if n_steady else 0.0
+            n_steady = 0
         if not steady:
             pp00, pp01, pp11 = p00, p01, p11
         if obs:
@@ -205,13 +211,22 @@ def nll_rc2(
                 inv_s = 1.0 / s
                 k0 = pc0 * inv_s
                 k1 = pc1 * inv_s
-                log_s = math.log(s)
                 p00 -= k0 * pc0
                 p01 -= k0 * pc1
                 p11 -= k1 * pc1
+                # sum log s as the log of a running product (one log per ~dozens of samples)
+                if 1e-100 < s < 1e100:
+                    prod *= s
+                    if not 1e-200 < prod < 1e200:
+                        log_sum += math.log(prod)
+                        prod = 1.0
+                else:
+                    log_sum += math.log(s)
+            else:
+                n_steady += 1
             x0_ += k0 * innov
             x1_ += k1 * innov
-            nll += 0.5 * (log_s + innov * innov * inv_s)
+            sq_sum += innov * innov * inv_s
             n_obs += 1
         if not steady:
             pf00, pf01, pf11 = p00, p01, p11
@@ -232,6 +247,8 @@ def nll_rc2(
         x1_ = xn1
         if steady and g != steady_slot:
             steady = False
+            log_sum += n_steady * math.log(s) if n_steady else 0.0
+            n_steady = 0
             p00, p01, p11 = pf00, pf01, pf11
         if not steady:
             # P <- Phi P Phi' + Qd
@@ -251,4 +268,6 @@ def nll_rc2(
                     steady_obs = obs
         prev_slot = g
         prev_obs = obs
-    return nll, n_obs
+    if n_steady:
+        log_sum += n_steady * math.log(s)
+    return 0.5 * (log_sum + math.log(prod) + sq_sum), n_obs
