@@ -22,7 +22,7 @@ from rczone.estimation.kalman import (
     stochastic_matrices,
 )
 from rczone.kernels.discretize import modal_matrices
-from rczone.kernels.kalman import kalman_filter, kalman_filter_modal
+from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, no_sensitivities, outputs
 from rczone.simulation.discretize import symmetrizing_scale
 from rczone.simulation.intervals import interval_groups, unique_rows
 from tests.netfactory import random_network
@@ -85,16 +85,15 @@ def test_compiled_filter_equals_its_numpy_twin(seed, n_cap, n_massless, n_output
 
 def _compiled_nll(args: tuple, steady_rtol: float) -> float:
     Phi, G0, G1, Qd, which, u, y, x0, P0, C, D, R = args
-    K, n, p, ny = Phi.shape[0], x0.size, u.shape[1], y.shape[1]
-    outs = (np.empty((0, ny)), np.empty((0, ny, 0)), np.empty((0, n)), np.empty((0, n)), np.empty((0, n, n)))
+    n, p, ny = x0.size, u.shape[1], y.shape[1]
     nll, _, _, _ = kalman_filter(
         (Phi, G0, G1, Qd, which.astype(np.int64)),
-        (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n))),
+        no_sensitivities(Phi.shape[0], n, p),
         (C, D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))),
         (x0, P0, np.empty((0, n)), np.empty((0, n, n))),
         (u, y),
         (bool(np.any(G1)), False, steady_rtol),
-        (*outs, np.empty((0, ny, ny))),
+        outputs(y.shape[0], n, ny, 0, False, False),
     )
     return nll
 

@@ -42,7 +42,14 @@ from rczone.estimation.kalman import (
 )
 from rczone.estimation.parameters import measurement_noise_names
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
-from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, kalman_filter_modal, modal_pays
+from rczone.kernels.kalman import (
+    STEADY_RTOL,
+    kalman_filter,
+    kalman_filter_modal,
+    modal_pays,
+    no_sensitivities,
+    outputs,
+)
 from rczone.kernels.problem import trapezoid
 from rczone.network import BilinearStateSpace, RCNetwork
 from rczone.simulation.discretize import symmetrizing_scale
@@ -332,20 +339,9 @@ def general_cost(
             return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
         scale = np.empty(0) if scale is None else scale
         mats = interval_matrices(A, N, B, M, keys, qc, scale, foh, not ls)
-        K = keys.shape[0]
-        dmats = (
-            np.empty((K, 0, n, n)),
-            np.empty((K, 0, n, p)),
-            np.empty((K, 0, n, p)),
-            np.empty((K, 0, n, n)),
-        )
-    N_t = data.n_samples
+        dmats = no_sensitivities(keys.shape[0], n, p)
     y = f(data.y, dtype=float)
-    if ls:
-        outs = (np.full((N_t, ny), np.nan), np.zeros((N_t, ny, q)))
-    else:
-        outs = (np.empty((0, ny)), np.empty((0, ny, q)))
-    outs = (*outs, np.empty((0, n)), np.empty((0, n)), np.empty((0, n, n)), np.empty((0, ny, ny)))
+    outs = outputs(data.n_samples, n, ny, q, ls, False)
     nll, n_obs, g, fim = kalman_filter(
         (*mats, which),
         dmats,

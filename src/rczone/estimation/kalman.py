@@ -40,7 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rczone.errors import InputShapeError
-from rczone.kernels.kalman import STEADY_RTOL, kalman_filter
+from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import SYMMETRY_RTOL, interval_discretization, symmetrizing_scale
@@ -227,53 +227,30 @@ def kalman_filter_reference(
 # --------------------------------------------------------------------------- the compiled filter
 
 
-def _compiled(
-    Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, outputs: bool, hold: str = ""
-) -> tuple[float, int, tuple]:
-    """Run :func:`rczone.kernels.kalman.kalman_filter` on the arrays of :func:`stochastic_matrices`."""
+def _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, keep: bool) -> tuple[float, int, tuple]:
+    """Run :func:`rczone.kernels.kalman.kalman_filter` on the arrays of :func:`stochastic_matrices`.
+
+    With ``keep`` the intermediate results are returned too (the ``outs`` of the kernel).
+    """
     f = np.ascontiguousarray
-    r = measurement_variances(R)
+    r = measurement_variances(R).astype(float)
     N, ny = y.shape
     n, p = x0.shape[0], u.shape[1]
-    foh = bool(np.any(Gamma1))
-    K = Phi.shape[0]
-    if outputs:
-        outs = (
-            np.full((N, ny), np.nan),
-            np.empty((0, ny, 0)),
-            np.empty((N, n)),
-            np.empty((N, n)),
-            np.empty((N, n, n)),
-            np.empty((N, ny, ny)),
-        )
-    else:
-        outs = (
-            np.empty((0, ny)),
-            np.empty((0, ny, 0)),
-            *(np.empty((0, n)),) * 2,
-            np.empty((0, n, n)),
-            np.empty((0, ny, ny)),
-        )
+    outs = outputs(N, n, ny, 0, False, keep)
     nll, n_obs, _, _ = kalman_filter(
-        (
-            f(Phi, dtype=float),
-            f(Gamma0, dtype=float),
-            f(Gamma1, dtype=float),
-            f(Qd, dtype=float),
-            f(which, dtype=np.int64),
-        ),
-        (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n))),
+        (*(f(a, dtype=float) for a in (Phi, Gamma0, Gamma1, Qd)), f(which, dtype=np.int64)),
+        no_sensitivities(Phi.shape[0], n, p),
         (
             f(C, dtype=float),
             f(D, dtype=float),
-            r.astype(float),
+            r,
             np.empty((ny, 0, n)),
             np.empty((ny, 0, p)),
             np.empty((ny, 0)),
         ),
         (f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
         (f(u, dtype=float), f(y, dtype=float)),
-        (foh, False, STEADY_RTOL),
+        (bool(np.any(Gamma1)), False, STEADY_RTOL),
         outs,
     )
     if n_obs < 0:

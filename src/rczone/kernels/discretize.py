@@ -35,7 +35,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.expm import expm_frechet, matmul
+from rczone.kernels.expm import expm_frechet, matmul, norm1
 
 #: Below this ``|x|`` the series of ``(e^x - 1 - x)/x^2`` is used.
 SERIES_LIMIT = 0.2
@@ -420,13 +420,7 @@ def _van_loan_doubling(
     """
     n = A.shape[0]
     q = dA.shape[0]
-    norm = 0.0
-    for j in range(n):
-        s_ = 0.0
-        for i in range(n):
-            s_ += abs(A[i, j])
-        norm = max(norm, s_)
-    norm *= dt
+    norm = norm1(A) * dt
     s = math.ceil(math.log2(norm / VAN_LOAN_NORM)) if norm > VAN_LOAN_NORM else 0
     h = dt * 0.5**s
     # directions that move Qd: A or qc

@@ -78,16 +78,22 @@ _PADE[4, :] = [
 @njit(cache=True, error_model="numpy")
 def matmul(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
     """``out = a @ b`` for small contiguous matrices (``out`` must not alias ``a`` or ``b``)."""
-    n, k = a.shape
-    m = b.shape[1]
-    for i in range(n):
-        for j in range(m):
+    for i in range(out.shape[0]):
+        for j in range(out.shape[1]):
             out[i, j] = 0.0
-        for q in range(k):
-            aiq = a[i, q]
-            if aiq != 0.0:
-                for j in range(m):
-                    out[i, j] += aiq * b[q, j]
+    _add_product(a, b, out)
+
+
+@njit(cache=True, error_model="numpy")
+def norm1(a: np.ndarray) -> float:
+    """The 1-norm (largest column sum of absolute values) of a matrix."""
+    big = 0.0
+    for j in range(a.shape[1]):
+        c = 0.0
+        for i in range(a.shape[0]):
+            c += abs(a[i, j])
+        big = max(big, c)
+    return big
 
 
 @njit(cache=True, error_model="numpy")
@@ -192,12 +198,7 @@ def expm_frechet(A: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     n = A.shape[0]
     q = E.shape[0]
-    nrm = 0.0
-    for j in range(n):
-        c = 0.0
-        for i in range(n):
-            c += abs(A[i, j])
-        nrm = max(nrm, c)
+    nrm = norm1(A)
     deg = 4
     for i in range(4):
         if nrm <= _THETA[i]:

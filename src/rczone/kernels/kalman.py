@@ -64,6 +64,32 @@ MODAL_CHANGES = 0.25
 FAST = {"reassoc", "contract"}
 
 
+@njit(cache=True, error_model="numpy")
+def no_sensitivities(K: int, n: int, p: int) -> tuple:
+    """The ``sens`` argument of :func:`kalman_filter` for the likelihood alone (``q = 0``)."""
+    return (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n)))
+
+
+@njit(cache=True, error_model="numpy")
+def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> tuple:
+    """The ``outs`` argument of :func:`kalman_filter`, empty where not wanted.
+
+    ``errors``: the innovations or output errors (NaN where missing) and their derivatives;
+    ``states``: the innovations, predicted and filtered states, covariances, ``S``.
+    """
+    ne = N if errors or states else 0
+    nd = N if errors else 0
+    ns = N if states else 0
+    return (
+        np.full((ne, ny), np.nan),
+        np.zeros((nd, ny, q)),
+        np.empty((ns, n)),
+        np.empty((ns, n)),
+        np.empty((ns, n, n)),
+        np.empty((ns, ny, ny)),
+    )
+
+
 @njit(cache=True, error_model="numpy", fastmath=FAST)
 def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int, np.ndarray, np.ndarray]:
     """Run the filter over all samples; ``-log L`` without ``0.5 n log 2 pi``, and its gradient.

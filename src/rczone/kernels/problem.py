@@ -51,7 +51,7 @@ from numba import njit
 
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
-from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays
+from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
 
 #: Problem kinds.
@@ -349,17 +349,18 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
             r[s] = sv[s] * sv[s]
             if q and sv_idx[s] >= 0:
                 dr[s, sv_idx[s]] += 2.0 * sv[s] * sv_k[s]
+    C = np.zeros((ny, n))  # output j reads state out_state[j]
+    for s in range(ny):
+        C[s, out_state[s]] = 1.0
     if fused and not want_grad:
         # values of 2-state, 1-output problems: the fused kernel (rczone.kernels.rc2)
-        c = np.zeros(2)
-        c[out_state[0]] = 1.0
         e = scratch[:0]
         if kind == LS:
             e = scratch
             for k in range(N_t):
                 e[k] = math.nan
         nll, n_obs = nll_rc2(
-            A0, N, B0, M, cap, t, m, u, y[:, 0], x0, P0, c, np.zeros(B0.shape[1]), r[0], qc, foh,
+            A0, N, B0, M, cap, t, m, u, y[:, 0], x0, P0, C[0], np.zeros(B0.shape[1]), r[0], qc, foh,
             sym_rtol, steady_rtol, e, groups,
         )  # fmt: skip
         if n_obs < 0:
@@ -369,12 +370,7 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
         j = nll + 0.5 * n_obs * _LOG_2PI
     elif q == 0 and kind != LS and modal_pays(which, n):
         # values of larger models with flows constant over stretches: the modal filter
-        scale = np.empty(n)
-        for s in range(n):
-            scale[s] = math.sqrt(cap[s])
-        C = np.zeros((ny, n))
-        for s in range(ny):
-            C[s, out_state[s]] = 1.0
+        scale = np.sqrt(cap)
         modal = modal_matrices(A0, N, B0, M, keys, qc, scale, foh)
         nll, n_obs = kalman_filter_modal(
             modal, scale, which, (C, np.zeros((ny, B0.shape[1])), r), (x0, P0), (u, y), foh
@@ -387,33 +383,12 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
         if q:
             mats, dmats = interval_derivatives(A0, N, B0, M, dA0, dN, dB0, dM, keys, qc, dqc, foh, noise)
         else:
-            scale = np.empty(n)
-            for s in range(n):
-                scale[s] = math.sqrt(cap[s])
-            mats = interval_matrices(A0, N, B0, M, keys, qc, scale, foh, noise)
-            K = keys.shape[0]
-            p = B0.shape[1]
-            dmats = (
-                np.empty((K, 0, n, n)),
-                np.empty((K, 0, n, p)),
-                np.empty((K, 0, n, p)),
-                np.empty((K, 0, n, n)),
-            )
+            mats = interval_matrices(A0, N, B0, M, keys, qc, np.sqrt(cap), foh, noise)
+            dmats = no_sensitivities(keys.shape[0], n, B0.shape[1])
         p = B0.shape[1]
-        C = np.zeros((ny, n))
-        for s in range(ny):
-            C[s, out_state[s]] = 1.0
         obs = (C, np.zeros((ny, p)), r, np.zeros((ny, q, n)), np.zeros((ny, q, p)), dr)
         Phi, G0, G1, Qd = mats
-        if kind == LS:
-            e = np.full((N_t, ny), math.nan)
-            de = np.zeros((N_t, ny, q))
-            outs = (e, de, np.empty((0, n)), np.empty((0, n)), np.empty((0, n, n)), np.empty((0, ny, ny)))
-        else:
-            outs = (
-                np.empty((0, ny)), np.empty((0, ny, q)), np.empty((0, n)), np.empty((0, n)),
-                np.empty((0, n, n)), np.empty((0, ny, ny)),
-            )  # fmt: skip
+        outs = outputs(N_t, n, ny, q, kind == LS, False)
         nll, n_obs, g, fim = kalman_filter(
             (Phi, G0, G1, Qd, which),
             dmats,
