@@ -267,7 +267,7 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
     x0 = steady_state(ss13, u[0], m[0])
     y = simulate(ss13, t, u, m, x0=x0).y + 0.05 * rng.standard_normal((t.size, 1))
     data13 = Dataset(t, u, m, y, net13.input_names, net13.flow_names, net13.outputs)
-    spec13 = make_spec(net13, ["sigma_v"])
+    spec13 = make_spec(net13, ["sigma_v"], fixed={f"sigma_w_{s}": 1e-3 for s in net13.state_names})
     obj13 = Objective(net13, data13, spec13, "ml")
     eta13 = spec13.to_eta(spec13.start)
     plain13 = plain_problem(net13, data13, spec13.values(spec13.start))

@@ -1,123 +1,481 @@
 """The calibration workflow: data frame in, fitted model and its checks out.
 
 This is the path shared by ``rczone fit``, ``rczone predict``, the demo and batch
-calibration: pick the model's signals from a frame (deriving ``Tsd`` from the five
-surroundings, holding ``Q`` constant when the data have none), fit, and validate the fitted
-model open loop. The network is never modified; the fitted values live in a
-:class:`~rczone.mpc.ZoneModel`.
+calibration: pick the model's signals from a frame by name (with the model's own conventions
+for inputs the data lack, :class:`~rczone.models.zone.ModelInputs`), fit from the model's values,
+and validate the fitted model open loop. The network is never modified; the fitted values live
+in a new :class:`~rczone.models.zone.ZoneModel`.
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from rczone.comparison import model_arrays
+from rczone.errors import DataError
 from rczone.estimation import Dataset, FitResult, fit
-from rczone.estimation.validation import OpenLoopError, ResidualTest, ljung_box, open_loop_error
-from rczone.mpc import ZoneModel
+from rczone.estimation.fit import default_free
+from rczone.estimation.innovations import (
+    ResidualAnalysis,
+    innovation_analysis,
+    ljung_box_lags,
+    open_loop_analysis,
+)
+from rczone.estimation.validation import (
+    OpenLoopError,
+    ResidualTest,
+    ljung_box,
+    open_loop_error,
+)
+from rczone.models import ZoneModel, load_model
 from rczone.network import RCNetwork
 
-#: Free parameters by method when the user names none: the paper's reduced set, plus the
-#: measurement and process noise for the likelihood methods.
-DEFAULT_FREE = {
-    "ls": ("Cr", "Rw"),
-    "ml": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
-    "map": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
-}
+ModelLike = ZoneModel | RCNetwork | str | os.PathLike
 
 
-def dataset(network: RCNetwork, frame: pd.DataFrame, constants: Mapping[str, float] | None = None) -> Dataset:
-    """The network's signals from a frame in rczone's default columns."""
-    t, u, m = model_arrays(network, frame, constants)
-    y = frame[list(network.outputs)].to_numpy(float)
-    return Dataset(
-        t, u, m if m.shape[1] else None, y, network.input_names, network.flow_names, network.outputs
+def as_model(model: ModelLike) -> ZoneModel:
+    """A :class:`ZoneModel` from a model, a bare network, a built-in name or a model file."""
+    return load_model(model)
+
+
+def frame_from(data: pd.DataFrame) -> pd.DataFrame:
+    """A frame with a ``time`` column in seconds; a DatetimeIndex (or datetime ``time``) is converted.
+
+    Every API entry point accepts a frame indexed by time stamps: the time becomes seconds since
+    the first sample (only differences of time enter the models).
+    """
+    if not isinstance(data, pd.DataFrame):
+        raise DataError(f"data must be a pandas DataFrame, got {type(data).__name__}")
+    if "time" in data:
+        t = data["time"]
+        if pd.api.types.is_datetime64_any_dtype(t):
+            out = data.copy()
+            out["time"] = (t - t.iloc[0]).dt.total_seconds()
+            return out
+        return data
+    if isinstance(data.index, pd.DatetimeIndex):
+        out = data.reset_index(drop=True)
+        out.insert(0, "time", (data.index - data.index[0]).total_seconds().to_numpy())
+        return out
+    raise DataError(
+        "the data have no 'time' column and no DatetimeIndex; give time in seconds or index the"
+        " frame by time stamps"
     )
 
 
-def default_constants(frame: pd.DataFrame, network: RCNetwork) -> dict[str, float]:
-    """The paper's Q = 50 W when the data carry no internal-gain column."""
-    return {"Q": 50.0} if "Q" in network.input_names and "Q" not in frame else {}
+def complete_stretch(u: np.ndarray, m: np.ndarray, y: np.ndarray) -> slice:
+    """The longest run of samples where every input and flow is known and some output is measured.
+
+    The model needs its inputs at every sample (an unknown input is not a missing measurement);
+    outputs may be missing inside the run. Returns ``slice(start, stop)``.
+    """
+    ok = np.isfinite(u).all(axis=1) & np.isfinite(m).all(axis=1)
+    best, start = (0, 0), None
+    for i, good in enumerate(np.r_[ok, False]):
+        if good and start is None:
+            start = i
+        elif not good and start is not None:
+            if i - start > best[1] - best[0] and np.isfinite(y[start:i]).any():
+                best = (start, i)
+            start = None
+    return slice(*best)
 
 
-def default_free(network: RCNetwork, method: str) -> tuple[str, ...]:
-    """Default free parameters: the paper's set if the model has it, else every base R and C."""
-    base = DEFAULT_FREE.get(method, DEFAULT_FREE["ls"])
-    if all(n in network.parameters for n in ("Cr", "Rw")):
-        return tuple(n for n in base if n in network.parameters or n.startswith("sigma_"))
-    rc = tuple(
-        n for n, p in network.parameters.items() if not p.is_tied and p.kind in ("resistance", "capacitance")
-    )
-    return rc + (("sigma_v", f"sigma_w_{network.state_names[0]}") if method != "ls" else ())
+def dataset(
+    model: ModelLike,
+    frame: pd.DataFrame,
+    constants: Mapping[str, float] | None = None,
+    stretch: str = "longest",
+) -> Dataset:
+    """The model's signals from a frame (see :meth:`ZoneModel.signals`) as an estimation data set.
+
+    Parameters
+    ----------
+    stretch : {"longest", "all"}
+        ``"longest"``: where an input has gaps, the longest stretch without any
+        (:func:`complete_stretch`; :func:`dataset_note` says which was used); ``"all"``: every
+        sample (an input gap is then an error naming the sample).
+    """
+    zm = as_model(model)
+    t, u, m, y = zm.signals(frame_from(frame), constants)
+    if stretch == "longest":
+        sl = complete_stretch(u, m, y)
+        if sl.stop - sl.start < 2:
+            bad = [
+                n
+                for j, n in enumerate((*zm.network.input_names, *zm.network.flow_names))
+                if not np.isfinite(np.column_stack([u, m])[:, j]).any()
+            ]
+            raise DataError(
+                "no stretch of at least 2 samples where every input is known"
+                + (f" ({', '.join(bad)} never are)" if bad else "")
+                + "; check the column map and the data's gaps"
+            )
+        t, u, m, y = t[sl], u[sl], m[sl], y[sl]
+    elif stretch != "all":
+        raise DataError(f"stretch must be 'longest' or 'all', got {stretch!r}")
+    net = zm.network
+    return Dataset(t, u, m if m.shape[1] else None, y, net.input_names, net.flow_names, net.outputs)
 
 
 @dataclass(frozen=True, eq=False)
 class Calibration:
-    """A fit and its open-loop check on the calibration data."""
+    """A fit and its open-loop check on the calibration data.
+
+    Attributes
+    ----------
+    result : FitResult
+    model : ZoneModel
+        The fitted model (structure and conventions of the input model, the estimates as values).
+    open_loop : OpenLoopError
+        Open-loop simulation of the fitted model on the calibration data (from the estimated
+        initial state where the fit estimated one).
+    residuals : ResidualTest
+        Whiteness of the open-loop error (not expected to be white; see the innovations for ML).
+    innovations : ResidualAnalysis or None
+        Whiteness of the one-step innovations (ML and MAP fits; None for LS or too few samples).
+    open_loop_residuals : ResidualAnalysis or None
+        The same statistics on the open-loop error, labelled as such.
+    """
 
     result: FitResult
     model: ZoneModel
     open_loop: OpenLoopError
     residuals: ResidualTest
+    innovations: ResidualAnalysis | None = None
+    open_loop_residuals: ResidualAnalysis | None = None
+
+    def to_frame(self) -> pd.DataFrame:
+        """The parameter table (:meth:`FitResult.to_frame`)."""
+        return self.result.to_frame()
 
 
 def calibrate(
-    network: RCNetwork,
+    model: ModelLike,
     frame: pd.DataFrame,
     method: str = "ls",
     free: Sequence[str] | None = None,
     optimizer: str = "nelder-mead",
-    n_starts: int = 1,
+    n_starts: int | None = None,
     seed: int = 0,
     constants: Mapping[str, float] | None = None,
     provenance: Mapping[str, object] | None = None,
     uncertainty: bool = True,
+    bounds: Mapping[str, tuple[float, float]] | None = None,
 ) -> Calibration:
-    """Fit ``network`` to ``frame`` and check the fitted model open loop."""
-    constants = dict(default_constants(frame, network) if constants is None else constants)
-    data = dataset(network, frame, constants)
-    free = tuple(free) if free else default_free(network, method)
-    rng = np.random.default_rng(seed)
+    """Fit ``model`` to ``frame`` and check the fitted model open loop.
+
+    Parameters
+    ----------
+    model : ZoneModel, RCNetwork, str or path
+        A built-in name, a model file, a saved model (its values are the start) or a network.
+    frame : DataFrame
+        ``time`` (s) or a DatetimeIndex, and a column per model input and output (by name; the
+        model's conventions fill inputs the data lack).
+    method : {"ls", "ml", "map"}
+    free : sequence of str, optional
+        Default :func:`rczone.estimation.fit.default_free`.
+    optimizer : {"nelder-mead", "powell", "lbfgs"}
+    n_starts : int, optional
+        Default: the global search (see :func:`rczone.estimation.fit`); 1: one local search.
+    seed : int
+        Seed of the global search.
+    constants : mapping, optional
+        Inputs held constant instead of read from the frame.
+    provenance : mapping, optional
+        Added to the fitted model's provenance.
+    uncertainty : bool
+        Standard errors from the Hessian.
+    bounds : mapping, optional
+        Search bounds overriding the declared ones.
+    """
+    zm = as_model(model)
+    net = zm.network
+    frame = frame_from(frame)
+    used = zm.constants_used(frame, constants)
+    data = dataset(zm, frame, constants)
+    stretch = {
+        "samples": int(data.n_samples),
+        "of": len(frame),
+        "start_s": float(data.t[0]),
+        "end_s": float(data.t[-1]),
+    }
+    free = tuple(free) if free else default_free(net, method)
+    start = {k: v for k, v in {**zm.theta, **zm.noise}.items() if k in free}
     res = fit(
-        network,
+        net,
         data,
         free,
         method=method,
         optimizer=optimizer,
         n_starts=n_starts,
-        rng=rng,
+        rng=np.random.default_rng(seed),
         uncertainty=uncertainty,
+        start=start,
+        fixed={k: v for k, v in zm.theta.items() if k not in free},
+        bounds=bounds,
     )
-    theta = {k: v for k, v in {**res.fixed, **res.estimates}.items() if k in network.parameters}
-    noise = {k: v for k, v in {**res.fixed, **res.estimates}.items() if k not in network.parameters}
-    model = ZoneModel(
-        network,
+    values = {**res.fixed, **res.estimates}
+    theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
+    noise = {k: v for k, v in values.items() if k.startswith("sigma_")} if method != "ls" else {}
+    initial = {k: v for k, v in values.items() if k.startswith("x0_")}
+    fitted = zm.with_values(
         theta,
-        {
-            "method": method,
-            "optimizer": optimizer,
-            "free": list(free),
-            "cost": res.cost,
-            "rmse_K": res.rmse_K,
-            "std_errors": {k: float(v) for k, v in res.std_errors.items()},
-            "noise_and_initial_state": noise,
-            "constants": constants,
-            **dict(provenance or {}),
-        },
+        noise,
+        method=method,
+        optimizer=optimizer,
+        free=list(free),
+        cost=res.cost,
+        rmse_K=res.rmse_K,
+        std_errors={k: float(v) for k, v in res.std_errors.items()},
+        initial_state=initial,
+        constants=used,
+        trustworthy=res.trustworthy,
+        flags=list(res.flags),
+        stretch=stretch,
+        covariance=parameter_covariance(res),
+        **dict(provenance or {}),
     )
-    ol = open_loop_error(network, theta, data)
-    return Calibration(res, model, ol, ljung_box(ol.error[:, 0], n_lags=min(20, data.n_samples // 5)))
+    ol = open_loop_error(net, {**theta, **initial}, data)
+    n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
+    inn = olr = None
+    if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
+        olr = open_loop_analysis(ol.error, data)
+        if method != "ls":
+            inn = innovation_analysis(net, values, data, res.hold)
+    return Calibration(res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr)
+
+
+#: Fewest measured samples (of every output) the residual analysis is made on (fewer: the statistics mean nothing).
+MIN_ANALYSIS_SAMPLES = 10
+
+
+def parameter_covariance(res: FitResult) -> dict[str, object]:
+    """The estimates' covariance in physical units, ``{"names": [...], "matrix": [[...]]}``.
+
+    ``cov_ij = corr_ij se_i se_j`` (the correlation is the same in eta and theta to first order);
+    NaN where a standard error is missing (an estimate held at a bound).
+    """
+    se = np.array([res.std_errors[n] for n in res.names], dtype=float)
+    return {"names": list(res.names), "matrix": (res.correlation * np.outer(se, se)).tolist()}
 
 
 def predict(
-    model: ZoneModel, frame: pd.DataFrame, constants: Mapping[str, float] | None = None
+    model: ModelLike, frame: pd.DataFrame, constants: Mapping[str, float] | None = None
 ) -> OpenLoopError:
-    """Open-loop simulation of a saved model on other data (starting at the measured Ti)."""
-    if constants is None:
-        constants = model.provenance.get("constants") or default_constants(frame, model.network)
-    data = dataset(model.network, frame, constants)
-    return open_loop_error(model.network, dict(model.theta), data)
+    """Open-loop simulation of a model on data (the measured states start at their first measurement)."""
+    zm = as_model(model)
+    data = dataset(zm, frame, constants)
+    return open_loop_error(zm.network, dict(zm.theta), data)
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """An open-loop or k-step-ahead prediction with a band of plus or minus two standard deviations.
+
+    Attributes
+    ----------
+    t : ndarray, shape (N,)
+        Time, s (as in the data: UTC epoch seconds for a loaded trend log).
+    measured, predicted, sd : ndarray, shape (N, ny)
+        ``sd`` is the total: ``sqrt(sd_noise^2 + sd_parameters^2)``.
+    outputs : tuple of str
+    band_source : str
+        Where the standard deviation comes from, in words.
+    sd_noise, sd_parameters : ndarray, shape (N, ny), optional
+        The parts from the noise (or the fit's RMSE) and from the estimates' covariance (NaN: none).
+    steps : int, optional
+        Steps ahead; None for open loop.
+    """
+
+    t: np.ndarray
+    measured: np.ndarray
+    predicted: np.ndarray
+    sd: np.ndarray
+    outputs: tuple[str, ...]
+    band_source: str
+    sd_noise: np.ndarray | None = None
+    sd_parameters: np.ndarray | None = None
+    steps: int | None = None
+
+    @property
+    def horizon(self) -> str:
+        """``"open loop"`` or ``"k steps ahead"``, in words."""
+        return "open loop" if self.steps is None else f"{self.steps} step{'s' * (self.steps != 1)} ahead"
+
+    @property
+    def error(self) -> np.ndarray:
+        return self.measured - self.predicted
+
+    @property
+    def rmse_K(self) -> np.ndarray:
+        """Per output, K (NaN where nothing is measured)."""
+        e = self.error
+        n = np.isfinite(e).sum(axis=0)
+        return np.where(n > 0, np.sqrt(np.nansum(e**2, axis=0) / np.maximum(n, 1)), np.nan)
+
+    @property
+    def max_abs_K(self) -> np.ndarray:
+        e = np.abs(self.error)
+        return np.array([np.max(c[np.isfinite(c)]) if np.isfinite(c).any() else np.nan for c in e.T])
+
+    @property
+    def coverage(self) -> np.ndarray:
+        """Fraction of measured samples inside the band, per output (NaN without a band)."""
+        e = np.abs(self.error)
+        ok = np.isfinite(e) & np.isfinite(self.sd)
+        inside = (e <= 2 * self.sd) & ok
+        return np.where(ok.sum(axis=0) > 0, inside.sum(axis=0) / np.maximum(ok.sum(axis=0), 1), np.nan)
+
+    def to_frame(self) -> pd.DataFrame:
+        """``time`` (and ``timestamp_utc`` for epoch times), then per output measured, predicted, lower, upper."""
+        cols: dict[str, np.ndarray] = {"time": self.t}
+        if self.t.size and self.t[0] > 1e8:  # epoch seconds: also a readable UTC time stamp
+            cols["timestamp_utc"] = pd.to_datetime(self.t, unit="s", utc=True).strftime("%Y-%m-%dT%H:%M:%SZ")
+        for j, o in enumerate(self.outputs):
+            cols[f"{o}_measured"] = self.measured[:, j]
+            cols[f"{o}_predicted"] = self.predicted[:, j]
+            cols[f"{o}_lower"] = self.predicted[:, j] - 2 * self.sd[:, j]
+            cols[f"{o}_upper"] = self.predicted[:, j] + 2 * self.sd[:, j]
+            if self.sd_noise is not None:
+                cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
+            if self.sd_parameters is not None:
+                cols[f"{o}_sd_parameters"] = self.sd_parameters[:, j]
+        return pd.DataFrame(cols)
+
+    def write(self, path: str | os.PathLike) -> None:
+        """Write :meth:`to_frame` as ``.csv`` or ``.parquet`` (atomically)."""
+        import io
+
+        from rczone.atomic import write_bytes_atomic, write_text_atomic
+
+        p = os.fspath(path)
+        low = p.lower()
+        if low.endswith(".csv"):
+            write_text_atomic(p, self.to_frame().to_csv(index=False))
+        elif low.endswith((".parquet", ".pq")):
+            buf = io.BytesIO()
+            self.to_frame().to_parquet(buf, index=False)
+            write_bytes_atomic(p, buf.getvalue())
+        else:
+            raise DataError(f"the series file must end in .csv or .parquet, got {p!r}")
+
+
+def prediction(
+    model: ModelLike,
+    frame: pd.DataFrame,
+    constants: Mapping[str, float] | None = None,
+    steps: int | None = None,
+    parameters: bool = True,
+) -> Prediction:
+    """Open-loop (or ``steps``-ahead) prediction of ``model`` on data with a two-sigma band.
+
+    The band has two parts (:mod:`rczone.estimation.forecast`):
+
+    * the noise: from the model's noise levels when it has them (a likelihood fit: process noise
+      accumulated along the prediction plus measurement noise), else, open loop, from the
+      open-loop RMSE of the least-squares fit that produced the model (constant), else none;
+    * the estimates: their covariance saved with a fitted model (``provenance["covariance"]``),
+      carried to the prediction by the delta method (``parameters=False`` leaves it out).
+
+    Parameters
+    ----------
+    steps : int, optional
+        Predict ``y[j]`` from the measurements up to ``j - steps`` (Kalman filter; needs the
+        model's noise levels). Default: open loop from the first measurement.
+    """
+    from rczone.estimation.forecast import noise_band, parameter_sd
+
+    zm = as_model(model)
+    data = dataset(zm, frame, constants)
+    net = zm.network
+    values = {**zm.theta, **noise_values(zm)}
+    has_noise = any(k.startswith("sigma_") for k in zm.noise)
+    if steps is not None and not has_noise:
+        raise DataError(
+            f"a {steps}-step prediction needs the model's noise levels; fit the model by ML"
+            " (rczone fit --method ml --save-model ...) or predict open loop"
+        )
+    sources = []
+    if has_noise:
+        y_hat, sd = noise_band(net, values, data, steps)
+        sources.append("the model's noise levels")
+    else:
+        y_hat = open_loop_error(net, dict(zm.theta), data).y_hat
+        rmse = zm.provenance.get("rmse_K") if zm.provenance.get("method") == "ls" else None
+        if isinstance(rmse, (int, float)) and np.isfinite(rmse):
+            sd = np.full_like(y_hat, float(rmse))
+            sources.append("the open-loop RMSE of the least-squares fit")
+        else:
+            sd = np.full_like(y_hat, np.nan)
+    if not np.all(np.isfinite(y_hat[steps or 0 :])):
+        raise DataError("the model's prediction is not finite; its values are not usable on these data")
+    sd_par = None
+    cov = saved_covariance(zm) if parameters else None
+    if cov is not None:
+        names, matrix = cov
+        if has_noise:
+
+            def predictor(v: Mapping[str, float]) -> np.ndarray:
+                return noise_band(net, v, data, steps)[0]
+        else:
+
+            def predictor(v: Mapping[str, float]) -> np.ndarray:
+                return open_loop_error(net, v, data).y_hat
+
+        sd_par = parameter_sd(predictor, values, names, matrix)
+        sources.append("the estimates' covariance")
+    total = sd if sd_par is None else np.sqrt(np.where(np.isfinite(sd), sd**2, 0.0) + sd_par**2)
+    source = (
+        " and ".join(sources) if sources else "none: the model has no noise levels (fit it by ML for a band)"
+    )
+    return Prediction(data.t, data.y, y_hat, total, net.outputs, source, sd, sd_par, steps)
+
+
+def noise_values(zm: ZoneModel) -> dict[str, float]:
+    """The model's noise levels completed with the defaults for those it has none of (empty without any)."""
+    if not any(k.startswith("sigma_") for k in zm.noise):
+        return {}
+    from rczone.estimation.parameters import NOISE_DEFAULTS, noise_parameter_names
+
+    values = dict(zm.noise)
+    for n in noise_parameter_names(zm.network):
+        if n.startswith("sigma_w_") and n not in values:
+            values[n] = 0.0
+        elif n.startswith("sigma_x0_") and n not in values:
+            values[n] = NOISE_DEFAULTS["sigma_x0"]
+        elif n.startswith("sigma_v") and n not in values:
+            values[n] = 0.0
+    return values
+
+
+def saved_covariance(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:
+    """The estimates' covariance a fit saved with the model, restricted to what moves a prediction.
+
+    Only the model's base parameters and noise levels are kept (the initial state of the
+    calibration data says nothing about other data). None when the model has none, or none of
+    its entries is usable. A malformed entry (a model file is untrusted) is an error.
+    """
+    cov = zm.provenance.get("covariance")
+    if cov is None:
+        return None
+    try:
+        names = [str(n) for n in cov["names"]]
+        matrix = np.array(
+            [[np.nan if v is None else float(v) for v in row] for row in cov["matrix"]], dtype=float
+        )
+        if matrix.shape != (len(names), len(names)):
+            raise ValueError
+    except (KeyError, TypeError, ValueError):
+        raise DataError(
+            f"model {zm.label!r}: its saved covariance is malformed (expected names and a square matrix)"
+        ) from None
+    known = {*zm.theta, *noise_values(zm)}
+    keep = [i for i, n in enumerate(names) if n in known and np.isfinite(matrix[i, i])]
+    if not keep:
+        return None
+    return [names[i] for i in keep], matrix[np.ix_(keep, keep)]

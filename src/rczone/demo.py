@@ -11,12 +11,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from rczone import datasets
 from rczone.atomic import write_json_atomic
 from rczone.comparison import TimeComparison, compare_frequency, compare_time, input_variation
 from rczone.models import get_model
+from rczone.models.reduction import F_PER_K, PAPER_DU_K, band_matched_model
+from rczone.network import RCNetwork
 from rczone.report import Report
 from rczone.report import figures as figs
+from rczone.virtual.operation import Operation
 
 ORDERS = ("full-scale", "second-order", "first-order")
 SCENARIOS = {
@@ -25,10 +30,26 @@ SCENARIOS = {
     "C": "C: autumn night, forced-response test",
 }
 #: The paper's yardstick for section III, in K (1 F and 3 F).
-PAPER_SECOND_ORDER_K = 1.0 / 1.8
-PAPER_FIRST_ORDER_K = 3.0 / 1.8
+PAPER_SECOND_ORDER_K = 1.0 / F_PER_K
+PAPER_FIRST_ORDER_K = 3.0 / F_PER_K
+#: Low-order variants judged at the paper's weights: parallel aggregation and band-matched values.
+VARIANTS = (
+    "second-order",
+    "second-order-band",
+    "second-order-paper",
+    "second-order-paper-band",
+    "first-order",
+    "first-order-band",
+)
 #: Constant internal gain used in every time-domain simulation (the paper's Q = 50 W).
 Q_PAPER = 50.0
+#: The paper's unknowns (section IV: theta = [Cr, Rw], the initial state taken from the data), plus
+#: the noise levels a likelihood fit needs.
+PAPER_FREE = {
+    "ls": ("Cr", "Rw"),
+    "ml": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
+    "map": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
+}
 
 
 def true_equivalent() -> dict[str, float] | None:
@@ -92,6 +113,9 @@ def model_order_study(report: Report, progress: Callable[[str], None]) -> dict[s
                 "at_hz": float(fc.freq_hz[j]),
             }
     results["frequency_domain"]["relative_gain_error"] = rel
+
+    progress("frequency responses at the paper's weights, parallel and band-matched values")
+    fcp, results["frequency_domain"]["paper_weights"] = paper_weights_study()
 
     report.heading("III. Which model order is enough?")
     report.paragraph(
@@ -165,7 +189,62 @@ def model_order_study(report: Report, progress: Callable[[str], None]) -> dict[s
         "neighbours vary little overnight."
     )
     report.paragraph(verdict, "note")
+    _report_paper_weights(report, fcp, results["frequency_domain"]["paper_weights"])
     return results
+
+
+def _variant_model(name: str) -> RCNetwork:
+    base = name.removesuffix("-band")
+    return band_matched_model(base) if name.endswith("-band") else get_model(base)
+
+
+def paper_weights_study() -> tuple[Any, dict[str, Any]]:
+    """Eq.-7 errors at the paper's input amplitudes, parallel against band-matched values."""
+    models = {"full-scale": get_model("full-scale"), **{k: _variant_model(k) for k in VARIANTS}}
+    fc = compare_frequency(models, "full-scale", PAPER_DU_K, m=0.12)
+    maxe = fc.max_errors()
+    limit = {k: PAPER_FIRST_ORDER_K if k.startswith("first") else PAPER_SECOND_ORDER_K for k in VARIANTS}
+    out = {
+        "du_K": dict(PAPER_DU_K),
+        "du_F": {k: v * F_PER_K for k, v in PAPER_DU_K.items()},
+        "max_error_K": maxe,
+        "max_error_F": {k: {i: e * F_PER_K for i, e in v.items()} for k, v in maxe.items()},
+        "paper_bound_F": {k: v * F_PER_K for k, v in limit.items()},
+        "agrees_with_paper": {k: max(maxe[k].values()) <= limit[k] for k in VARIANTS},
+        "values": {k: models[k].values() for k in VARIANTS},
+    }
+    return fc, out
+
+
+def _report_paper_weights(report: Report, fc: Any, pw: dict[str, Any]) -> None:
+    report.heading("The paper's weights, and values matched to the band", 3)
+    report.paragraph(
+        "The paper weights eq. 7 with 45 F (Ts), 10 F (surroundings) and 45 F (To). At those weights the "
+        "parallel aggregation misses the 1 F the paper reports for the 2nd-order model, because one lumped wall "
+        "with R1 = R2 cannot follow six surfaces whose room sides respond within minutes and whose cores take "
+        "days. 'band' values keep every steady-state gain (Rwin and the wall's total resistance are the "
+        "parallel ones) and choose Cr, Cw and the room-side share R1/(R1+R2) to match the full model's "
+        "complex responses over 1e-5 to 1e-3 Hz (rczone.models.reduction), from the construction data alone. "
+        "docs/paper.md explains the difference in detail."
+    )
+    report.figure(
+        "fig5_6_paper_weights",
+        figs.paper_figs_5_6(fc),
+        "Gains and eq.-7 errors at the paper's weights; dashed: band-matched values (Figs. 5-6)",
+    )
+    report.table(
+        [
+            {
+                "model": k,
+                **{f"max e_{i} (F)": v for i, v in pw["max_error_F"][k].items()},
+                "paper's bound (F)": pw["paper_bound_F"][k],
+                "agrees": "yes" if pw["agrees_with_paper"][k] else "no",
+            }
+            for k in VARIANTS
+        ],
+        "Largest eq.-7 error at the paper's weights (F)",
+        digits=2,
+    )
 
 
 ATTEMPTS = {"1": ("A", ("B", "C")), "2": ("C", ("A", "B"))}
@@ -194,7 +273,7 @@ def identification_study(
         preds: dict[str, dict[str, Any]] = {s: {} for s in (cal_set, *val_sets)}
         for meth in METHODS:
             progress(f"attempt {att}: calibrating on {cal_set} by {meth.upper()}")
-            cal = calibrate(net, frames[cal_set], meth, n_starts=3, seed=1, constants=const)
+            cal = calibrate(net, frames[cal_set], meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const)
             entry = {
                 "parameters": {
                     n: {
@@ -223,6 +302,8 @@ def identification_study(
             for s in (cal_set, *val_sets)
         ]
         res["_figure"] = figs.time_comparison(comps)
+
+    out["map_prior"] = _map_prior_study(net, frames, const, progress)
 
     report.heading("IV. Can R and C be identified from the data?")
     report.paragraph(
@@ -267,6 +348,151 @@ def identification_study(
             f"Calibration on {cal_set} and validation (Fig. {6 + int(att)})",
         )
     report.paragraph(_identification_summary(out), "note")
+    mp = out["map_prior"]
+    report.table(
+        [
+            {
+                "prior (construction values)": rule,
+                "Rw prior (K/W)": v["construction"]["Rw"],
+                "Cw fixed (J/K)": v["construction"]["Cw"],
+                "Rwin fixed (K/W)": v["construction"]["Rwin"],
+                **{f"MAP on {s}: Rw": v["fits"][s]["Rw"] for s in v["fits"]},
+                **{f"MAP on {s}: C RMSE (K)": v["fits"][s]["C_rmse_K"] for s in v["fits"]},
+            }
+            for rule, v in mp["rules"].items()
+        ],
+        "MAP on the closed-loop nights with parallel or band-matched construction values as prior",
+        digits=4,
+    )
+    report.paragraph(
+        f"The band-matched values fit the full model better over the band, but as the prior and fixed values of "
+        f"the reduced model (R1 = R2) they {'improve' if mp['better'] == 'band' else 'do not improve'} the MAP "
+        "fits on closed-loop nights (judged by their open-loop error on the forced night C), so rczone keeps "
+        f"the '{mp['default']}' values as the reduced model's construction values.",
+        "note",
+    )
+    return out
+
+
+def _map_prior_study(
+    net: Any, frames: dict[str, Any], const: dict[str, float], progress: Callable[[str], None]
+) -> dict[str, Any]:
+    """MAP on the closed-loop nights with each rule's construction values as prior; judged on C."""
+    from rczone.calibrate import calibrate, predict
+    from rczone.models.aggregation import REDUCED_RULE
+
+    nets = {"parallel": net, "band": band_matched_model("second-order-paper")}
+    rules: dict[str, Any] = {}
+    for rule, n in nets.items():
+        fits = {}
+        for s in ("A", "B"):
+            progress(f"MAP on {s} with {rule} construction values as prior")
+            cal = calibrate(
+                n, frames[s], "map", PAPER_FREE["map"], n_starts=3, seed=1, constants=const, uncertainty=False
+            )
+            fits[s] = {
+                "Rw": cal.result.estimates["Rw"],
+                "Cr": cal.result.estimates["Cr"],
+                "own_rmse_K": cal.open_loop.rmse_K,
+                "C_rmse_K": predict(cal.model, frames["C"], const).rmse_K,
+            }
+        v = n.values()
+        rules[rule] = {"construction": {k: v[k] for k in ("Cr", "Rw", "Cw", "Rwin")}, "fits": fits}
+    score = {r: float(np.mean([f["C_rmse_K"] for f in v["fits"].values()])) for r, v in rules.items()}
+    return {
+        "rules": rules,
+        "mean_C_rmse_K": score,
+        "better": min(score, key=score.get),
+        "default": REDUCED_RULE,
+    }
+
+
+#: The strongest honest closed-loop case found (docs/paper.md): the thermostat in the supply jet.
+CLOSED_LOOP_CASES = {"as shipped": Operation(), "thermostat at the diffuser": Operation(sensor="diffuser")}
+#: Nights of the closed-loop study: the A-style and C-style nights (season, mode, seed).
+CLOSED_LOOP_NIGHTS = {"A": ("summer", "closed-loop", 20110802), "C": ("autumn", "forced", 20111024)}
+
+
+def closed_loop_study(report: Report, progress: Callable[[str], None]) -> dict[str, Any]:
+    """Closed-loop (A-style) against forced (C-style) LS and ML fits for today's operation and the strongest case."""
+    from rczone.calibrate import calibrate, predict
+    from rczone.virtual.scenarios import generate_night
+
+    net = get_model("second-order-paper")
+    const = {"Q": Q_PAPER}
+    out: dict[str, Any] = {}
+    comps = []
+    for case, op in CLOSED_LOOP_CASES.items():
+        frames = {}
+        for s, (season, mode, seed) in CLOSED_LOOP_NIGHTS.items():
+            progress(f"closed-loop study ({case}): night {s}")
+            frames[s] = (
+                datasets.load(s) if op.is_default else generate_night(season, mode, seed, operation=op)
+            )
+        res: dict[str, Any] = {"operation": op.label()}
+        for meth in ("ls", "ml"):
+            fits = {}
+            for s, f in frames.items():
+                cal = calibrate(
+                    net, f, meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const, uncertainty=False
+                )
+                other = "C" if s == "A" else "A"
+                fits[s] = {
+                    "Rw": cal.result.estimates["Rw"],
+                    "Cr": cal.result.estimates["Cr"],
+                    "at_bound": [k for k, v in cal.result.at_bound.items() if v],
+                    "own_rmse_K": cal.open_loop.rmse_K,
+                    f"{other}_rmse_K": predict(cal.model, frames[other], const).rmse_K,
+                }
+                if meth == "ls" and s == "A":
+                    comps.append(
+                        TimeComparison(
+                            f"{case}: LS fit to the A-style night, predicting the C-style night",
+                            frames["C"]["time"].to_numpy(float),
+                            frames["C"]["Ti"].to_numpy(float),
+                            {"A-fit": predict(cal.model, frames["C"], const).y_hat[:, 0]},
+                        )
+                    )
+            fits["rw_ratio_C_over_A"] = fits["C"]["Rw"] / fits["A"]["Rw"]
+            res[meth] = fits
+        ls = res["ls"]
+        res["paper_strength"] = bool(ls["rw_ratio_C_over_A"] >= 5.0 and ls["A"]["own_rmse_K"] <= 0.2)
+        out[case] = res
+
+    report.heading("Closed-loop data at the paper's strength", 3)
+    report.paragraph(
+        "The paper's Tables I and II put the closed-loop fit's Rw 15.5 (LS) and 8.9 (ML) times below the forced "
+        "fit's. The shipped nights give a milder version. docs/paper.md switches features of real operation on "
+        "one at a time in the virtual building (a tight loop, a narrow night deadband, unmeasured gains that "
+        "follow the schedule, coarse trend logs, the thermostat in the supply jet). The strongest that holds "
+        "across nights is the thermostat at the diffuser: the logged room temperature then has a component that "
+        "follows the supply air with no lag, which the reduced model can only reproduce with a vanishing room "
+        "capacity (Cr at its lower bound) and, to keep that instantaneous response as small as observed, a wall "
+        "resistance that nails the room to the wall node. Both nights are run with the same sensor."
+    )
+    rows = []
+    for case, res in out.items():
+        for meth in ("ls", "ml"):
+            r = res[meth]
+            rows.append(
+                {
+                    "case": case,
+                    "method": meth.upper(),
+                    "Rw A-fit (K/W)": r["A"]["Rw"],
+                    "Rw C-fit (K/W)": r["C"]["Rw"],
+                    "C/A": r["rw_ratio_C_over_A"],
+                    "Cr A-fit (J/K)": r["A"]["Cr"],
+                    "A-fit at bound": ", ".join(r["A"]["at_bound"]) or "-",
+                    "A-fit RMSE on A (K)": r["A"]["own_rmse_K"],
+                    "A-fit RMSE on C (K)": r["A"]["C_rmse_K"],
+                }
+            )
+    report.table(
+        rows, "Closed-loop (A-style) against forced (C-style) fits, same building and sensor", digits=4
+    )
+    report.figure(
+        "fig9_closed_loop", figs.time_comparison(comps), "The A-style LS fits predicting the forced night"
+    )
     return out
 
 
@@ -324,6 +550,7 @@ def run_demo(out: str | os.PathLike, progress: Callable[[str], None] | None = No
     )
     results = {"model_order": model_order_study(report, progress)}
     results["identification"] = identification_study(report, progress, true_equivalent())
+    results["closed_loop"] = closed_loop_study(report, progress)
     report.write(out)
     write_json_atomic(out / "results.json", results)
     return out / "report.html"

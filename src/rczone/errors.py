@@ -27,8 +27,17 @@ class InputShapeError(RczoneError, ValueError):
     """An array passed to a simulation or cost has the wrong shape or content."""
 
 
+class OutputError(RczoneError, OSError):
+    """A result cannot be written where asked (a folder for a file, read-only, disk full...)."""
+
+
 class DataError(RczoneError, ValueError):
-    """Measured data cannot be used as given (missing column, bad unit, bad timestamps...)."""
+    """Data or a file a user handed in cannot be used as given (missing column, bad unit, bad
+    timestamps, a malformed column map or manifest...)."""
+
+
+class ModelFileError(DataError):
+    """A model file (TOML written by a person, or JSON saved by rczone) cannot be used as given."""
 
 
 def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:

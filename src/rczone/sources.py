@@ -6,19 +6,31 @@ reads a user's data the same way.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from rczone.errors import DataError
+from rczone.estimation.data import MIN_MEASURED
 
 
-def read_frame(path: str | Path, column_map: str | Path | None = None) -> pd.DataFrame:
+def read_frame(
+    path: str | Path,
+    column_map: str | Path | None = None,
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
+) -> pd.DataFrame:
     """A zone's data as a frame in rczone's default columns (SI units, ``time`` in s).
 
     ``path`` is a CSV or Parquet file in the default columns (``time``, ``Ti``, ``To``, ``Ts``,
     ``m``, ``Q`` and ``Tsd`` or the five surroundings), or any trend log described by a TOML
-    ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``).
+    ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``). ``signals``
+    (name -> quantity, :meth:`rczone.models.ZoneModel.signal_quantities`) are the model's: without a
+    map, the columns named as them are read in SI units, and the ``required`` ones must exist. A
+    record with fewer than :data:`~rczone.estimation.data.MIN_MEASURED` measured ``Ti`` samples
+    is an error: it would fit anything.
     """
     from rczone.data import load_zone_data
 
@@ -31,4 +43,13 @@ def read_frame(path: str | Path, column_map: str | Path | None = None) -> pd.Dat
         raise DataError(
             f"data file {str(path)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
         )
-    return load_zone_data(path, column_map).to_frame()
+    frame = load_zone_data(path, column_map, signals=signals, required=required).to_frame()
+    if "Ti" in frame:
+        measured = int(np.isfinite(frame["Ti"].to_numpy(float)).sum())
+        if measured < MIN_MEASURED:
+            raise DataError(
+                f"{path}: only {measured} of {len(frame)} samples have a measured room temperature Ti;"
+                f" at least {MIN_MEASURED} are needed (rczone.estimation.data.MIN_MEASURED): use a longer"
+                " record with fewer gaps"
+            )
+    return frame

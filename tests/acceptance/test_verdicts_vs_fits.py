@@ -94,9 +94,10 @@ def test_closed_loop_fits_are_far_off_or_scattered(fast):
             off = abs(np.log(s.ratio_to_truth)) > np.log(STRUCTURAL_FACTOR)
             scattered = s.scatter_ln > np.log(2.0) or s.n_at_bound > 0
             assert off or scattered, f"{regime} {name}: {s}"
-    # the paper's failure mode: closed-loop Rw far below the truth on every summer night
+    # the paper's failure mode: closed-loop Rw far below the truth on every summer night, or (the
+    # global search finds these too) at a bound of the search box: grossly wrong either way
     truth = steady_state_equivalent()["Rw"]
-    assert fast["summer closed-loop", "Rw"].max_estimate < truth / 2
+    assert fast["summer closed-loop", "Rw"].max_inside < truth / 2
 
 
 def test_structural_allowance_reference_is_consistent():

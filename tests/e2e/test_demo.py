@@ -81,3 +81,27 @@ def test_map_on_closed_loop_data_stays_near_construction_and_predicts_the_forced
     # it admits what it does not know
     assert rw["map"]["std_error"] / rw["map"]["estimate"] > 3 * rw["ls"]["std_error"] / rw["ls"]["estimate"]
     assert a["map"]["validation"]["C"]["rmse_K"] < a["ls"]["validation"]["C"]["rmse_K"]
+
+
+def test_band_matched_second_order_meets_the_papers_1F_at_its_weights(demo):
+    pw = demo[1]["model_order"]["frequency_domain"]["paper_weights"]
+    assert pw["du_F"] == pytest.approx({"Ts": 45.0, "Tsd": 10.0, "To": 45.0})
+    assert pw["agrees_with_paper"]["second-order-band"] is True
+    assert pw["agrees_with_paper"]["second-order"] is False  # the parallel aggregation does not
+    assert max(pw["max_error_F"]["second-order-band"].values()) <= 1.0
+    # the band values keep the steady state: same window and total wall resistance
+    par, band = pw["values"]["second-order"], pw["values"]["second-order-band"]
+    assert band["Rwin"] == pytest.approx(par["Rwin"])
+    assert band["R1"] + band["R2"] == pytest.approx(par["R1"] + par["R2"])
+
+
+def test_closed_loop_case_at_the_papers_strength(demo):
+    cl = demo[1]["closed_loop"]
+    ls = cl["thermostat at the diffuser"]["ls"]
+    assert cl["thermostat at the diffuser"]["paper_strength"] is True
+    assert ls["rw_ratio_C_over_A"] >= 5.0 and ls["A"]["own_rmse_K"] <= 0.2
+    assert cl["as shipped"]["ls"]["rw_ratio_C_over_A"] < 5.0
+    # the wrong model fails on the forced night of its own building
+    assert ls["A"]["C_rmse_K"] > 2 * ls["C"]["own_rmse_K"]
+    mp = demo[1]["identification"]["map_prior"]
+    assert mp["better"] in ("parallel", "band") and set(mp["rules"]) == {"parallel", "band"}

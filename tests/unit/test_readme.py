@@ -19,3 +19,13 @@ def test_readme_python_example_runs(capsys):
     assert "('To', 'Tsd', 'Ts', 'Q') ('m',)" in out
     ti = float(out.strip().splitlines()[-1].strip("[]"))
     assert 13.0 < ti < 28.0  # between the coldest and warmest driving temperature
+
+
+def test_readme_model_file_example_reads(tmp_path):
+    from rczone.models import read_model_file
+
+    blocks = re.findall(r"```toml\n(.*?)```", README.read_text(), re.S)
+    model = next(b for b in blocks if b.startswith("name ="))
+    (tmp_path / "m.toml").write_text(model)
+    zm = read_model_file(tmp_path / "m.toml")
+    assert zm.network.state_names == ("Ti", "Te") and zm.network.default_free == ("Ci", "Ce", "Rie", "Aw")

@@ -4,7 +4,7 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
 ``[[zone]]`` names one zone and either a data file or a virtual-building night; each
 ``[[generate]]`` expands into many virtual-building nights (seasons x modes x seeds)::
 
-    model = "second-order-paper"     # default model (rczone.models.get_model)
+    model = "second-order-paper"     # a built-in model, or a model file (rczone.models.load_model)
     methods = ["ls", "ml"]           # one task per zone and method
     optimizer = "nelder-mead"
     n_starts = 1
@@ -29,20 +29,34 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
     modes = ["closed-loop", "forced"]
     seeds = "0..249"                 # inclusive range, or a list of integers
 
+``model`` is a built-in name or a model file (``.toml``, or ``.json`` saved by ``rczone fit
+--save-model``) relative to the manifest's folder.
+
 Unknown keys, duplicate zone ids, unknown methods or models are errors naming the place in
-the file, with a suggestion where one is close.
+the file, with a suggestion where one is close. A manifest that would expand into more than
+:data:`MAX_TASKS` calibrations is refused before anything is built.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
+import math
+import os
 import re
-import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 from rczone.errors import DataError, did_you_mean
+from rczone.textfiles import read_toml
 
+MAX_TASKS = 200_000
+"""Most calibrations (zones x methods) one manifest may ask for."""
+MAX_STARTS = 1000
+"""Most optimizer starts per calibration."""
+MODEL_FILE_SUFFIXES = (".toml", ".json")
 METHODS = ("ls", "ml", "map")
 OPTIMIZERS = ("nelder-mead", "powell", "lbfgs")
 SEASONS = ("summer", "winter", "autumn")
@@ -85,6 +99,46 @@ class Task:
         """Unique name of the task (zone and method)."""
         return f"{self.zone}::{self.method}"
 
+    @property
+    def fingerprint(self) -> str:
+        """Hash of everything that determines the task's result.
+
+        Every setting of the task, and the contents of the files it reads (the data file, the
+        column map, a model file): a stored result is reused only for the same fingerprint, so
+        a changed setting or an edited file is computed anew, never resumed.
+        """
+        files = [self.source[1], self.source[2]] if self.source[0] == "file" else []
+        if Path(self.model).suffix.lower() in MODEL_FILE_SUFFIXES:
+            files.append(self.model)
+        doc = {"task": asdict(self), "files": [file_digest(f) for f in files if f]}
+        text = json.dumps(doc, sort_keys=True, default=str)
+        return hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
+
+
+def file_digest(path: str) -> str:
+    """SHA-256 of a file's contents, or a marker when it is absent or unreadable.
+
+    A built-in data set name (no such file) stands for itself; a file that cannot be read
+    makes the task fail on its own, so its result is keyed by the reason.
+    """
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return "absent"
+    return _digest(path, st.st_size, st.st_mtime_ns)
+
+
+@lru_cache(maxsize=4096)
+def _digest(path: str, size: int, mtime_ns: int) -> str:  # size, mtime: a changed file is read again
+    h = hashlib.sha256()
+    try:
+        with open(path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+    except OSError as exc:
+        return f"unreadable: {exc.strerror}"
+    return h.hexdigest()
+
 
 @dataclass(frozen=True)
 class Manifest:
@@ -108,7 +162,7 @@ def _check_keys(table: Mapping, allowed: tuple[str, ...], where: str) -> None:
             raise _err(where, f"unknown key {k!r}; " + did_you_mean(k, allowed))
 
 
-def _settings(base: Mapping[str, object], table: Mapping, where: str) -> dict[str, object]:
+def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Path) -> dict[str, object]:
     out = dict(base)
     for k in SETTINGS:
         if k in table:
@@ -121,14 +175,21 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str) -> dict[st
     for m in methods:
         if m not in METHODS:
             raise _err(where, f"unknown method {m!r}; " + did_you_mean(str(m), METHODS))
+    if len(set(methods)) < len(methods):
+        raise _err(where, f"methods lists a method twice: {methods!r}")
     out["methods"] = tuple(methods)
-    if out["optimizer"] not in OPTIMIZERS:
+    if not isinstance(out["optimizer"], str) or out["optimizer"] not in OPTIMIZERS:
         raise _err(
             where,
             f"unknown optimizer {out['optimizer']!r}; " + did_you_mean(str(out["optimizer"]), OPTIMIZERS),
         )
-    if not isinstance(out["n_starts"], int) or isinstance(out["n_starts"], bool) or out["n_starts"] < 1:
-        raise _err(where, f"n_starts must be a positive integer, got {out['n_starts']!r}")
+    n_starts = out["n_starts"]
+    if not isinstance(n_starts, int) or isinstance(n_starts, bool) or not 1 <= n_starts <= MAX_STARTS:
+        raise _err(
+            where,
+            f"n_starts must be an integer from 1 to {MAX_STARTS} (rczone.batch.manifest.MAX_STARTS),"
+            f" got {n_starts!r}",
+        )
     if not isinstance(out["diagnose"], bool):
         raise _err(where, f"diagnose must be true or false, got {out['diagnose']!r}")
     free = out["free"]
@@ -136,26 +197,68 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str) -> dict[st
         raise _err(where, f"free must be a list of parameter names, got {free!r}")
     const = out["constants"]
     if const is not None and (
-        not isinstance(const, dict) or not all(isinstance(v, (int, float)) for v in const.values())
+        not isinstance(const, dict)
+        or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in const.values())
+        or not all(math.isfinite(v) for v in const.values())
     ):
-        raise _err(where, f"constants must be a table of numbers, e.g. {{ Q = 50.0 }}, got {const!r}")
-    from rczone.models import model_names
-
-    if out["model"] not in model_names():
-        raise _err(
-            where, f"unknown model {out['model']!r}; " + did_you_mean(str(out["model"]), model_names())
-        )
+        raise _err(where, f"constants must be a table of finite numbers, e.g. {{ Q = 50.0 }}, got {const!r}")
+    if out["columns"] is not None:
+        _text(out["columns"], "columns", where)
+    out["model"] = _model(out["model"], folder, where)
     return out
 
 
-def _seeds(spec: object, where: str) -> list[int]:
+def _text(value: object, what: str, where: str) -> str:
+    if not isinstance(value, str) or not value or "\x00" in value:
+        raise _err(where, f"{what} must be a non-empty string, got {value!r}")
+    return value
+
+
+def _model(spec: object, folder: Path, where: str) -> str:
+    """A built-in model name, or a model file resolved against the manifest's folder."""
+    spec = _text(spec, "model", where)
+    if Path(spec).suffix.lower() in MODEL_FILE_SUFFIXES:
+        path = (folder / spec).resolve()
+        if not path.is_file():
+            raise _err(where, f"model file {spec!r} does not exist (looked for {str(path)!r})")
+        spec = str(path)
+    problem = _model_problem(spec, file_digest(spec) if Path(spec).is_absolute() else "")
+    if problem:
+        raise _err(where, problem)
+    return spec
+
+
+@lru_cache(maxsize=64)
+def _model_problem(spec: str, digest: str) -> str:  # digest: an edited model file is checked again
+    """Why ``spec`` is not a usable model ("" if it is): loaded once per model, not per zone."""
+    from rczone.errors import RczoneError
+    from rczone.models import load_model
+
+    try:
+        load_model(spec)
+    except RczoneError as exc:
+        return str(exc)
+    return ""
+
+
+def _seeds(spec: object, where: str) -> range | list[int]:
+    """The seeds of a generator, as a list or a lazy range (its size is checked before expanding)."""
     if isinstance(spec, list) and spec and all(isinstance(s, int) and not isinstance(s, bool) for s in spec):
         return list(spec)
     if isinstance(spec, str):
-        m = re.fullmatch(r"\s*(\d+)\s*\.\.\s*(\d+)\s*", spec)
+        m = re.fullmatch(r"\s*(\d{1,18})\s*\.\.\s*(\d{1,18})\s*", spec)
         if m and int(m.group(1)) <= int(m.group(2)):
-            return list(range(int(m.group(1)), int(m.group(2)) + 1))
+            return range(int(m.group(1)), int(m.group(2)) + 1)
     raise _err(where, f'seeds must be a list of integers or a range like "0..99", got {spec!r}')
+
+
+def _names(value: object, allowed: tuple[str, ...], what: str, where: str) -> list[str]:
+    if not isinstance(value, list) or not value or not all(isinstance(v, str) for v in value):
+        raise _err(where, f"{what} must be a non-empty list of {allowed}, got {value!r}")
+    for v in value:
+        if v not in allowed:
+            raise _err(where, f"unknown {what[:-1]} {v!r}; " + did_you_mean(v, allowed))
+    return value
 
 
 def _virtual(spec: object, where: str) -> tuple:
@@ -200,12 +303,21 @@ def _data_path(folder: Path, data: str) -> str:
     return data if not p.exists() and data in datasets.names() else str(p)
 
 
+def _tables(doc: Mapping, name: str, where: str) -> list[Mapping]:
+    tables = doc.get(name, [])
+    if not isinstance(tables, list) or not all(isinstance(t, dict) for t in tables):
+        raise _err(where, f"write {name}s as [[{name}]] tables")
+    return tables
+
+
 def parse_manifest(doc: Mapping, path: Path) -> Manifest:
     """Build a :class:`Manifest` from a parsed TOML document (``path``: where relative files live)."""
     where = str(path)
+    if not isinstance(doc, Mapping):
+        raise _err(where, f"expected a TOML document, got {type(doc).__name__}")
     _check_keys(doc, TOP_KEYS, where)
-    base = _settings(DEFAULTS, doc, where)
     folder = path.parent
+    base = _settings(DEFAULTS, doc, where, folder)
     tasks: list[Task] = []
     ids: set[str] = set()
 
@@ -215,40 +327,47 @@ def parse_manifest(doc: Mapping, path: Path) -> Manifest:
         ids.add(zone)
         tasks.extend(_tasks(zone, source, s))
 
-    zones = doc.get("zone", [])
-    if not isinstance(zones, list):
-        raise _err(where, "write zones as [[zone]] tables")
+    def check_size(extra: int, w: str) -> None:
+        if len(tasks) + extra > MAX_TASKS:
+            raise _err(
+                w,
+                f"{len(tasks) + extra:,} calibrations (zones x methods) exceed the limit of {MAX_TASKS:,}"
+                " (rczone.batch.manifest.MAX_TASKS); split the manifest",
+            )
+
+    zones = _tables(doc, "zone", where)
+    check_size(len(zones), where)
     for i, z in enumerate(zones, 1):
         w = f"{where}, zone {i}"
         _check_keys(z, ZONE_KEYS, w)
         zid = z.get("id")
-        if not isinstance(zid, str) or not zid:
+        if not isinstance(zid, str) or not zid.strip():
             raise _err(w, "every [[zone]] needs an id (a non-empty string)")
-        s = _settings(base, z, f"{w} ({zid})")
+        s = _settings(base, z, f"{w} ({zid})", folder)
         if ("data" in z) == ("virtual" in z):
             raise _err(f"{w} ({zid})", 'give exactly one of data = "file" or virtual = { ... }')
         if "data" in z:
             cols = s["columns"]
             source = (
                 "file",
-                _data_path(folder, str(z["data"])),
+                _data_path(folder, _text(z["data"], "data", f"{w} ({zid})")),
                 str((folder / str(cols)).resolve()) if cols else None,
             )
         else:
             source = _virtual(z["virtual"], f"{w} ({zid})")
         add(zid, source, s, f"{w} ({zid})")
-    gens = doc.get("generate", [])
-    if not isinstance(gens, list):
-        raise _err(where, "write generators as [[generate]] tables")
-    for i, g in enumerate(gens, 1):
+    for i, g in enumerate(_tables(doc, "generate", where), 1):
         w = f"{where}, generate {i}"
         _check_keys(g, GENERATE_KEYS, w)
-        s = _settings(base, g, w)
-        prefix = str(g.get("prefix", "night"))
-        seasons, modes = g.get("seasons", ["autumn"]), g.get("modes", ["forced"])
+        s = _settings(base, g, w, folder)
+        prefix = _text(g.get("prefix", "night"), "prefix", w)
+        seasons = _names(g.get("seasons", ["autumn"]), SEASONS, "seasons", w)
+        modes = _names(g.get("modes", ["forced"]), MODES, "modes", w)
+        seeds = _seeds(g.get("seeds", [0]), w)
+        check_size(len(seasons) * len(modes) * len(seeds) * len(s["methods"]), w)
         for season in seasons:
             for mode in modes:
-                for seed in _seeds(g.get("seeds", [0]), w):
+                for seed in seeds:
                     src = _virtual({"season": season, "mode": mode, "seed": seed}, w)
                     add(f"{prefix}-{season}-{mode}-{seed}", src, s, w)
     if not tasks:
@@ -261,8 +380,4 @@ def read_manifest(path: str | Path) -> Manifest:
     path = Path(path)
     if not path.exists():
         raise DataError(f"manifest {str(path)!r} does not exist")
-    try:
-        doc = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise DataError(f"manifest {path}: not valid TOML: {exc}") from None
-    return parse_manifest(doc, path)
+    return parse_manifest(read_toml(path, "manifest"), path)

@@ -16,16 +16,22 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor
-from concurrent.futures import as_completed as futures_completed
-from dataclasses import dataclass
+from collections import Counter, deque
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from rczone.batch.manifest import Manifest, Task
 from rczone.batch.store import ResultStore
+from rczone.batch.summary import write_summary
 from rczone.batch.task import run_tasks
 from rczone.errors import RczoneError
+
+CONNECT_TIMEOUT = 20.0
+"""Seconds to wait for a Dask scheduler to answer."""
+WORKER_TIMEOUT = 60.0
+"""Seconds to wait for the first Dask worker to join the scheduler."""
 
 
 @dataclass(frozen=True)
@@ -39,21 +45,39 @@ class BatchRun:
     skipped : int
         Already done by an earlier run (resumed).
     computed : int
-        Finished in this run (ok or failed).
+        Finished in this run (ok or failed with the zone's own error), and stored.
     failed : int
         Of the computed, how many failed.
+    lost : int
+        Could not be run (worker died, scheduler lost, no workers): not stored, and computed
+        by the next run.
+    lost_reasons : tuple of str
+        Why, one entry per distinct reason.
     seconds : float
         Wall time of this run.
     results : Path
         The consolidated table.
+    summary : dict
+        The summary written beside it (:func:`~rczone.batch.summary.summarize`).
     """
 
     total: int
     skipped: int
     computed: int
     failed: int
+    lost: int
+    lost_reasons: tuple[str, ...]
     seconds: float
     results: Path
+    summary: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Lost:
+    """The tasks of one zone that the infrastructure could not run, and why."""
+
+    tasks: list[Task]
+    reason: str
 
 
 def _by_zone(tasks: list[Task]) -> list[list[Task]]:
@@ -63,53 +87,102 @@ def _by_zone(tasks: list[Task]) -> list[list[Task]]:
     return list(groups.values())
 
 
-def _dask_results(tasks: list[Task], scheduler: str | None, workers: int) -> Iterator[dict]:
-    from dask.distributed import Client, LocalCluster, as_completed
+def _why(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__
 
-    if scheduler:
-        client, cluster = Client(scheduler), None
-    else:
+
+def _connect(scheduler: str | None, workers: int):
+    """A Dask client (and the LocalCluster it owns, if any); connection problems are one line."""
+    from dask.distributed import Client, LocalCluster
+
+    if not scheduler:
         cluster = LocalCluster(
             n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
         )
-        client = Client(cluster)
+        return Client(cluster), cluster
+    if "://" not in scheduler or not scheduler.split("://", 1)[1]:
+        raise RczoneError(
+            f"--scheduler {scheduler!r} is not a Dask scheduler address; expected e.g. tcp://host:8786"
+        )
     try:
-        groups = _by_zone(tasks)
-        futures = client.map(run_tasks, groups, pure=False)
-        index = {f.key: g for f, g in zip(futures, groups)}
-        for fut in as_completed(futures):
-            try:
-                yield from fut.result()
-            except Exception as exc:  # the worker itself died (e.g. out of memory)
-                for t in index[fut.key]:
-                    yield _failed(t, f"{type(exc).__name__}: {exc}")
+        return Client(scheduler, timeout=CONNECT_TIMEOUT), None
+    except (OSError, ValueError, TypeError) as exc:  # unreachable, refused, malformed
+        raise RczoneError(
+            f"cannot connect to the Dask scheduler {scheduler!r} ({_why(exc)}); check the address and"
+            " that `dask scheduler` runs there"
+        ) from None
+
+
+def _close(client, cluster) -> None:
+    client.close(timeout=10)
+    if cluster is not None:
+        cluster.close(timeout=10)
+
+
+def _dask_results(
+    groups: list[list[Task]], client, where: str, retries: int, worker_timeout: float
+) -> Iterator[list[dict] | Lost]:
+    from dask.distributed import as_completed
+
+    try:
+        client.wait_for_workers(1, timeout=worker_timeout)
+    except (TimeoutError, OSError) as exc:
+        reason = f"no Dask worker joined {where} within {worker_timeout:g} s"
+        reason += f" ({_why(exc)})" if not isinstance(exc, TimeoutError) else "; start workers"
+        for g in groups:
+            yield Lost(g, reason)
+        return
+    # the scheduler reruns a task whose worker died (up to its allowed-failures), then
+    # raises KilledWorker; retries= reruns it after any other exception
+    futures = client.map(run_tasks, groups, pure=False, retries=retries)
+    index = {f.key: g for f, g in zip(futures, groups)}
+    for fut in as_completed(futures):
+        try:
+            rows = fut.result()
+        except Exception as exc:  # run_tasks returns every zone error: this is the cluster's
+            yield Lost(index[fut.key], _why(exc))
+        else:
+            yield rows
+
+
+def _process_results(groups: list[list[Task]], workers: int, retries: int) -> Iterator[list[dict] | Lost]:
+    """Run the groups on ``workers`` single-process executors, one zone at a time each.
+
+    A pool of N processes breaks as a whole when one of them dies, failing every queued
+    zone; an executor per worker fails only its own zone, which is retried in a fresh one.
+    """
+    queue = deque(range(len(groups)))
+    attempts: Counter[int] = Counter()
+    idle: list[ProcessPoolExecutor] = []
+    running: dict[Future, tuple[ProcessPoolExecutor, int]] = {}
+    try:
+        while queue or running:
+            while queue and len(running) < workers:
+                ex = idle.pop() if idle else ProcessPoolExecutor(max_workers=1)
+                i = queue.popleft()
+                running[ex.submit(run_tasks, groups[i])] = (ex, i)
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for fut in finished:
+                ex, i = running.pop(fut)
+                try:
+                    rows = fut.result()
+                except Exception as exc:  # the worker died (killed, out of memory) or ran out of memory
+                    ex.shutdown(wait=False, cancel_futures=True)
+                    attempts[i] += 1
+                    if attempts[i] <= retries:
+                        queue.append(i)
+                    else:
+                        reason = "worker process died" if "BrokenProcessPool" in _why(exc) else _why(exc)
+                        yield Lost(groups[i], f"{reason} (tried {attempts[i]} times)")
+                else:
+                    idle.append(ex)
+                    yield rows
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
-def _process_results(tasks: list[Task], workers: int) -> Iterator[dict]:
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futs = {pool.submit(run_tasks, g): g for g in _by_zone(tasks)}
-        for fut in futures_completed(futs):
-            try:
-                yield from fut.result()
-            except Exception as exc:  # the worker process died
-                for t in futs[fut]:
-                    yield _failed(t, f"{type(exc).__name__}: {exc}")
-
-
-def _failed(task: Task, error: str) -> dict:
-    return {
-        "key": task.key,
-        "zone": task.zone,
-        "method": task.method,
-        "model": task.model,
-        "status": "failed",
-        "error": error,
-        "seconds": float("nan"),
-    }
+        for ex, _ in running.values():
+            ex.shutdown(wait=False, cancel_futures=True)
+        for ex in idle:
+            ex.shutdown(wait=True)
 
 
 def have_dask() -> bool:
@@ -127,14 +200,20 @@ def run_batch(
     workers: int | None = None,
     backend: str = "auto",
     on_result: Callable[[dict, int, int], None] | None = None,
+    *,
+    on_start: Callable[[int, int], None] | None = None,
+    retries: int = 1,
+    worker_timeout: float = WORKER_TIMEOUT,
+    title: str = "rczone batch",
 ) -> BatchRun:
-    """Calibrate every task of ``manifest`` not yet done in ``out``.
+    """Calibrate every task of ``manifest`` not yet done in ``out``, then write the table and summary.
 
     Parameters
     ----------
     manifest : Manifest
     out : path
-        Results folder (created); rerunning with the same folder resumes.
+        Results folder (created); rerunning with the same folder resumes. One run at a time
+        may write into it (a second is refused with :class:`~rczone.batch.store.FolderBusyError`).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:port``); default: local processes.
     workers : int, optional
@@ -143,10 +222,26 @@ def run_batch(
         Local execution engine; ``auto`` uses Dask when installed.
     on_result : callable, optional
         Called as ``on_result(row, done, to_do)`` after each result is stored (progress).
+    on_start : callable, optional
+        Called as ``on_start(resumed, to_do)`` once the stored results are known.
+    retries : int
+        How many times a task lost to the infrastructure is run again in this run.
+    worker_timeout : float
+        Seconds to wait for a Dask worker before giving up (every task then counts as lost).
+    title : str
+        Title of the summary report.
 
     Returns
     -------
     BatchRun
+
+    Raises
+    ------
+    OutputError
+        The folder cannot take the results (a file in its place, read-only, disk full); the
+        results stored until then are complete and resumed by the next run.
+    FolderBusyError
+        Another run is writing into ``out``.
     """
     if backend not in ("auto", "dask", "processes"):
         raise RczoneError(f"backend must be auto, dask or processes, got {backend!r}")
@@ -161,20 +256,48 @@ def run_batch(
         raise RczoneError(f"workers must be >= 1, got {workers}")
     store = ResultStore(out)
     t0 = time.perf_counter()
-    done = store.done()
-    todo = [t for t in manifest.tasks if t.key not in done]
-    computed = failed = 0
-    if todo:
-        results: Iterable[dict] = (
-            _dask_results(todo, scheduler, workers) if use_dask else _process_results(todo, workers)
-        )
-        for row in results:
-            store.write(row)
-            computed += 1
-            failed += row["status"] != "ok"
-            if on_result:
-                on_result(row, computed, len(todo))
-    path = store.consolidate()
+    with store.locked():
+        fingerprints = {t.key: t.fingerprint for t in manifest.tasks}
+        done = store.done(manifest.tasks)
+        todo = [t for t in manifest.tasks if t.key not in done]
+        computed = failed = 0
+        lost: dict[str, str] = {}
+        connection = _connect(scheduler, workers) if todo and use_dask else None
+        try:
+            if on_start:
+                on_start(len(manifest.tasks) - len(todo), len(todo))
+            groups = _by_zone(todo)
+            outcomes = (
+                _dask_results(
+                    groups, connection[0], scheduler or "the local cluster", retries, worker_timeout
+                )
+                if connection
+                else _process_results(groups, workers, retries)
+            )
+            for outcome in outcomes:
+                if isinstance(outcome, Lost):
+                    lost.update((t.key, outcome.reason) for t in outcome.tasks)
+                    continue
+                for row in outcome:
+                    store.write({**row, "fingerprint": fingerprints[row["key"]]})
+                    computed += 1
+                    failed += row["status"] != "ok"
+                    if on_result:
+                        on_result(row, computed + len(lost), len(todo))
+        finally:
+            if connection:
+                _close(*connection)
+        table = store.table(manifest.tasks)
+        path = store.consolidate(table)
+        summary = write_summary(table, store.folder, title=title)
     return BatchRun(
-        len(manifest.tasks), len(manifest.tasks) - len(todo), computed, failed, time.perf_counter() - t0, path
+        total=len(manifest.tasks),
+        skipped=len(manifest.tasks) - len(todo),
+        computed=computed,
+        failed=failed,
+        lost=len(lost),
+        lost_reasons=tuple(dict.fromkeys(lost.values())),
+        seconds=time.perf_counter() - t0,
+        results=path,
+        summary=summary,
     )

@@ -1,7 +1,10 @@
 """One batch task: load a zone's data, calibrate one method, diagnose; always return a row.
 
 Runs in a worker process. Whatever goes wrong in one zone (bad data, a failed fit, a bug)
-becomes a row with ``status = "failed"`` and the error, so the batch goes on.
+becomes a row with ``status = "failed"`` and the error, so the batch goes on. Running out of
+memory is not the zone's own error (the same zone may fit on a machine with more memory, or
+when fewer zones run beside it): :class:`MemoryError` propagates, and the runner retries the
+task instead of storing a failure.
 """
 
 from __future__ import annotations
@@ -29,6 +32,13 @@ def load_task_data(task: Task) -> pd.DataFrame:
 
     _, path, columns = task.source
     return read_frame(Path(path), Path(columns) if columns else None)
+
+
+def task_model(task: Task):
+    """The task's model: a built-in name or a model file (already resolved by the manifest)."""
+    from rczone.models import load_model
+
+    return load_model(task.model)
 
 
 def source_label(task: Task) -> str:
@@ -60,16 +70,14 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
     }
     try:
         from rczone.calibrate import calibrate
-        from rczone.models import get_model
 
-        net = get_model(task.model)
+        zm = task_model(task)
+        net = zm.network
         if "frame" not in cache:
             cache["frame"] = load_task_data(task)
         frame = cache["frame"]
         constants = dict(task.constants) or None
-        cal = calibrate(
-            net, frame, task.method, task.free, task.optimizer, task.n_starts, constants=constants
-        )
+        cal = calibrate(zm, frame, task.method, task.free, task.optimizer, task.n_starts, constants=constants)
         r = cal.result
         row.update(
             open_loop_rmse_K=cal.open_loop.rmse_K,
@@ -95,6 +103,8 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
                 cache["diagnose", rc] = {n: v.verdict for n, v in d.parameters.items()}
             for n, verdict in cache.get(("diagnose", rc), {}).items():
                 row[f"{n}_verdict"] = verdict
+    except MemoryError:
+        raise  # not the zone's own error: the runner retries it
     except RczoneError as exc:
         row.update(status="failed", error=f"{type(exc).__name__}: {exc}")
     except Exception as exc:  # a bug or numerical failure in one zone must not stop the batch

@@ -6,8 +6,9 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
 
+from rczone.cli.common import EXIT_INFRASTRUCTURE as EXIT_TASKS_LOST
+from rczone.cli.common import EXIT_ZONES_FAILED
 from rczone.cli.main import app
 
 
@@ -23,19 +24,20 @@ def fit_many(
     workers: Annotated[int | None, typer.Option(help="Local worker processes (default: cores).")] = None,
     backend: Annotated[str, typer.Option(help="Local engine: auto, dask or processes.")] = "auto",
 ) -> None:
-    """Calibrate many zones; resumes where an earlier run stopped."""
+    """Calibrate many zones; resumes where an earlier run stopped.
+
+    Exit code 0 when every zone is calibrated, 4 when some zones failed with their own errors
+    (stored, listed in the summary), 5 when some calibrations could not run (a worker or the
+    scheduler was lost; rerun to compute them), 2 for a mistake in the manifest or options.
+    """
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
-    from rczone.batch import read_manifest, run_batch, write_summary
-    from rczone.batch.store import ResultStore
+    from rczone.batch import read_manifest, run_batch
+    from rczone.cli.console import console, escape
 
     m = read_manifest(manifest)
     folder = out or manifest.with_suffix("").with_name(manifest.stem + "-results")
-    console = Console(stderr=True)
-    done_before = len(ResultStore(folder).done() & {t.key for t in m.tasks})
-    console.print(
-        f"{len(m.tasks)} calibrations of {len(m.zones)} zones; {done_before} already done in {folder}"
-    )
+    err = console(stderr=True)
     columns = (
         TextColumn("calibrating"),
         BarColumn(),
@@ -43,23 +45,52 @@ def fit_many(
         TextColumn("{task.fields[failed]} failed"),
         TimeRemainingColumn(),
     )
-    with Progress(*columns, console=console, transient=False) as progress:
-        bar = progress.add_task("fit", total=len(m.tasks) - done_before, failed=0)
-        state = {"failed": 0}
+    progress = Progress(*columns, console=err, transient=False)
+    bar = progress.add_task("fit", total=None, failed=0)
+    state = {"failed": 0}
 
-        def on_result(row: dict, done: int, total: int) -> None:
-            state["failed"] += row["status"] != "ok"
-            progress.update(bar, completed=done, failed=state["failed"])
+    def on_start(resumed: int, to_do: int) -> None:
+        err.print(
+            f"{len(m.tasks)} calibrations of {len(m.zones)} zones; {resumed} already done in {escape(folder)}"
+        )
+        progress.update(bar, total=to_do)
+        state["started"] = 1
+        progress.start()  # only now: an error before the run prints its one line and nothing else
 
-        run = run_batch(m, folder, scheduler=scheduler, workers=workers, backend=backend, on_result=on_result)
-    summary = write_summary(ResultStore(folder).table(), folder, title=f"rczone fit-many {manifest.name}")
-    out_console = Console()
-    out_console.print(
+    def on_result(row: dict, done: int, total: int) -> None:
+        state["failed"] += row["status"] != "ok"
+        progress.update(bar, completed=done, failed=state["failed"])
+
+    try:
+        run = run_batch(
+            m,
+            folder,
+            scheduler=scheduler,
+            workers=workers,
+            backend=backend,
+            on_result=on_result,
+            on_start=on_start,
+            title=f"rczone fit-many {manifest.name}",
+        )
+    finally:
+        if state.get("started"):
+            progress.stop()
+    summary = run.summary
+    say = console()
+    say.print(
         f"{run.computed} computed ({run.failed} failed), {run.skipped} resumed, in {run.seconds:.1f} s;"
-        f" {summary['ok']}/{summary['tasks']} ok in total"
+        f" {summary['ok']}/{run.total} ok in total"
     )
     for f in summary["failures"][:10]:
-        out_console.print(f"[red]failed[/] {f['zone']} ({f['method']}): {f['error']}")
+        say.print(f"[red]failed[/] {escape(f['zone'])} ({escape(f['method'])}): {escape(f['error'])}")
     if summary["failed"] > 10:
-        out_console.print(f"... and {summary['failed'] - 10} more (see {folder / 'summary.json'})")
-    out_console.print(f"results: {run.results}; report: {folder / 'report.html'}")
+        say.print(f"... and {summary['failed'] - 10} more (see {escape(folder / 'summary.json')})")
+    say.print(f"results: {escape(run.results)}; report: {escape(folder / 'report.html')}")
+    if run.lost:
+        err.print(
+            f"[yellow]{run.lost} calibration(s) could not run[/] ({escape('; '.join(run.lost_reasons[:3]))});"
+            " nothing was stored for them: rerun the same command to compute them"
+        )
+        raise typer.Exit(EXIT_TASKS_LOST)
+    if summary["failed"]:
+        raise typer.Exit(EXIT_ZONES_FAILED)

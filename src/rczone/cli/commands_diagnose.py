@@ -6,18 +6,11 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-from rich.table import Table
 
-from rczone.cli.common import model, read_frame
+from rczone.cli.common import MODEL_HELP, esc, model, read_frame, split, write_json
 from rczone.cli.main import app
 
 VERDICT_STYLE = {"identifiable": "green", "weak": "yellow", "not identifiable": "red"}
-
-
-def _split(text: str | None) -> list[str] | None:
-    return [s.strip() for s in text.split(",") if s.strip()] if text else None
 
 
 def _pair(text: str, what: str) -> tuple[float, float]:
@@ -30,15 +23,18 @@ def _pair(text: str, what: str) -> tuple[float, float]:
     return lo, hi
 
 
+def _rc(net) -> list[str]:
+    """The model's default free resistances and capacities."""
+    return [n for n in net.default_free if net.parameters[n].kind in ("resistance", "capacitance")]
+
+
 @app.command()
 def diagnose(
     data: Annotated[Path, typer.Argument(help="CSV/Parquet file, or a built-in data set name (A, B, C).")],
-    model_name: Annotated[str, typer.Option("--model", help="Model name.")] = "second-order-paper",
+    model_name: Annotated[str, typer.Option("--model", help=MODEL_HELP)] = "second-order-paper",
     free: Annotated[
         str | None,
-        typer.Option(
-            help="Comma-separated free parameters (default: Cr,Rw for the paper model; all R and C otherwise)."
-        ),
+        typer.Option(help="Comma-separated free parameters (default: the model's free R and C)."),
     ] = None,
     column_map: Annotated[
         Path | None, typer.Option("--columns", help="TOML column map for trend logs.")
@@ -48,48 +44,63 @@ def diagnose(
     ] = 0.1,
     q: Annotated[
         float | None,
-        typer.Option("--q", help="Constant internal gain Q in W (the paper: 50) if the data have none."),
+        typer.Option(
+            "--q", help="Constant internal gain Q in W if the data have none (default: the model's)."
+        ),
     ] = None,
     json_out: Annotated[
-        Path | None, typer.Option("--json", help="Write the verdicts and evidence as JSON.")
+        Path | None, typer.Option("--json", help="Write the verdicts and evidence as JSON ('-': stdout).")
     ] = None,
     report_dir: Annotated[
         Path | None, typer.Option("--report", help="Folder for report.html and figures.")
     ] = None,
 ) -> None:
     """Tell, before fitting, whether DATA can identify the model's parameters, and why."""
-    from rczone.atomic import write_json_atomic
+    from rich.table import Table
+
+    from rczone.cli.common import out_console
     from rczone.diagnostics import diagnose as run
 
-    net = model(model_name)
-    frame = read_frame(data, column_map)
-    free_list = _split(free) or (["Cr", "Rw"] if model_name == "second-order-paper" else None)
-    constants = {"Q": q} if q is not None else ({"Q": 50.0} if "Q" not in frame else None)
-    rep = run(net, frame, free=free_list, sigma_K=sigma, constants=constants)
-    table = Table(title=f"Can {data.name} identify {model_name}?")
+    zm = model(model_name)
+    net = zm.network
+    frame = read_frame(data, column_map, zm)
+    free_list = split(free) or _rc(net)
+    constants = zm.constants_used(frame, {"Q": q} if q is not None else None) or None
+    rep = run(net, frame, free=free_list, theta=dict(zm.theta), sigma_K=sigma, constants=constants)
+    table = Table(title=f"Can {esc(data.name)} identify {esc(zm.label)}?")
     for c in ("parameter", "construction", "expected ± (rel.)", "verdict", "reason"):
         table.add_column(c, overflow="fold")
     for name, v in rep.parameters.items():
         style = VERDICT_STYLE[v.verdict]
         table.add_row(
-            name, f"{v.construction:.4g}", f"{v.expected_rel_se:.0%}", f"[{style}]{v.verdict}[/]", v.reason
+            esc(name),
+            f"{v.construction:.4g}",
+            f"{v.expected_rel_se:.0%}",
+            f"[{style}]{v.verdict}[/]",
+            esc(v.reason),
         )
-    Console().print(table)
+    console = out_console(json_out)
+    console.print(table)
     for name, v in rep.parameters.items():
         if v.advice:
-            Console().print(f"[bold]{name}[/]: {v.advice}")
+            console.print(f"[bold]{esc(name)}[/]: {esc(v.advice)}")
     if json_out:
-        write_json_atomic(json_out, {"data": str(data), "model": model_name, **rep.to_dict()})
+        write_json(json_out, {"data": data.name, "model": zm.label, **rep.to_dict()})
     if report_dir:
         from rczone.report.diagnose import diagnose_report
 
-        diagnose_report(rep, frame, str(data), model_name).write(report_dir)
+        diagnose_report(rep, frame, data.name, zm.label).write(report_dir)
 
 
 @app.command()
 def design(
-    model_name: Annotated[str, typer.Option("--model", help="Model name.")] = "second-order-paper",
-    free: Annotated[str, typer.Option(help="Comma-separated parameters the test should identify.")] = "Cr,Rw",
+    model_name: Annotated[str, typer.Option("--model", help=MODEL_HELP)] = "second-order-paper",
+    free: Annotated[
+        str | None,
+        typer.Option(
+            help="Comma-separated parameters the test should identify (default: the model's R and C)."
+        ),
+    ] = None,
     hours: Annotated[float, typer.Option(help="Length of the test, h.")] = 12.0,
     ts_range: Annotated[str, typer.Option(help="Supply-air temperature range 'low,high', degC.")] = "12,35",
     m_range: Annotated[str, typer.Option(help="Supply mass-flow range 'low,high', kg/s.")] = "0.02,0.12",
@@ -104,14 +115,21 @@ def design(
         "schedule.csv"
     ),
     json_out: Annotated[
-        Path | None, typer.Option("--json", help="Write the design and its predictions as JSON.")
+        Path | None,
+        typer.Option("--json", help="Write the design and its predictions as JSON ('-': stdout)."),
     ] = None,
 ) -> None:
     """Design a forced-response test (D-optimal supply-air schedule) that can identify the parameters."""
-    from rczone.atomic import write_json_atomic
+    from rich.console import Console
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+    from rich.table import Table
+
+    from rczone.cli.common import out_console
     from rczone.diagnostics.design import DesignLimits, design_test
 
-    net = model(model_name)
+    zm = model(model_name)
+    net = zm.network
+    free_list = split(free) or _rc(net)
     limits = DesignLimits(
         _pair(ts_range, "ts-range"), _pair(m_range, "m-range"), _pair(band, "band"), min_hold * 60.0
     )
@@ -126,24 +144,24 @@ def design(
         task = bar.add_task("design", total=None)
         res = design_test(
             net,
-            _split(free) or [],
+            free_list,
             hours * 3600.0,
             limits,
+            theta=dict(zm.theta),
             conditions=cond,
             progress=lambda done, total: bar.update(task, completed=done, total=total),
         )
     res.to_csv(str(out))
-    console = Console()
+    console = out_console(json_out)
     table = Table(title="Forced-response schedule")
     for c in ("from (h)", "to (h)", "Ts (degC)", "m (kg/s)"):
         table.add_column(c)
     for r in res.schedule.itertuples():
         table.add_row(f"{r.start_s / 3600:.1f}", f"{r.end_s / 3600:.1f}", f"{r.Ts:.1f}", f"{r.m:.3f}")
     console.print(table)
-    se = ", ".join(f"{k} ±{v:.0%}" for k, v in res.expected_se.items())
+    se = ", ".join(f"{esc(k)} ±{v:.0%}" for k, v in res.expected_se.items())
     console.print(
         f"predicted room temperature {res.ti_predicted.min():.1f}..{res.ti_predicted.max():.1f} degC; expected {se}"
     )
-    console.print(f"schedule written to [bold]{out}[/]")
-    if json_out:
-        write_json_atomic(json_out, res.to_dict())
+    console.print(f"schedule written to [bold]{esc(out)}[/]")
+    write_json(json_out, res.to_dict())

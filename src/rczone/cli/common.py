@@ -1,14 +1,111 @@
-"""Helpers shared by CLI commands: reading a zone's data and choosing a model."""
+"""Helpers shared by CLI commands: the model and the data a user names, outputs, exit codes.
+
+Everything heavy is imported inside the functions, so that ``rczone --help`` stays fast.
+"""
 
 from __future__ import annotations
 
-from rczone.models import get_model
-from rczone.network import RCNetwork
-from rczone.sources import read_frame
+import json
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
 
-__all__ = ["model", "read_frame"]
+import typer
+
+from rczone.cli.console import escape
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+    from rich.console import Console
+
+    from rczone.models import ZoneModel
+
+#: A user's string (file, column or zone name) made safe to print through rich markup.
+esc = escape
+
+#: Exit codes of every command (documented in the README and in :func:`rczone.cli.main.main`).
+EXIT_OK = 0
+EXIT_CHECK_FAILED = 1  # rczone validate: a reference check failed
+EXIT_USER_ERROR = 2  # a mistake in the input or an unwritable output: one line on stderr
+EXIT_UNTRUSTED = 3  # a fit finished but is flagged untrustworthy (all outputs written)
+EXIT_ZONES_FAILED = 4  # fit-many: some zones failed with their own errors (stored)
+EXIT_INFRASTRUCTURE = 5  # fit-many: some tasks could not run (lost worker...); the next run retries
+EXIT_INTERRUPTED = 130  # Ctrl-C
+
+#: Options several commands share (declare a command's parameter with these types).
+ColumnMapOption = Annotated[Path | None, typer.Option("--columns", help="TOML column map for trend logs.")]
+ConstantsOption = Annotated[
+    list[str] | None,
+    typer.Option("--const", help="Hold an input constant, NAME=VALUE in SI units (repeatable), e.g. Q=50."),
+]
+
+MODEL_HELP = (
+    "Model: a built-in name (`rczone models` lists them, e.g. second-order-paper, TiTe+heater+solar),"
+    " a model file (.toml) or a model saved by --save-model (.json; its values are the start)."
+)
 
 
-def model(name: str) -> RCNetwork:
-    """A model by registry name (``second-order-paper``, ``second-order``, ``first-order``, ``full-scale``)."""
-    return get_model(name)
+def model(spec: str) -> ZoneModel:
+    """The model a user names (built-in, model file or saved model)."""
+    from rczone.models import load_model
+
+    return load_model(spec)
+
+
+def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None = None) -> pd.DataFrame:
+    """A zone's data as a frame in rczone's default columns (see :func:`rczone.sources.read_frame`).
+
+    With the model ``zm``, a file without a column map is read by the model's signal names.
+    """
+    from rczone.sources import read_frame as read
+
+    if zm is None:
+        return read(path, column_map)
+    return read(path, column_map, zm.signal_quantities(), zm.required_signals())
+
+
+def split(text: str | None) -> list[str] | None:
+    """``"a, b,c"`` -> ``["a", "b", "c"]``; None or empty -> None."""
+    return [s.strip() for s in text.split(",") if s.strip()] if text else None
+
+
+def constants(items: Iterable[str] | None) -> dict[str, float] | None:
+    """``["Q=50", "Ts=20"]`` -> ``{"Q": 50.0, "Ts": 20.0}`` (SI units); None when none given."""
+    from rczone.errors import ParameterError
+
+    out: dict[str, float] = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        try:
+            if not sep or not name.strip():
+                raise ValueError
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise ParameterError(f"--const must be NAME=VALUE in SI units, e.g. Q=50; got {item!r}") from None
+    return out or None
+
+
+def out_console(json_out: Path | None) -> Console:
+    """The console for the human-readable output: stderr when JSON goes to stdout (``--json -``)."""
+    from rich.console import Console
+
+    return Console(stderr=json_out is not None and str(json_out) == "-")
+
+
+def write_json(json_out: Path | None, payload: Any) -> None:
+    """Write ``payload`` to ``json_out`` atomically, or to stdout for ``-``."""
+    if json_out is None:
+        return
+    from rczone.atomic import _jsonable, write_json_atomic
+
+    if str(json_out) == "-":
+        sys.stdout.write(json.dumps(_jsonable(payload), indent=2, allow_nan=False) + "\n")
+        sys.stdout.flush()
+    else:
+        write_json_atomic(json_out, payload)
+
+
+def data_label(path: Path) -> str:
+    """The name shown in titles: the file name without its folders, or the built-in set's name."""
+    return Path(str(path)).name

@@ -8,6 +8,7 @@ exit code 2, never a traceback.
 from __future__ import annotations
 
 import sys
+import warnings
 
 import typer
 
@@ -22,8 +23,20 @@ app = typer.Typer(
 )
 
 
+def _version(value: bool) -> None:
+    if value:
+        from rczone import __version__
+
+        typer.echo(__version__)
+        raise typer.Exit()
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version, is_eager=True, help="Print the rczone version and exit."
+    ),
+) -> None:
     """Grey-box RC thermal models of building zones."""
 
 
@@ -41,21 +54,52 @@ from rczone.cli import (  # noqa: E402, F401
     commands_demo,
     commands_diagnose,
     commands_fit,
+    commands_models,
+    commands_select,
     commands_validate,
 )
 
 
+def one_line(text: object) -> str:
+    """``text`` on one line: newlines and other control characters become spaces."""
+    return " ".join("".join(c if c.isprintable() else " " for c in str(text)).split())
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning for the user as one line on stderr (no source line, no file of rczone's)."""
+    typer.echo(f"warning: {one_line(message)}", err=True)
+
+
+def _error(message: object) -> int:
+    typer.echo(f"error: {one_line(message)}", err=True)
+    return 2
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; returns the exit code (also used by the console script)."""
+    """Run the CLI; returns the exit code (also used by the console script).
+
+    Exit codes: 0 success, 1 a validation check failed, 2 a user's mistake (one line on stderr,
+    no traceback), 3 a fit flagged untrustworthy, 4 ``fit-many`` stored failed zones, 5
+    ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
+    """
     try:
-        app(args=argv, standalone_mode=False)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning
+            code = app(args=argv, standalone_mode=False)  # returns typer.Exit's code in this mode
     except RczoneError as exc:
-        typer.echo(f"error: {exc}", err=True)
-        return 2
+        return _error(exc)
     except FileNotFoundError as exc:
-        typer.echo(f"error: file not found: {exc.filename or exc}", err=True)
-        return 2
-    except (typer.Abort, KeyboardInterrupt):
+        return _error(f"file not found: {exc.filename or exc}")
+    except OSError as exc:  # a path the user gave cannot be read or written
+        where = f"{exc.filename}: " if exc.filename else ""
+        return _error(f"{where}{exc.strerror or exc}")
+    except typer.Abort as exc:
+        # click turns an EOFError from anywhere into Abort; only Ctrl-C is an interruption
+        if isinstance(exc.__cause__, EOFError):
+            return _error("unexpected end of input (a truncated or damaged file?)")
+        typer.echo("aborted", err=True)
+        return 130
+    except KeyboardInterrupt:
         typer.echo("aborted", err=True)
         return 130
     except typer.Exit as exc:
@@ -65,7 +109,7 @@ def main(argv: list[str] | None = None) -> int:
             exc.show()
             return exc.exit_code
         raise
-    return 0
+    return code if isinstance(code, int) else 0
 
 
 if __name__ == "__main__":  # pragma: no cover

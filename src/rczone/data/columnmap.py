@@ -17,7 +17,7 @@ the close name), so a typo never silently drops a setting::
 
     [time]
     column = "Timestamp"          # default "time"
-    format = "auto"               # "auto" | "iso" | "seconds"  (seconds = Unix epoch, UTC)
+    format = "auto"               # "auto" | "iso" | "seconds" | "milliseconds" (Unix epoch, UTC)
     timezone = "America/New_York" # IANA zone of naive local stamps and of the night window
                                   # (default "UTC"; a fixed offset is e.g. "Etc/GMT+5" = UTC-5)
     ambiguous = "infer"           # repeated local hour at the end of DST:
@@ -66,7 +66,6 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 import zoneinfo
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -74,6 +73,7 @@ from pathlib import Path
 
 from rczone.data.units import DEFAULT_AIR_DENSITY, SI_UNITS, canonical_unit
 from rczone.errors import DataError, did_you_mean
+from rczone.textfiles import read_toml
 
 KNOWN_CHANNELS = {
     "Ti": ("temperature", "room"),
@@ -88,10 +88,15 @@ KNOWN_CHANNELS = {
 DEFAULT_SURROUNDINGS = ("Tf", "Tc", "Tn1", "Tn2", "Thw")
 """The paper's five surrounding spaces: floor, ceiling, two neighbours, hallway."""
 
-_ROLE_OF_QUANTITY = {"temperature": "temperature", "flow": "flow", "power": "power"}
+_ROLE_OF_QUANTITY = {
+    "temperature": "temperature",
+    "flow": "flow",
+    "power": "power",
+    "irradiance": "irradiance",
+}
 AMBIGUOUS = ("infer", "first", "second", "drop", "raise")
 NONEXISTENT = ("raise", "shift_forward", "drop")
-TIME_FORMATS = ("auto", "iso", "seconds")
+TIME_FORMATS = ("auto", "iso", "seconds", "milliseconds")
 DEFAULT_MAX_GAP = 1800.0
 
 _TOP_KEYS = (
@@ -185,8 +190,11 @@ class ColumnMap:
         raise DataError(f"no channel {name!r} in the column map; {did_you_mean(name, self.channel_names)}")
 
 
-def read_column_map(path: str | Path) -> ColumnMap:
+def read_column_map(path: str | Path, signals: Mapping[str, str] | None = None) -> ColumnMap:
     """Read and validate a TOML column map.
+
+    ``signals`` (channel name -> quantity, from the model the data are for) gives the quantity of
+    channels the map does not declare one for (a model's heater ``Ph`` is a power).
 
     Raises
     ------
@@ -196,12 +204,7 @@ def read_column_map(path: str | Path) -> ColumnMap:
         For invalid TOML or any invalid setting (the message names the key).
     """
     path = Path(path)
-    with path.open("rb") as fh:
-        try:
-            doc = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise DataError(f"column map {path}: invalid TOML: {exc}") from None
-    return parse_column_map(doc, source=str(path))
+    return parse_column_map(read_toml(path, "column map"), source=str(path), signals=signals)
 
 
 def _check_keys(table: Mapping, allowed: Sequence[str], where: str, source: str) -> None:
@@ -262,11 +265,15 @@ def check_clock(text: str, what: str, source: str = "<defaults>") -> str:
     return text.strip()
 
 
-def _channel(name: str, spec, source: str, where: str, surrounding: bool) -> Channel:
+def _channel(
+    name: str, spec, source: str, where: str, surrounding: bool, signals: Mapping[str, str] | None = None
+) -> Channel:
     if surrounding:
         quantity, role = "temperature", "room"
     else:
         quantity, role = KNOWN_CHANNELS.get(name, (None, None))
+        if quantity is None and signals and name in signals:
+            quantity, role = signals[name], _ROLE_OF_QUANTITY[signals[name]]
     if isinstance(spec, str):
         spec = {"column": spec}
     _check_keys(spec, _CHANNEL_KEYS, f"{where}.{name}", source)
@@ -291,7 +298,9 @@ def _channel(name: str, spec, source: str, where: str, surrounding: bool) -> Cha
     return Channel(name, column, value, unit, quantity, role)
 
 
-def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
+def parse_column_map(
+    doc: Mapping, source: str = "<dict>", signals: Mapping[str, str] | None = None
+) -> ColumnMap:
     """Validate a parsed TOML document (a dict) and build a :class:`ColumnMap`.
 
     Raises
@@ -305,10 +314,11 @@ def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
     if "columns" not in doc:
         raise DataError(f"column map {source}: missing the [columns] table naming the channels")
     cols = doc["columns"]
-    _check_keys(cols, list(cols), "[columns]", source)
     surr = doc.get("surroundings", {})
-    _check_keys(surr, list(surr), "[surroundings]", source)
-    channels = [_channel(n, s, source, "[columns]", False) for n, s in cols.items()]
+    for table, where in ((cols, "[columns]"), (surr, "[surroundings]")):
+        if not isinstance(table, Mapping):
+            raise DataError(f"column map {source}: {where} must be a table, got {type(table).__name__}")
+    channels = [_channel(n, s, source, "[columns]", False, signals) for n, s in cols.items()]
     if not channels:
         raise DataError(f"column map {source}: [columns] is empty; map at least 'Ti'")
     for n in surr:
@@ -322,6 +332,15 @@ def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
     if "Tsd" in surr:
         raise DataError(f"column map {source}: 'Tsd' cannot be a surrounding; it is their mean")
     channels += [_channel(n, s, source, "[surroundings]", True) for n, s in surr.items()]
+    by_column: dict[str, str] = {}
+    for ch in channels:
+        if ch.column is not None and ch.column in by_column:
+            raise DataError(
+                f"column map {source}: column {ch.column!r} is mapped to both {by_column[ch.column]!r} and"
+                f" {ch.name!r}; each channel needs its own column"
+            )
+        if ch.column is not None:
+            by_column[ch.column] = ch.name
 
     time = doc.get("time", {})
     long = doc.get("long", {})
@@ -361,13 +380,25 @@ def parse_column_map(doc: Mapping, source: str = "<dict>") -> ColumnMap:
     )
 
 
-def default_column_map(columns: Sequence[str], source: str = "<data>") -> ColumnMap:
+def default_column_map(
+    columns: Sequence[str],
+    source: str = "<data>",
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
+) -> ColumnMap:
     """The map used when none is given (the CLI's default layout).
 
-    Columns ``time`` (seconds or ISO 8601), ``Ti``, ``To``, ``Ts``, ``m`` (kg/s), ``Q``
-    (W), and either ``Tsd`` or the five ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw``, all
-    temperatures in degC. When ``Tsd`` is present it is used as is and any of the five
+    Without ``signals``: columns ``time`` (seconds or ISO 8601), ``Ti``, ``To``, ``Ts``, ``m``
+    (kg/s), optionally ``Q`` (W; without it commands hold the paper's 50 W constant), and either
+    ``Tsd`` or the five ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw``, all temperatures in degC. When
+    ``Tsd`` is present it is used as is and any of the five
     also present are loaded as plain channels; otherwise Tsd is the mean of the five.
+
+    With ``signals`` (channel name -> quantity, the signals of the model the data are for):
+    ``time`` and every column named as one of the signals, in SI units; a model input the data
+    lack is reported by the model (it may have a default), except the ``required`` ones, which
+    are reported here with close names of the file's columns. An unnamed first column (a frame
+    written with its index) is taken as the time.
 
     Raises
     ------
@@ -375,7 +406,30 @@ def default_column_map(columns: Sequence[str], source: str = "<data>") -> Column
         Naming every missing column, with close names from ``columns``.
     """
     present = [str(c) for c in columns]
-    required = ["time", "Ti", "To", "Ts", "m", "Q"]
+    if signals is not None:
+        time = "time"
+        if "time" not in present and present and (present[0].startswith("Unnamed") or not present[0].strip()):
+            time = present[0]
+        missing = [c for c in (time, *required) if c not in present]
+        if missing:
+            hints = "; ".join(f"{c!r}: {did_you_mean(c, present)}" for c in missing)
+            raise DataError(
+                f"{source}: missing column(s) {', '.join(repr(c) for c in missing)} that the model needs"
+                f" ({hints}); rename them or give a column map"
+            )
+        channels = []
+        for n, q in signals.items():
+            if n in present and n != time:
+                known = KNOWN_CHANNELS.get(n)
+                role = known[1] if known is not None and known[0] == q else _ROLE_OF_QUANTITY[q]
+                channels.append(Channel(n, n, None, SI_UNITS[q], q, role))
+        if not channels:
+            raise DataError(
+                f"{source}: none of the model's signals ({', '.join(signals)}) is a column; rename the"
+                " columns or give a column map"
+            )
+        return ColumnMap(channels=tuple(channels), time_column=time, source=source)
+    required = ["time", "Ti", "To", "Ts", "m"]  # Q is optional: 50 W held constant
     if "Tsd" in present:
         required.append("Tsd")
     else:

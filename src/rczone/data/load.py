@@ -32,10 +32,13 @@ the column, row or key and what was expected -- never a traceback from pandas.
 from __future__ import annotations
 
 import warnings
+import zlib
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from pyarrow import ArrowException
 
 from rczone.data.columnmap import DEFAULT_MAX_GAP, ColumnMap, default_column_map, read_column_map
 from rczone.data.quality import FLAT_SECONDS, RczoneWarning, find_gaps, longest_flat_run
@@ -46,7 +49,36 @@ from rczone.data.zonedata import ZoneData
 from rczone.errors import DataError, did_you_mean
 
 CSV_SUFFIXES = (".csv", ".csv.gz", ".txt", ".tsv")
+LONG_STEP = 3 * 3600.0
+"""A median time step longer than this (s) is reported: a room's dynamics are hours."""
 PARQUET_SUFFIXES = (".parquet", ".pq")
+
+
+def _first_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__
+
+
+def _check_header(frame: pd.DataFrame, header: list[str], path: Path, sep: str) -> None:
+    """Duplicate column names, and a header that is one column because of another delimiter."""
+    seen: dict[str, int] = {}
+    for k, name in enumerate(header, 1):
+        if name in seen and name.strip():
+            raise DataError(
+                f"{path}: column {name!r} appears twice in the header (columns {seen[name]} and {k});"
+                " rename or remove one"
+            )
+        seen[name] = k
+    if frame.shape[1] == 1 and header:
+        other = next((d for d in (";", "\t", "|") if d in header[0] and d != sep), None)
+        if other is not None:
+            shown = "tab" if other == "\t" else repr(other)
+            expected = "tab" if sep == "\t" else repr(sep)
+            raise DataError(
+                f"{path}: the header is one column {header[0][:60]!r}; the file seems separated by {shown},"
+                f" rczone reads {expected}-separated {path.suffix} files: save it comma-separated"
+                " (or tab-separated as .tsv)"
+            )
 
 
 def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFrame:
@@ -55,15 +87,32 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
     name = path.name.lower()
     if not path.exists():
         raise FileNotFoundError(2, "No such file", str(path))
+    if path.is_dir():
+        raise DataError(f"data file {str(path)!r} is a folder, not a file")
     try:
         if name.endswith(PARQUET_SUFFIXES):
-            return pd.read_parquet(path)
+            frame = pd.read_parquet(path)
+            _check_header(frame, [str(c) for c in frame.columns], path, ",")
+            return frame
         if name.endswith(CSV_SUFFIXES):
             sep = "\t" if name.endswith(".tsv") else ","
-            return pd.read_csv(path, sep=sep, na_values=list(na_values) or None)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError, OSError, ValueError) as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise DataError(f"{path}: cannot read the table: {first}") from None
+            header = pd.read_csv(path, sep=sep, header=None, nrows=1, dtype=str, keep_default_na=False)
+            frame = pd.read_csv(path, sep=sep, na_values=list(na_values) or None)
+            _check_header(frame, [str(c) for c in header.iloc[0]], path, sep)
+            return frame
+    except DataError:
+        raise
+    except UnicodeDecodeError as exc:
+        raise DataError(
+            f"{path}: cannot read the table: not UTF-8 text (byte 0x{exc.object[exc.start]:02x});"
+            " save it as UTF-8"
+        ) from None
+    except (EOFError, zlib.error) as exc:
+        raise DataError(
+            f"{path}: cannot read the table: the file ends early or is damaged ({_first_line(exc)})"
+        ) from None
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, OSError, ValueError, ArrowException) as exc:
+        raise DataError(f"{path}: cannot read the table: {_first_line(exc)}") from None
     raise DataError(
         f"{path}: unknown file type; expected one of {', '.join(CSV_SUFFIXES + PARQUET_SUFFIXES)}"
     )
@@ -74,6 +123,8 @@ def load_zone_data(
     column_map: ColumnMap | str | Path | None = None,
     *,
     flat_seconds: float = FLAT_SECONDS,
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
 ) -> ZoneData:
     """Load a trend log file into SI arrays.
 
@@ -85,6 +136,12 @@ def load_zone_data(
         None uses the default layout (:func:`~rczone.data.columnmap.default_column_map`).
     flat_seconds : float
         A temperature exactly constant for longer than this (s) is reported as flat.
+    signals : mapping of channel name to quantity, optional
+        The signals of the model the data are for: without a column map, every column named as
+        one of them is read (:func:`~rczone.data.columnmap.default_column_map`); with a map, they
+        give the quantity of channels the map does not declare.
+    required : sequence of str
+        Of the ``signals``, the columns a file without a column map must have.
 
     Returns
     -------
@@ -97,9 +154,11 @@ def load_zone_data(
     FileNotFoundError
         If ``path`` (or the map file) does not exist.
     """
-    cmap = read_column_map(column_map) if isinstance(column_map, str | Path) else column_map
+    cmap = read_column_map(column_map, signals) if isinstance(column_map, str | Path) else column_map
     frame = read_table(path, cmap.na_values if cmap is not None else ())
-    return zone_data_from_frame(frame, cmap, source=Path(path).name, flat_seconds=flat_seconds)
+    return zone_data_from_frame(
+        frame, cmap, source=Path(path).name, flat_seconds=flat_seconds, signals=signals, required=required
+    )
 
 
 def _require(columns: list[str], needed: str, what: str, source: str) -> None:
@@ -142,13 +201,22 @@ def _check_order(t: np.ndarray, rows: np.ndarray, where: str, source: str) -> No
     )
 
 
+def _times(source: str, raw: pd.Series, **kwargs) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """:func:`parse_times` with the file named in its errors."""
+    try:
+        return parse_times(raw, **kwargs)
+    except DataError as exc:
+        raise DataError(f"{source}: {exc}") from None
+
+
 def _samples_wide(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list[str]):
     cols = [str(c) for c in frame.columns]
     _require(cols, cmap.time_column, "time column", source)
     for ch in cmap.channels:
         if ch.column is not None:
             _require(cols, ch.column, f"column for channel {ch.name!r}", source)
-    t, keep, dropped = parse_times(
+    t, keep, dropped = _times(
+        source,
         frame[cmap.time_column],
         fmt=cmap.time_format,
         tz=cmap.timezone,
@@ -186,7 +254,8 @@ def _samples_long(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list
             )
     rows = np.flatnonzero(points.isin(wanted).fillna(False).to_numpy())
     sub = frame.iloc[rows]
-    t, keep, dropped = parse_times(
+    t, keep, dropped = _times(
+        source,
         sub[cmap.time_column],
         fmt=cmap.time_format,
         tz=cmap.timezone,
@@ -242,9 +311,15 @@ def zone_data_from_frame(
     *,
     source: str = "<frame>",
     flat_seconds: float = FLAT_SECONDS,
+    signals: Mapping[str, str] | None = None,
+    required: Sequence[str] = (),
 ) -> ZoneData:
     """Build :class:`ZoneData` from a table already in memory (same rules as :func:`load_zone_data`)."""
-    cmap = column_map if column_map is not None else default_column_map(list(frame.columns), source)
+    cmap = (
+        column_map
+        if column_map is not None
+        else default_column_map(list(frame.columns), source, signals, required)
+    )
     if not isinstance(cmap, ColumnMap):
         raise DataError(f"column_map must be a ColumnMap, a TOML path or None, got {type(cmap).__name__}")
     if len(frame) == 0:
@@ -276,7 +351,7 @@ def zone_data_from_frame(
         si_samples[ch.name] = (t_c, si)
 
     if cmap.step is not None:
-        t_out = uniform_grid(float(axis[0]), float(axis[-1]), cmap.step)
+        t_out = uniform_grid(float(axis[0]), float(axis[-1]), cmap.step)  # refuses absurd sizes
     else:
         t_out = axis
     limits: dict[str, float] = {}
@@ -322,6 +397,15 @@ def zone_data_from_frame(
             _warn(
                 f"{source}: sampling is irregular (time steps from {dt.min():g} s to {dt.max():g} s);"
                 " set [resample] step in the column map for a uniform grid",
+                collected,
+            )
+    if t_out.size > 2:
+        typical = float(np.median(np.diff(t_out)))
+        if typical > LONG_STEP:
+            _warn(
+                f"{source}: the median time step is {_hours(typical)}, too coarse for a room's thermal"
+                " dynamics; are the times in the right unit (seconds, or [time] format ="
+                ' "milliseconds")?',
                 collected,
             )
     gaps = []

@@ -24,11 +24,27 @@ import math
 
 import numpy as np
 
+from rczone.errors import DataError
+
+MAX_SAMPLES = 2_000_000
+"""Most grid times a record is resampled onto (23 days at 1 s, 3.8 years at 1 min)."""
+
 
 def uniform_grid(t_first: float, t_last: float, step: float) -> np.ndarray:
-    """Multiples of ``step`` within ``[t_first, t_last]`` (s), in increasing order."""
+    """Multiples of ``step`` within ``[t_first, t_last]`` (s), in increasing order.
+
+    Raises
+    ------
+    DataError
+        If the grid would have more than :data:`MAX_SAMPLES` times.
+    """
     k0 = math.ceil(t_first / step - 1e-9)
     k1 = math.floor(t_last / step + 1e-9)
+    if k1 - k0 + 1 > MAX_SAMPLES:
+        raise DataError(
+            f"[resample] step = {step:g} s over {t_last - t_first:g} s of data gives {k1 - k0 + 1:,} samples,"
+            f" more than the limit of {MAX_SAMPLES:,} (rczone.data.resample.MAX_SAMPLES); use a larger step"
+        )
     return np.arange(k0, k1 + 1, dtype=float) * step
 
 

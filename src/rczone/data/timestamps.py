@@ -1,9 +1,11 @@
 """Time stamps of trend logs to UTC epoch seconds.
 
 Accepted time columns
-    * numbers: seconds since 1970-01-01 00:00 UTC (Unix time). Relative times (starting
-      at 0) work for everything except the night window, which then refers to
-      1970-01-01 in the map's time zone;
+    * numbers: seconds since 1970-01-01 00:00 UTC (Unix time), or milliseconds with
+      ``format = "milliseconds"``. Relative times (starting at 0) work for everything except
+      the night window, which then refers to 1970-01-01 in the map's time zone. Every time
+      must lie in the years 1677 to 2262 (what a nanosecond time stamp can hold); numbers
+      beyond that which would be plausible dates in milliseconds are an error saying so;
     * ISO 8601 strings *with* an offset (``2011-11-06T01:30:00-05:00`` or ``...Z``):
       converted to UTC, so a log that changes offset at a daylight-saving change is
       read exactly;
@@ -38,6 +40,10 @@ from rczone.errors import DataError
 
 _OFFSET = re.compile(r"[T ]\d{1,2}:\d{2}(?::\d{2}(?:\.\d+)?)?\s*(?:Z|[+-]\d{2}(?::?\d{2})?)$", re.IGNORECASE)
 _EPOCH = pd.Timestamp(0, tz="UTC")
+LATEST = float(pd.Timestamp.max.value // 10**9)
+"""Largest magnitude of epoch seconds a time stamp can hold (year 2262; 1677 below zero)."""
+EPOCH_PLAUSIBLE = 3.15e8
+"""1980-01-01 in epoch seconds: numbers that are this late only in milliseconds are milliseconds."""
 
 
 def rows_text(rows: np.ndarray, limit: int = 5) -> str:
@@ -52,13 +58,29 @@ def _epoch_seconds(idx: pd.DatetimeIndex) -> np.ndarray:
     return np.asarray((idx - _EPOCH) / pd.Timedelta(seconds=1), dtype=float)
 
 
-def _numeric(raw: pd.Series, column: str) -> np.ndarray:
+def _numeric(raw: pd.Series, column: str, unit: float = 1.0) -> np.ndarray:
+    """Numbers of seconds (``unit`` = 1) or milliseconds (``unit`` = 1e-3) as seconds."""
     t = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
+    what = "seconds" if unit == 1.0 else "milliseconds"
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
         raise DataError(
-            f"time column {column!r}: not a number of seconds at {rows_text(bad)}"
+            f"time column {column!r}: not a number of {what} at {rows_text(bad)}"
             f" (value {raw.iloc[bad[0]]!r}); use Unix seconds or ISO 8601 stamps"
+        )
+    t = t * unit
+    far = np.flatnonzero(np.abs(t) > LATEST)
+    if far.size:
+        k = int(far[0])
+        if unit == 1.0 and np.all(np.abs(t) / 1e3 <= LATEST) and np.all(t / 1e3 >= EPOCH_PLAUSIBLE):
+            raise DataError(
+                f"time column {column!r}: {raw.iloc[k]} at {rows_text(far)} is after the year 2262 in"
+                " seconds; the times look like milliseconds since 1970: set [time] format ="
+                ' "milliseconds" in a column map'
+            )
+        raise DataError(
+            f"time column {column!r}: {raw.iloc[k]} at {rows_text(far)} is {what} outside the years"
+            " 1677 to 2262; use Unix seconds or ISO 8601 stamps"
         )
     return t
 
@@ -174,7 +196,7 @@ def parse_times(
     ----------
     raw : pandas.Series
         The time column as read.
-    fmt : {"auto", "iso", "seconds"}
+    fmt : {"auto", "iso", "seconds", "milliseconds"}
         How to read it; ``"auto"`` takes numbers as seconds and strings as ISO 8601.
     tz : str
         IANA time zone of naive (offset-free) stamps.
@@ -197,10 +219,32 @@ def parse_times(
     n = len(raw)
     keep = np.ones(n, dtype=bool)
     is_datetime = pd.api.types.is_datetime64_any_dtype(raw.dtype)
-    if fmt == "seconds" and is_datetime:
-        raise DataError(f'time column {column!r} holds date-times, not seconds; set [time] format = "auto"')
+    if fmt in ("seconds", "milliseconds") and is_datetime:
+        raise DataError(f'time column {column!r} holds date-times, not {fmt}; set [time] format = "auto"')
+    if fmt == "milliseconds":
+        return _numeric(raw, column, 1e-3), keep, []
     if fmt == "seconds" or (fmt == "auto" and not is_datetime and _looks_numeric(raw)):
         return _numeric(raw, column), keep, []
+    try:
+        return _parse_dates(raw, is_datetime, tz, ambiguous, nonexistent, groups, column, keep)
+    except (pd.errors.OutOfBoundsDatetime, OverflowError):
+        raise DataError(
+            f"time column {column!r}: a time stamp lies outside the years 1677 to 2262 that rczone"
+            " handles; check the dates"
+        ) from None
+
+
+def _parse_dates(
+    raw: pd.Series,
+    is_datetime: bool,
+    tz: str,
+    ambiguous: str,
+    nonexistent: str,
+    groups: np.ndarray | None,
+    column: str,
+    keep: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Date-times (Parquet) or ISO 8601 strings to UTC epoch seconds (see :func:`parse_times`)."""
     if is_datetime:
         idx = pd.DatetimeIndex(raw)
         bad = np.flatnonzero(idx.isna())

@@ -11,6 +11,7 @@ temperature    degC [C, °C, celsius], degF [F, °F,        degC
 flow           kg/s, m3/s [m^3/s], m3/h [m^3/h], L/s      kg/s
                [l/s], cfm [ft3/min]
 power          W, kW, Btu/h [BTU/h]                       W
+irradiance     W/m2 [W/m^2], kW/m2 [kW/m^2]               W/m2
 =============  =========================================  ==========
 
 Temperatures are kept in degrees Celsius rather than kelvin. The RC equations are affine
@@ -45,7 +46,7 @@ FOOT = 0.3048
 BTU_PER_HOUR = 0.29307107
 """One Btu_IT per hour in watts."""
 
-SI_UNITS = {"temperature": "degC", "flow": "kg/s", "power": "W"}
+SI_UNITS = {"temperature": "degC", "flow": "kg/s", "power": "W", "irradiance": "W/m2"}
 """The unit each quantity has inside rczone."""
 
 _ALIASES = {
@@ -66,11 +67,15 @@ _ALIASES = {
         "kW": ("kw",),
         "Btu/h": ("btu/h", "btuh", "btu/hr"),
     },
+    "irradiance": {
+        "W/m2": ("w/m2", "w/m^2", "w/m²"),
+        "kW/m2": ("kw/m2", "kw/m^2", "kw/m²"),
+    },
 }
 
 # Volume-flow units: cubic metres per second per unit.
 _VOLUME_M3S = {"m3/s": 1.0, "m3/h": 1.0 / 3600.0, "L/s": 1e-3, "cfm": FOOT**3 / 60.0}
-_POWER_W = {"W": 1.0, "kW": 1e3, "Btu/h": BTU_PER_HOUR}
+_POWER_W = {"W": 1.0, "kW": 1e3, "Btu/h": BTU_PER_HOUR, "W/m2": 1.0, "kW/m2": 1e3}
 
 
 @dataclass(frozen=True)
@@ -100,6 +105,7 @@ PLAUSIBLE = {
     "flow": Plausible("zone air mass flow", "flow", 0.0, 20.0),
     "power": Plausible("heat input", "power", -1e6, 1e6),
     "temperature": Plausible("temperature", "temperature", -60.0, 100.0),
+    "irradiance": Plausible("solar irradiance", "irradiance", -50.0, 2000.0),
 }
 """Plausible ranges by role. ``"temperature"`` is the loose default for other temperatures."""
 
@@ -149,7 +155,8 @@ def to_si(
     unit : str
         Declared unit (any accepted spelling).
     quantity : str
-        ``"temperature"`` (to degC), ``"flow"`` (to kg/s) or ``"power"`` (to W).
+        ``"temperature"`` (to degC), ``"flow"`` (to kg/s), ``"power"`` (to W) or ``"irradiance"``
+        (to W/m2).
     column : str
         Source column name, used in error messages.
     air_density : float

@@ -28,17 +28,18 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from rczone.errors import ParameterError
 from rczone.estimation import FitResult
 from rczone.estimation.costs import MAP_CORRELATION_TIME, Objective, auto_initial_state
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.uncertainty import profile
+from rczone.models import ZoneModel
 from rczone.network import RCNetwork
 
 #: Rise of the tempered negative log-likelihood that a 95 % profile interval allows.
-PROFILE_THRESHOLD = 0.5 * float(chi2.ppf(0.95, 1))
+PROFILE_THRESHOLD = 0.5 * float(chdtri(1, 0.05))  # chi2(1) 95 % quantile
 
 
 @dataclass(frozen=True)
@@ -96,10 +97,12 @@ class Disagreement:
         return {k: v for k, v in vars(self).items() if k != "name"}
 
 
-def _objective(network: RCNetwork, frame: pd.DataFrame, res: FitResult, constants) -> tuple[Objective, float]:
-    from rczone.calibrate import dataset
+def _objective(model, frame: pd.DataFrame, res: FitResult, constants) -> tuple[Objective, float]:
+    from rczone.calibrate import as_model, dataset
 
-    data = dataset(network, frame, constants)
+    zm = as_model(model)
+    network = zm.network
+    data = dataset(zm, frame, constants)
     ss0 = network.state_space()
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
     x0_auto = {f"x0_{s}": float(v) for s, v in zip(ss0.state_names, x0a)}
@@ -123,7 +126,7 @@ def _objective(network: RCNetwork, frame: pd.DataFrame, res: FitResult, constant
 
 
 def profile_checks(
-    network: RCNetwork,
+    network: RCNetwork | ZoneModel,
     frame: pd.DataFrame,
     res: FitResult,
     names: Sequence[str] | None = None,
@@ -135,8 +138,8 @@ def profile_checks(
 
     Parameters
     ----------
-    network : RCNetwork
-        The fitted structure (as passed to the fit).
+    network : RCNetwork or ZoneModel
+        The fitted structure (as passed to the fit; a model brings its input conventions).
     frame : DataFrame
         The calibration data.
     res : FitResult
@@ -155,13 +158,14 @@ def profile_checks(
     """
     if not factor > 1 or n_points < 3:
         raise ParameterError(f"profile needs factor > 1 and n_points >= 3, got {factor}, {n_points}")
+    obj, w = _objective(network, frame, res, constants)
+    network = obj.network
     if names is None:
         names = [
             n
             for n in res.names
             if n in network.parameters and network.parameters[n].kind in ("resistance", "capacitance")
         ]
-    obj, w = _objective(network, frame, res, constants)
     theta_hat = np.array([res.estimates[n] for n in obj.spec.names])
     n_eff = (obj.data.t[-1] - obj.data.t[0]) / MAP_CORRELATION_TIME
     out = {}

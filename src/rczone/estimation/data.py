@@ -17,6 +17,36 @@ from rczone.network import RCNetwork
 from rczone.simulation.intervals import interval_groups, interval_keys, unique_rows
 from rczone.simulation.simulate import check_inputs, check_time
 
+MIN_MEASURED = 30
+"""Fewest measured output samples a fit accepts (see :meth:`Dataset.check_fit_size`): the
+residual whiteness test after a fit looks at up to 20 lags, and a fit of a few samples would
+match anything."""
+
+
+def time_text(t: float) -> str:
+    """A time for messages: ``t = 420 s``, with the UTC date when ``t`` is an epoch time."""
+    if 3.15e8 <= t <= 9.2e9:  # 1980 to 2261: Unix seconds
+        stamp = np.datetime64(int(t), "s").astype(str)
+        return f"t = {t:.10g} s ({stamp}Z)"
+    return f"t = {t:g} s"
+
+
+def _check_gaps(t: np.ndarray, arr: object, names: tuple[str, ...], what: str) -> None:
+    """A missing input value is an error naming the channel, its first time and what to do."""
+    a = np.asarray(arr, dtype=float)
+    if a.ndim == 1 and len(names) == 1:
+        a = a[:, None]
+    if a.ndim != 2 or a.shape != (t.size, len(names)):
+        return  # the shape error is check_inputs' to report
+    bad = ~np.isfinite(a)
+    for j in np.flatnonzero(bad.any(axis=0)):
+        k = int(np.flatnonzero(bad[:, j])[0])
+        raise DataError(
+            f"{what} {names[j]!r} is missing (NaN or infinite) at {int(bad[:, j].sum())} of {t.size}"
+            f" samples, first at {time_text(float(t[k]))} (sample {k}); inputs must be complete: fill the"
+            " gap in the data, or fit a gap-free stretch (rczone.data.ZoneData.complete_segments)"
+        )
+
 
 @dataclass(frozen=True, eq=False)
 class Dataset:
@@ -47,9 +77,11 @@ class Dataset:
     def __post_init__(self) -> None:
         t = check_time(self.t)
         n = t.size
+        _check_gaps(t, self.u, tuple(self.input_names), "input")
         u = check_inputs(self.u, n, tuple(self.input_names), "u")
         no_flows = len(self.flow_names) == 0 and (self.m is None or np.size(self.m) == 0)
         m = np.zeros((n, 0)) if no_flows else self.m
+        _check_gaps(t, m, tuple(self.flow_names), "flow")
         m = check_inputs(m, n, tuple(self.flow_names), "m")
         y = np.asarray(self.y, dtype=float)
         if y.ndim == 1 and len(self.output_names) == 1:
@@ -73,6 +105,26 @@ class Dataset:
     @property
     def n_samples(self) -> int:
         return self.t.size
+
+    @property
+    def n_measured(self) -> int:
+        """Samples with every output measured (finite)."""
+        return int(np.isfinite(self.y).all(axis=1).sum())
+
+    def check_fit_size(self, n_free: int = 0) -> None:
+        """Raise :class:`DataError` unless the data can support a fit of ``n_free`` parameters.
+
+        A fit needs at least :data:`MIN_MEASURED` measured samples and more than twice as many
+        as free parameters; fewer (a record of a few samples, or one almost all missing) would
+        fit anything and then fail in the residual tests.
+        """
+        need = max(MIN_MEASURED, 2 * n_free + 1)
+        if self.n_measured < need:
+            raise DataError(
+                f"only {self.n_measured} of {self.n_samples} samples have a measured"
+                f" {', '.join(self.output_names)}; a fit of {n_free} parameter(s) needs at least {need}"
+                " (rczone.estimation.data.MIN_MEASURED); use a longer record with fewer gaps"
+            )
 
     @cached_property
     def interval_groups(self) -> np.ndarray | None:

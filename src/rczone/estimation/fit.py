@@ -1,8 +1,8 @@
 """``fit``: estimate free parameters of an RC network from a data set.
 
-The top-level function ties the pieces together: parameter spec, cost, (multistart)
-optimizer, uncertainty, and the frozen :class:`~rczone.estimation.result.FitResult`.
-The network is never modified.
+The top-level function ties the pieces together: default free set, parameter spec, cost, global
+search, uncertainty, the flags that say when a result should not be trusted, and the frozen
+:class:`~rczone.estimation.result.FitResult`. The network is never modified.
 """
 
 from __future__ import annotations
@@ -21,12 +21,15 @@ from rczone.estimation.costs import (
     auto_initial_state,
     filter_arrays,
     simulate_output,
+    trapezoid_sse,
 )
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import kalman_innovations_fast
-from rczone.estimation.optimize import OPTIMIZERS, latin_hypercube_starts, minimize_from
-from rczone.estimation.parameters import make_spec
+from rczone.estimation.optimize import OPTIMIZERS
+from rczone.estimation.parameters import NOISE_DEFAULTS, make_spec, noise_parameter_names
+from rczone.estimation.resolution import noise_floor
 from rczone.estimation.result import FitResult
+from rczone.estimation.search import global_search
 from rczone.estimation.uncertainty import covariance, hessian
 from rczone.network import RCNetwork
 from rczone.simulation.simulate import HOLDS
@@ -41,13 +44,59 @@ def rmse_of(network: RCNetwork, values: Mapping[str, float], data: Dataset, meth
     return float(np.sqrt(np.nanmean(e**2)))
 
 
+def measured_states(network: RCNetwork) -> tuple[str, ...]:
+    """States that an output measures directly."""
+    return tuple(o for o in network.outputs if o in network.state_names)
+
+
+def default_free(network: RCNetwork, method: str, initial_state: str = "estimate") -> tuple[str, ...]:
+    """Parameters a fit estimates when the user names none.
+
+    The network's :attr:`~rczone.network.RCNetwork.default_free` (every resistance, capacitance and
+    gain not declared fixed); for ML and MAP also the measurement noise of every output and the
+    process noise of every state, as in continuous-time grey-box practice (Bacher & Madsen 2011):
+    with noise on the measured states only, the unmeasured ones are forced to follow the model
+    exactly, and the likelihood of real data is far lower (by 800 log-units on the Bacher-Madsen
+    experiment, 300 on the virtual forced night) with innovations far from white; for LS with
+    ``initial_state="estimate"`` the initial temperature of every state that is not measured (the
+    data rarely start at rest, and assuming they do biases the fit: see :func:`fit`).
+    """
+    free = list(network.default_free)
+    measured = measured_states(network)
+    if method in ("ml", "map"):
+        free += [n for n in noise_parameter_names(network) if n.startswith("sigma_v")]
+        free += [f"sigma_w_{s}" for s in network.state_names]
+    elif initial_state == "estimate":
+        free += [f"x0_{s}" for s in network.state_names if s not in measured]
+    return tuple(free)
+
+
+def noise_bounds(network: RCNetwork, data: Dataset, free: Sequence[str]) -> dict[str, tuple[float, float]]:
+    """Bounds of free measurement-noise levels derived from the data (see :mod:`~rczone.estimation.resolution`).
+
+    Lower: the output's :func:`~rczone.estimation.resolution.noise_floor`; upper: ten times the
+    output's spread (a noise larger than the signal explains nothing), at least 100 floors.
+    """
+    out = {}
+    names = [n for n in noise_parameter_names(network) if n.startswith("sigma_v")]
+    for j, o in enumerate(network.outputs):
+        name = names[0] if len(names) == 1 else f"sigma_v_{o}"
+        if name not in free:
+            continue
+        y = data.y[:, j]
+        floor = noise_floor(y)
+        spread = float(np.nanstd(y)) if np.isfinite(y).sum() > 1 else 1.0
+        out[name] = (floor, max(10.0 * spread, 100.0 * floor, 1.0))
+    return out
+
+
 def fit(
     network: RCNetwork,
     data: Dataset,
-    free: Sequence[str],
+    free: Sequence[str] | None = None,
     method: str = "ls",
     optimizer: str = "nelder-mead",
-    n_starts: int = 1,
+    n_starts: int | None = None,
     bounds: Mapping[str, tuple[float, float]] | None = None,
     rng: np.random.Generator | None = None,
     start: Mapping[str, float] | None = None,
@@ -58,8 +107,14 @@ def fit(
     spread: float = 10.0,
     uncertainty: bool = True,
     max_evals: int | None = None,
+    initial_state: str = "estimate",
 ) -> FitResult:
     """Estimate the ``free`` parameters of ``network`` from ``data``.
+
+    By default the search is global (:func:`~rczone.estimation.search.global_search`): the cost is
+    sampled over the whole box of bounds, local searches start from the model's values and from
+    the best samples, identical optima are merged, and the result is *converged* only when the best
+    optimum was reached from two starts or confirmed by a second method.
 
     Parameters
     ----------
@@ -68,19 +123,23 @@ def fit(
         the values of non-free parameters.
     data : Dataset
         Columns must match ``network.input_names``, ``flow_names`` and ``outputs``.
-    free : sequence of str
-        Parameters to estimate (base network parameters, ``sigma_v``,
-        ``sigma_w_<state>``, ``x0_<state>``, ``sigma_x0_<state>``).
+    free : sequence of str, optional
+        Parameters to estimate (base network parameters, ``sigma_v`` (``sigma_v_<output>`` with
+        several outputs), ``sigma_w_<state>``, ``x0_<state>``, ``sigma_x0_<state>``). Default
+        :func:`default_free`.
     method : {"ls", "ml", "map"}
         Output-error least squares (SPEC eq. 8), Kalman-filter maximum likelihood
         (eq. 9), or ML with a log-normal prior on the free R and C.
     optimizer : {"nelder-mead", "powell", "lbfgs"}
-    n_starts : int
-        Number of starts; the first is ``start`` (default: construction values), the
-        others a Latin hypercube (needs ``rng``).
+        The local method.
+    n_starts : int, optional
+        Local searches: default automatic (2 or more, see the search); ``1`` is one local search
+        from the start values (no global phase); ``k`` runs exactly ``k``.
     bounds : mapping of name to (lower, upper), optional
+        Default: declared on the parameter, else a factor 1000 around its value; measurement
+        noise from the data (:func:`noise_bounds`).
     rng : numpy.random.Generator, optional
-        Required when ``n_starts > 1``.
+        Draws the global phase; default ``numpy.random.default_rng(0)`` (reproducible).
     start, fixed : mapping of name to float, optional
         Start values of free parameters; values of non-free ones.
     hold : {"zoh", "foh"}
@@ -93,11 +152,16 @@ def fit(
         so that a night of closed-loop data cannot overrule the construction values with
         thousands of samples that carry the information of a few dozen.
     spread : float
-        Multistart box: factor around the construction values.
+        Kept for compatibility; the global phase samples the whole box of bounds.
     uncertainty : bool
         Compute the Hessian, standard errors and correlations.
     max_evals : int, optional
-        Evaluation budget per start.
+        Evaluation budget per local search.
+    initial_state : {"estimate", "steady"}
+        Only when ``free`` is not given: ``"estimate"`` (default) frees the initial temperature of
+        every unmeasured state in an LS fit; ``"steady"`` starts them in equilibrium with the first
+        inputs and measurement, which biases the fit when the data do not start at rest. ML and
+        MAP fits carry an initial-state uncertainty in the filter either way.
 
     Returns
     -------
@@ -109,55 +173,95 @@ def fit(
         raise ParameterError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
     if hold not in HOLDS:
         raise ParameterError(f"hold must be one of {HOLDS}, got {hold!r}")
+    if initial_state not in ("estimate", "steady"):
+        raise ParameterError(f"initial_state must be 'estimate' or 'steady', got {initial_state!r}")
     if not isinstance(data, Dataset):
         raise ParameterError(
             f"data must be an rczone Dataset, got {type(data).__name__}; see Dataset.from_frame"
         )
     data.check_against(network)
-    if n_starts > 1 and rng is None:
-        raise ParameterError("n_starts > 1 needs rng (a numpy.random.Generator) to draw the starts")
+    free = tuple(free) if free else default_free(network, method, initial_state)
     if method == "ls":
         noisy = [n for n in free if n.startswith("sigma_")]
         if noisy:
             raise ParameterError(
                 f"noise parameter(s) {noisy} cannot be estimated by least squares; use method='ml' or 'map'"
             )
+    rng = np.random.default_rng(0) if rng is None else rng
     ss0 = network.state_space()
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
     x0_auto = {f"x0_{s}": float(v) for s, v in zip(ss0.state_names, x0a)}
-    spec = make_spec(network, free, bounds=bounds, start=start, fixed=fixed, x0_auto=x0_auto)
+    all_bounds = {**noise_bounds(network, data, free), **dict(bounds or {})}
+    start = dict(start or {})
+    for name, (lo, hi) in all_bounds.items():
+        if name.startswith("sigma_v") and name not in start and name not in (bounds or {}):
+            v = NOISE_DEFAULTS["sigma_v"]
+            if not lo < v < hi:  # a coarse logger: start above its resolution
+                start[name] = math.sqrt(lo * hi) if hi < 100 * lo else 10.0 * lo
+    spec = make_spec(network, free, bounds=all_bounds, start=start, fixed=fixed, x0_auto=x0_auto)
     if not correlation_time_s > 0:
         raise ParameterError(f"correlation_time_s must be > 0, got {correlation_time_s!r}")
     weight = min(1.0, float(np.median(np.diff(data.t))) / correlation_time_s) if method == "map" else 1.0
     objective = Objective(network, data, spec, method, hold, prior_spread, weight)
-    starts = latin_hypercube_starts(spec, n_starts, rng, spread) if n_starts > 1 else spec.start[None]
-    outcomes = tuple(minimize_from(objective, spec, s, optimizer, max_evals) for s in starts)
-    costs = np.array([o.cost for o in outcomes])
-    best = int(np.nanargmin(np.where(np.isfinite(costs), costs, np.nan)))
+    scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if method == "ls" else 0.0
+    outcomes, search = global_search(
+        objective, spec, method, rng, optimizer, n_starts, max_evals, scale=scale
+    )
+    best = search.optima[0].starts[0]
     win = outcomes[best]
     theta = win.end
     names = spec.names
     d = spec.n_free
     flags: list[str] = []
+    notes: list[str] = []
+    issues: list[str] = []
+    positive_definite = True
+    near = spec.near_bound(theta)
     if uncertainty:
         H = hessian(objective, spec.to_eta(theta))
         scale = 1.0
         if method == "ls":
             dt = np.diff(data.t)
-            tau = float(np.sum(dt[np.isfinite(data.y[:-1, 0]) & np.isfinite(data.y[1:, 0])]))
+            obs = np.isfinite(data.y).all(axis=1)
+            tau = float(np.sum(dt[obs[:-1] & obs[1:]]))
             scale = 2.0 * win.cost / tau * float(np.mean(dt)) if tau > 0 else math.nan
-        unc = covariance(spec, theta, H, scale)
+        unc = covariance(spec, theta, H, scale, held=near)
         se, corr = unc.std_error, unc.correlation
-        if not unc.positive_definite:
+        positive_definite = unc.positive_definite
+        if not positive_definite:
+            issues.append("hessian")
             flags.append("Hessian not positive definite: the parameters are not identifiable from these data")
+        missing = [n for n, v, b in zip(names, se, near) if not math.isfinite(v) and not b]
+        if missing and positive_definite:
+            issues.append("std_error")
+            flags.append(f"no standard error for {', '.join(missing)}")
     else:
         se, corr = np.full(d, np.nan), np.full((d, d), np.nan)
-    near = spec.near_bound(theta)
-    for n, b in zip(names, near):
-        if b:
+    lower_side = spec.to_eta(theta) - spec.eta_lower <= spec.eta_upper - spec.to_eta(theta)
+    for n, b, low, kind in zip(names, near, lower_side, spec.kinds):
+        if not b:
+            continue
+        if kind == "noise" and low:
+            notes.append(
+                f"{n} is at its lower bound {spec.lower[names.index(n)]:.3g}: that noise is negligible"
+            )
+        else:
+            issues.append("at_bound")
             flags.append(f"{n} is at a bound")
-    if not win.converged:
-        flags.append(f"the winning start did not converge: {win.message}")
+    if not search.converged:
+        issues.append("not_converged")
+        flags.append(f"not converged: {search.reason}")
+    for n, kind in zip(names, spec.kinds):
+        lo_v, hi_v = search.spread[n]
+        if kind in ("resistance", "capacitance", "gain") and search.n_best >= 2:
+            rel = (hi_v / lo_v if lo_v > 0 else math.inf) if kind != "gain" else abs(hi_v - lo_v)
+            wide = rel > 1.1 if kind != "gain" else rel > 0.1 * max(abs(hi_v), 1e-12)
+            if wide:
+                issues.append("starts_disagree")
+                flags.append(
+                    f"starts that reach the same cost disagree on {n} ({lo_v:.3g} to {hi_v:.3g}):"
+                    " the data do not determine it"
+                )
     values = spec.values(theta)
     return FitResult(
         names=names,
@@ -168,9 +272,9 @@ def fit(
         method=method,
         optimizer=optimizer,
         hold=hold,
-        converged=win.converged,
-        n_evals=sum(o.n_evals for o in outcomes),
-        starts=outcomes,
+        converged=search.converged,
+        n_evals=search.n_sampled + sum(o.n_evals for o in outcomes),
+        starts=tuple(outcomes),
         best_start=best,
         lower=dict(zip(names, map(float, spec.lower))),
         upper=dict(zip(names, map(float, spec.upper))),
@@ -180,4 +284,17 @@ def fit(
         rmse_kind="open-loop" if method == "ls" else "one-step",
         fixed={k: v for k, v in values.items() if k not in names},
         flags=tuple(flags),
+        search=search,
+        notes=tuple(notes),
+        issues=tuple(dict.fromkeys(issues)),
+        units=dict(zip(names, (_unit_of(network, n) for n in names))),
     )
+
+
+def _unit_of(network: RCNetwork, name: str) -> str:
+    """SI unit of a free parameter, for tables."""
+    if name in network.parameters:
+        return network.parameters[name].unit or ""
+    if name.startswith("sigma_w_"):
+        return "K/sqrt(s)"
+    return "K" if name.startswith(("sigma_", "x0_")) else ""

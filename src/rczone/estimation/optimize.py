@@ -34,7 +34,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize
-from scipy.stats import qmc
 
 from rczone.errors import ParameterError
 from rczone.estimation.costs import Objective
@@ -50,6 +49,9 @@ GRADIENT_STEP = 1e-5
 
 #: L-BFGS phases that may end on their budget and restart with rescaled variables (see ``_lbfgs``).
 LBFGS_RESCALES = 2
+
+#: Largest |z| of a start: a start exactly on a bound (z infinite) begins this far inside it.
+Z_LIMIT = 30.0
 
 #: Nelder-Mead stopping tolerance on the cost (scaled to 1 at the start).
 FATOL = 1e-12
@@ -183,7 +185,7 @@ def minimize_from(
         def fz(z: np.ndarray) -> float:
             return min(counted(spec.from_z(z)), _BIG)
 
-        z0 = spec.to_z(eta0)
+        z0 = np.clip(spec.to_z(eta0), -Z_LIMIT, Z_LIMIT)  # a start on a bound: just inside it
         simplex = z0 + np.vstack([np.zeros(d), 0.5 * np.eye(d)])
         problem = cost.compiled if optimizer == "nelder-mead" and isinstance(cost, Objective) else None
         if problem is not None:
@@ -316,8 +318,9 @@ def latin_hypercube_starts(
     half = np.where(spec.log, math.log(spread), 0.25 * (hi_b - lo_b))
     lo = np.maximum(lo_b, centre - half)
     hi = np.minimum(hi_b, centre + half)
-    sampler = qmc.LatinHypercube(d=spec.n_free, rng=rng)
-    unit = sampler.random(n_starts - 1)
+    from rczone.estimation.search import latin_hypercube
+
+    unit = latin_hypercube(n_starts - 1, spec.n_free, rng)
     # keep starts strictly inside the bounds (the logit transform needs it)
     unit = 1e-6 + (1 - 2e-6) * unit
     out[1:] = spec.to_theta(lo + unit * (hi - lo))

@@ -10,6 +10,16 @@ from typing import Any
 import numpy as np
 
 from rczone.estimation.optimize import StartOutcome
+from rczone.estimation.search import SearchSummary
+
+#: Codes of :attr:`FitResult.issues`: what makes a result untrustworthy (CLI exit code 3).
+ISSUES = {
+    "at_bound": "an estimate is at a bound of its search box",
+    "std_error": "a standard error could not be computed",
+    "hessian": "the Hessian is not positive definite (the parameters are not identifiable)",
+    "not_converged": "the search has not settled on one optimum",
+    "starts_disagree": "starts that reach the same cost disagree on an estimate",
+}
 
 
 def _num(v: float) -> float | None:
@@ -54,7 +64,16 @@ class FitResult:
     fixed : dict of str to float
         Values of the non-free parameters used.
     flags : tuple of str
-        Human-readable warnings (at bound, not converged, Hessian not positive definite).
+        Human-readable warnings (at bound, not converged, Hessian not positive definite, starts
+        that disagree, missing standard errors): each makes the result untrustworthy.
+    search : SearchSummary, optional
+        How the optimum was found: distinct optima, how many starts reached each, the spread.
+    notes : tuple of str
+        Findings that do not make the result untrustworthy (a noise level at its floor).
+    issues : tuple of str
+        Codes of the flags (keys of :data:`ISSUES`); empty when the result can be trusted.
+    units : dict of str to str
+        SI unit of each free parameter.
     """
 
     names: tuple[str, ...]
@@ -77,6 +96,35 @@ class FitResult:
     rmse_kind: str
     fixed: Mapping[str, float] = field(default_factory=dict)
     flags: tuple[str, ...] = ()
+    search: SearchSummary | None = None
+    notes: tuple[str, ...] = ()
+    issues: tuple[str, ...] = ()
+    units: Mapping[str, str] = field(default_factory=dict)
+
+    @property
+    def trustworthy(self) -> bool:
+        """No flag: estimates inside their bounds, standard errors, a settled search."""
+        return not self.issues
+
+    def to_frame(self):
+        """One row per free parameter: estimate, standard error, unit, bounds, construction, at bound."""
+        import pandas as pd
+
+        rows = [
+            {
+                "parameter": n,
+                "estimate": self.estimates[n],
+                "std_error": self.std_errors[n],
+                "unit": self.units.get(n, ""),
+                "lower": self.lower[n],
+                "upper": self.upper[n],
+                "construction": self.construction[n],
+                "ratio_to_construction": self.ratio_to_construction(n),
+                "at_bound": self.at_bound[n],
+            }
+            for n in self.names
+        ]
+        return pd.DataFrame(rows).set_index("parameter")
 
     def ratio_to_construction(self, name: str) -> float:
         """``estimate / construction`` (NaN without a construction value)."""
@@ -105,6 +153,7 @@ class FitResult:
                 "upper": _num(self.upper[n]),
                 "ratio_to_construction": _num(self.ratio_to_construction(n)),
                 "at_bound": bool(self.at_bound[n]),
+                "unit": self.units.get(n, ""),
             }
             for n in self.names
         }
@@ -126,5 +175,9 @@ class FitResult:
             "rmse_kind": self.rmse_kind,
             "fixed": {k: _num(v) for k, v in self.fixed.items()},
             "flags": list(self.flags),
+            "issues": list(self.issues),
+            "trustworthy": self.trustworthy,
+            "notes": list(self.notes),
+            "search": self.search.to_dict(self.names) if self.search is not None else None,
             "starts": self.starts_table(),
         }

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtri
 
 from rczone.errors import ParameterError
 from rczone.estimation.parameters import ParameterSpec
@@ -96,20 +96,35 @@ class Uncertainty:
 
 
 def covariance(
-    spec: ParameterSpec, theta_hat: np.ndarray, H_eta: np.ndarray, scale: float = 1.0
+    spec: ParameterSpec,
+    theta_hat: np.ndarray,
+    H_eta: np.ndarray,
+    scale: float = 1.0,
+    held: np.ndarray | None = None,
 ) -> Uncertainty:
-    """Covariances from the Hessian of the cost in eta (``cov_eta = scale * H^{-1}``)."""
+    """Covariances from the Hessian of the cost in eta (``cov_eta = scale * H^{-1}``).
+
+    ``held`` marks parameters at a bound of their box: the estimate there is not a stationary
+    point, so they are treated as fixed (their rows and columns are dropped from ``H``, their
+    standard errors are NaN) and the others' covariance is the inverse of the remaining block,
+    the usual treatment of a boundary estimate (Pawitan 2001, section 4.7).
+    """
     d = spec.n_free
+    keep = np.ones(d, dtype=bool) if held is None else ~np.asarray(held, dtype=bool)
+    Hk = H_eta[np.ix_(keep, keep)]
+    nan = np.full((d, d), np.nan)
+    if not keep.any():
+        return Uncertainty(H_eta, nan, nan, np.full(d, np.nan), nan, True)
     try:
-        np.linalg.cholesky(H_eta)
+        np.linalg.cholesky(Hk)
         pd = True
     except np.linalg.LinAlgError:
         pd = False
     if not pd:
-        nan = np.full((d, d), np.nan)
         return Uncertainty(H_eta, nan, nan, np.full(d, np.nan), nan, False)
-    cov_eta = scale * np.linalg.inv(H_eta)
-    cov_eta = 0.5 * (cov_eta + cov_eta.T)
+    cov_eta = nan.copy()
+    ck = scale * np.linalg.inv(Hk)
+    cov_eta[np.ix_(keep, keep)] = 0.5 * (ck + ck.T)
     J = spec.jacobian(spec.to_eta(theta_hat))
     cov_theta = cov_eta * np.outer(J, J)
     se = np.sqrt(np.diag(cov_theta))
@@ -212,7 +227,7 @@ def profile(
         sub_obj = dataclasses.replace(objective, spec=sub)
         out = minimize_from(sub_obj, sub, rest, optimizer)
         costs[k], others[k] = out.cost, out.end
-    thr = costs.min() + 0.5 * chi2.ppf(level, 1)
+    thr = costs.min() + 0.5 * chdtri(1, 1.0 - level)  # chi2(1) quantile
     return Profile(name, grid, costs, others, _crossings(grid, costs, thr))
 
 

@@ -16,11 +16,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.special import chdtrc
 
-from rczone.errors import ParameterError
-from rczone.estimation.costs import filter_arrays, simulate_output
+from rczone.errors import InputShapeError, ParameterError
+from rczone.estimation.costs import filter_arrays, run_filter, simulate_output
 from rczone.estimation.data import Dataset
+from rczone.estimation.innovations import acf, ljung_box_q
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
 from rczone.network import RCNetwork
 
@@ -51,8 +52,40 @@ def open_loop_error(
     """Simulate ``network`` with ``values`` (base parameters, optional ``x0_*``) on ``data``."""
     data.check_against(network)
     _, yhat = simulate_output(network, values, data, hold)
+    if not np.all(np.isfinite(yhat)):
+        k = int(np.flatnonzero(~np.isfinite(yhat).all(axis=1))[0])
+        raise InputShapeError(
+            f"the model's prediction is not finite from sample {k} on; its parameter values or inputs"
+            " are not usable"
+        )
     e = data.y - yhat
     return OpenLoopError(data.t, yhat, e, float(np.sqrt(np.nanmean(e**2))), float(np.nanmax(np.abs(e))))
+
+
+def open_loop_band(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop prediction and its standard deviation from the model's noise levels.
+
+    The Kalman filter of the stochastic model is run with every measurement after the first
+    removed: it conditions the state on the first measurement and then only predicts, so its
+    mean is the open-loop simulation and its innovation covariance ``C P C' + R`` is the variance
+    of the measurement around it (process noise accumulated since the start, plus measurement
+    noise). ``values`` must hold the noise levels (``sigma_v``, ``sigma_w_*``, ``sigma_x0_*``).
+
+    Returns
+    -------
+    y_hat : ndarray, shape (N, ny)
+    sd : ndarray, shape (N, ny)
+    """
+    y = np.full_like(data.y, np.nan)
+    y[0] = data.y[0]
+    masked = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+    out = run_filter(network, values, masked, hold)
+    _, _, _, _, _, u, _, _, _, C, D, _ = filter_arrays(network, values, masked, hold)
+    y_hat = out.x_pred @ C.T + u @ D.T
+    sd = np.sqrt(np.einsum("kii->ki", out.S))
+    return y_hat, sd
 
 
 @dataclass(frozen=True, eq=False)
@@ -139,12 +172,7 @@ def ljung_box(residuals: np.ndarray, n_lags: int = 20, dof: int = 0) -> Residual
         raise ParameterError(f"n_lags must be between 1 and n-2 = {n - 2}, got {n_lags}")
     if not 0 <= dof < n_lags:
         raise ParameterError(f"dof must be in [0, n_lags), got {dof}")
-    r = r - r.mean()
-    c0 = float(r @ r) / n
-    if c0 == 0:
-        raise ParameterError("the residuals are constant; their autocorrelation is undefined")
-    lags = np.arange(1, n_lags + 1)
-    acf = np.array([float(r[:-k] @ r[k:]) / n / c0 for k in lags])
-    q = float(n * (n + 2) * np.sum(acf**2 / (n - lags)))
-    p = float(chi2.sf(q, n_lags - dof))
-    return ResidualTest(lags, acf, q, p, p > 0.05)
+    r_k = acf(r, n_lags)[1:]
+    q = ljung_box_q(r_k, n)
+    p = float(chdtrc(n_lags - dof, q))  # chi2 survival function
+    return ResidualTest(np.arange(1, n_lags + 1), r_k, q, p, p > 0.05)

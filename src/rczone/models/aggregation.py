@@ -92,6 +92,10 @@ from rczone.models.elements import SurfaceElement, _check_option
 OUTDOOR = "To"
 #: What happens to the external wall's capacity in the 2nd-order models.
 EXTERNAL_CAPACITY_OPTIONS = ("room-side", "all", "none")
+#: Rules for the reduced 2nd-order model's values (:func:`reduced_values`).
+REDUCTION_RULES = ("parallel", "band")
+#: The rule behind the reduced model's construction values (priors, starts, diagnose).
+REDUCED_RULE = "parallel"
 #: Which capacities form the first-order model's capacity.
 FIRST_ORDER_CAPACITY_OPTIONS = ("room", "all")
 
@@ -166,9 +170,26 @@ def second_order_values(
 
 
 def reduced_values(
-    cr: float, rwin: float, elements: Sequence[SurfaceElement], external_capacity: str = "none"
+    cr: float,
+    rwin: float,
+    elements: Sequence[SurfaceElement],
+    external_capacity: str = "none",
+    rule: str = REDUCED_RULE,
 ) -> dict[str, float]:
-    """Base parameter values of the reduced 2nd-order model: ``Cr, Rw, Cw, Rwin`` (R1 = R2 = Rw/2)."""
+    """Base parameter values of the reduced 2nd-order model: ``Cr, Rw, Cw, Rwin`` (R1 = R2 = Rw/2).
+
+    Parameters
+    ----------
+    rule : {"parallel", "band"}
+        ``"parallel"``: this module's aggregation (every DC gain kept). ``"band"``: the values
+        matched to the full model's response over the paper's band
+        (:func:`rczone.models.reduction.band_matched`; ``external_capacity`` does not apply).
+    """
+    _check_option(rule, REDUCTION_RULES, "reduction rule")
+    if rule == "band":
+        from rczone.models.reduction import band_matched  # reduction builds on this module
+
+        return band_matched(cr, rwin, elements, "second-order-paper").values
     return {
         "Cr": float(cr),
         "Rw": wall_resistance(elements),

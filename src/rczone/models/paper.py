@@ -35,6 +35,7 @@ from rczone.construction.room import AIR_CP, ZoneGeometry, office_241
 from rczone.errors import InputShapeError, ParameterError, did_you_mean
 from rczone.models.aggregation import first_order_values, reduced_values, second_order_values
 from rczone.models.elements import full_scale_values, surface_elements
+from rczone.models.zone import ModelInputs, ZoneModel
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 
 #: The five surrounding temperatures of the paper's zone, in the full model's input order.
@@ -191,8 +192,12 @@ def second_order_reduced(
         [
             Parameter("Cr", "capacitance", v["Cr"], description="room air and furnishings (estimated)"),
             Parameter("Rw", "resistance", v["Rw"], description="wall, room to surroundings (estimated)"),
-            Parameter("Cw", "capacitance", v["Cw"], description="walls, fixed at the construction value"),
-            Parameter("Rwin", "resistance", v["Rwin"], description="window and external wall, fixed"),
+            Parameter(
+                "Cw", "capacitance", v["Cw"], description="walls, fixed at the construction value", fixed=True
+            ),
+            Parameter(
+                "Rwin", "resistance", v["Rwin"], description="window and external wall, fixed", fixed=True
+            ),
             Parameter("R1", "resistance", expr="Rw/2", description="room half of the wall"),
             Parameter("R2", "resistance", expr="Rw/2", description="far half of the wall"),
         ],
@@ -310,3 +315,31 @@ def surroundings_to_tsd(
     tsd = u[:, [col[n] for n in surroundings]].mean(axis=1)
     out = np.column_stack([u[:, col["To"]], tsd, u[:, col["Ts"]], u[:, col["Q"]]])
     return out, LOW_ORDER_INPUTS
+
+
+#: The paper's constant internal gain (idle PC and printer), W, used when data carry no ``Q``.
+Q_PAPER = 50.0
+
+
+def paper_inputs(network: RCNetwork) -> ModelInputs:
+    """How the paper's models find their inputs: ``Q`` = 50 W unless measured, ``Tsd`` = mean of the surroundings."""
+    desc = {
+        "To": "outdoor air temperature, degC",
+        "Tsd": "mean temperature of the surrounding spaces (floor, ceiling, neighbours, hallway), degC",
+        "Ts": "supply-air temperature, degC",
+        "m": "supply-air mass flow, kg/s",
+        "Q": "internal heat gain, W (the paper: a constant 50 W)",
+    }
+    desc.update({s: "temperature of a surrounding space, degC" for s in SURROUNDINGS})
+    names = (*network.input_names, *network.flow_names)
+    return ModelInputs(
+        defaults={"Q": Q_PAPER} if "Q" in names else {},
+        mean_of={"Tsd": SURROUNDINGS} if "Tsd" in names else {},
+        descriptions={k: v for k, v in desc.items() if k in names},
+    )
+
+
+def paper_model(name: str, geometry: ZoneGeometry | None = None, **options: str) -> ZoneModel:
+    """One of the paper's models (:func:`get_model`) as a :class:`ZoneModel` with its input conventions."""
+    net = get_model(name, geometry, **options)
+    return ZoneModel(net, inputs=paper_inputs(net), source=name)

@@ -29,6 +29,7 @@ References
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -36,13 +37,22 @@ from functools import cached_property
 import numpy as np
 
 from rczone.errors import NetworkError, ParameterError, did_you_mean
-from rczone.network.parameters import Parameter, check_declarations, evaluate_ties, resolve
+from rczone.network.parameters import (
+    ESTIMATED_KINDS,
+    Parameter,
+    check_declarations,
+    evaluate_ties,
+    resolve,
+)
 from rczone.network.statespace import BilinearStateSpace, StateSpaceDerivative
 
 #: Specific heat of air at constant pressure, J/(kg K), used when none is given.
 CP_AIR = 1005.0
 
 Value = str | float
+
+#: SI units a heat input's signal may have (the split's gains make W of it).
+HEAT_INPUT_UNITS = ("W", "W/m2")
 
 
 def _check_positive(values: np.ndarray, names: Sequence[Value], what: str) -> None:
@@ -93,16 +103,28 @@ class HeatInput:
     split : mapping of node name to gain
         Fraction (or any gain; a parameter name or a number) of the input delivered to
         each node. ``{"Ti": 1.0}`` puts it all on ``Ti``.
+    unit : {"W", "W/m2"}
+        SI unit of the input signal: a heat flow, or an irradiance that gains in m2 (an
+        effective aperture such as ``Aw``) turn into a heat flow.
     """
 
     name: str
     split: tuple[tuple[str, Value], ...]
+    unit: str = "W"
 
-    def __init__(self, name: str, split: Mapping[str, Value] | str) -> None:
+    def __init__(self, name: str, split: Mapping[str, Value] | str, unit: str = "W") -> None:
         if isinstance(split, str):
             split = {split: 1.0}
+        if not isinstance(split, Mapping):
+            raise NetworkError(f"heat input {name!r}: split must map node names to gains, got {split!r}")
+        if unit not in HEAT_INPUT_UNITS:
+            raise NetworkError(
+                f"heat input {name!r}: unit {unit!r} is not one of {', '.join(HEAT_INPUT_UNITS)}"
+                " (SI units of the input signal; the gains turn it into W)"
+            )
         object.__setattr__(self, "name", name)
         object.__setattr__(self, "split", tuple(split.items()))
+        object.__setattr__(self, "unit", unit)
 
 
 @dataclass(frozen=True)
@@ -262,11 +284,38 @@ class RCNetwork:
         """Base (untied) parameter names."""
         return tuple(n for n, p in self.parameters.items() if not p.is_tied)
 
+    @property
+    def default_free(self) -> tuple[str, ...]:
+        """Parameters a fit estimates unless told otherwise.
+
+        Every base resistance, capacitance and gain not declared ``fixed`` (the declaration
+        is the model's, so a model file or a built-in model says what is usually estimated;
+        the paper's reduced model, for example, fixes ``Cw`` and ``Rwin``).
+        """
+        return tuple(
+            n
+            for n, p in self.parameters.items()
+            if not p.is_tied and not p.fixed and p.kind in ESTIMATED_KINDS
+        )
+
     # -------------------------------------------------------------- validation
     def _validate(self) -> None:
         node_names = [n.name for n in self.nodes]
         if not node_names:
             raise NetworkError(f"network {self.name!r} has no nodes")
+        signals = [
+            *node_names,
+            *self.boundaries,
+            *(h.name for h in self.heat_inputs),
+            *(x for s in self.supply_air for x in (s.flow, s.temperature, s.node)),
+            *self.outputs,
+        ]
+        for nm in signals:
+            if not isinstance(nm, str) or not nm.strip() or any(ord(ch) < 32 for ch in nm):
+                raise NetworkError(
+                    f"network {self.name!r}: {nm!r} is not a usable node or signal name"
+                    " (a non-empty string without control characters)"
+                )
         seen: set[str] = set()
         for nm in (*node_names, *self.boundaries):
             if nm in seen:
@@ -285,11 +334,18 @@ class RCNetwork:
                     raise NetworkError(
                         f"{where} refers to undeclared parameter {v!r}; " + did_you_mean(v, params)
                     )
-                if kind and params[v].kind not in (kind, "other"):
+                if kind in ("resistance", "capacitance") and params[v].kind not in (kind, "other"):
                     raise NetworkError(f"{where} uses {v!r}, declared as a {params[v].kind}, not a {kind}")
             else:
-                val = float(v)
-                if kind in ("resistance", "capacitance") and not val > 0:
+                try:
+                    if isinstance(v, bool):
+                        raise TypeError
+                    val = float(v)
+                except (TypeError, ValueError, OverflowError):
+                    raise NetworkError(f"{where}: {v!r} is neither a number nor a parameter name") from None
+                if not math.isfinite(val):
+                    raise ParameterError(f"{where}: {val!r} is not finite")
+                if kind in ("resistance", "capacitance", "positive") and not val > 0:
                     raise ParameterError(f"{where}: a {kind} must be > 0, got {val:g}")
 
         def check_node(n: str, where: str, allowed: Iterable[str]) -> None:
@@ -328,7 +384,7 @@ class RCNetwork:
                 raise NetworkError(f"flow name {s.flow!r} clashes with a node or input name")
             if s.temperature in node_names:
                 raise NetworkError(f"supply temperature {s.temperature!r} is a node, not an input")
-            check_value(s.cp, f"supply air {s.flow!r} cp", "")
+            check_value(s.cp, f"supply air {s.flow!r} cp", "positive")
         for o in self.outputs:
             check_node(o, "output", node_names)
         self._check_floating()

@@ -4,22 +4,39 @@ A parameter is either *base* (a value the user or an optimizer supplies) or *tie
 (an arithmetic expression over other parameters, such as the paper's ``R1 = Rw/2``).
 :func:`resolve` turns a mapping of base values into the value of every parameter,
 checking names, signs and expressions on the way. It never mutates its inputs.
+
+A base parameter also carries its estimation settings, as lmfit's and pySIP's parameters do:
+``bounds`` (the box an optimizer searches, physical units) and ``fixed`` (held at its value
+unless a fit names it explicitly). The structure stays frozen; a fit never changes it.
+
+Expressions are untrusted text (they come from model files): they are parsed into a small
+tree of numbers, names and ``+ - * / **`` and evaluated in floating point by rczone itself,
+never by Python's ``eval``. Length, size, nesting and constant exponents are bounded, and a
+result that overflows, is not a real number or is not finite is an error, so an expression
+can neither run code nor hang nor crash the process.
 """
 
 from __future__ import annotations
 
 import ast
+import cmath
 import functools
+import keyword
 import math
 import operator
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from types import CodeType
 
 from rczone.errors import ParameterError, did_you_mean
 
 #: Kinds of parameter; ``resistance`` and ``capacitance`` must be strictly positive.
 KINDS = ("resistance", "capacitance", "gain", "other")
+
+#: Kinds estimated by default (unless declared ``fixed``).
+ESTIMATED_KINDS = ("resistance", "capacitance", "gain")
+
+#: Name prefixes of the estimation's own parameters (noise, initial state), not network parameters.
+RESERVED_PREFIXES = ("sigma_", "x0_")
 
 _UNITS = {"resistance": "K/W", "capacitance": "J/K", "gain": "1", "other": ""}
 
@@ -31,6 +48,12 @@ _BINOPS = {
     ast.Pow: operator.pow,
 }
 _UNOPS = {ast.USub: operator.neg, ast.UAdd: operator.pos}
+
+#: Limits on a tie expression: characters, tree nodes, nesting depth, |constant exponent|.
+MAX_EXPRESSION_LENGTH = 200
+MAX_EXPRESSION_NODES = 64
+MAX_EXPRESSION_DEPTH = 16
+MAX_CONSTANT_EXPONENT = 64.0
 
 
 @dataclass(frozen=True)
@@ -52,6 +75,13 @@ class Parameter:
         SI unit, defaults from ``kind`` (K/W, J/K, 1).
     description : str
         Free text for reports.
+    bounds : (float, float), optional
+        Box an estimation searches, physical units; ``lower < value < upper`` and, for a
+        resistance or capacitance, ``lower > 0``. Default: chosen by the estimation
+        (a factor 1000 around the value for a positive parameter).
+    fixed : bool
+        Held at ``value`` unless a fit names it as free. Default False: base resistances,
+        capacitances and gains are estimated (:attr:`RCNetwork.default_free`).
     """
 
     name: str
@@ -60,10 +90,17 @@ class Parameter:
     expr: str | None = None
     unit: str | None = None
     description: str = ""
+    bounds: tuple[float, float] | None = None
+    fixed: bool = False
 
     def __post_init__(self) -> None:
-        if not self.name.isidentifier():
+        if not isinstance(self.name, str) or not self.name.isidentifier() or keyword.iskeyword(self.name):
             raise ParameterError(f"parameter name {self.name!r} is not a valid identifier")
+        if self.name.startswith(RESERVED_PREFIXES):
+            raise ParameterError(
+                f"parameter name {self.name!r}: names starting with {' or '.join(RESERVED_PREFIXES)} are"
+                " reserved for the noise and initial-state parameters of the estimation"
+            )
         if self.kind not in KINDS:
             raise ParameterError(
                 f"parameter {self.name!r}: kind {self.kind!r} is not one of {', '.join(KINDS)}"
@@ -75,13 +112,54 @@ class Parameter:
                 raise ParameterError(f"parameter {self.name!r} has both a value and an expression; give one")
             expression_names(self.expr)  # syntax check now, not at first use
         if self.value is not None:
-            object.__setattr__(self, "value", float(self.value))
+            try:
+                if isinstance(self.value, bool):
+                    raise TypeError
+                object.__setattr__(self, "value", float(self.value))
+            except (TypeError, ValueError, OverflowError):
+                raise ParameterError(
+                    f"parameter {self.name!r}: value {self.value!r} is not a number"
+                ) from None
             _check_value(self, self.value)
+        if not isinstance(self.fixed, bool):
+            raise ParameterError(f"parameter {self.name!r}: fixed must be true or false, got {self.fixed!r}")
+        if self.expr is not None and (self.bounds is not None or self.fixed):
+            raise ParameterError(
+                f"parameter {self.name!r} is tied ({self.name} = {self.expr}); it follows its expression,"
+                " so bounds and fixed belong to the parameters it depends on"
+            )
+        if self.bounds is not None:
+            object.__setattr__(self, "bounds", _check_bounds(self, self.bounds))
 
     @property
     def is_tied(self) -> bool:
         """True when the parameter is defined by an expression."""
         return self.expr is not None
+
+
+def _check_bounds(p: Parameter, bounds: object) -> tuple[float, float]:
+    try:
+        lo, hi = (float(b) for b in bounds)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"parameter {p.name!r}: bounds must be two numbers [lower, upper], got {bounds!r}"
+        ) from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ParameterError(
+            f"parameter {p.name!r}: bounds [{lo:g}, {hi:g}] must be finite with lower < upper"
+            " (they are never swapped)"
+        )
+    if p.kind in ("resistance", "capacitance") and lo <= 0:
+        raise ParameterError(
+            f"parameter {p.name!r}: the lower bound of a {p.kind} must be > 0, got {lo:g}"
+            " (it is estimated in log space)"
+        )
+    if p.value is not None and not lo < p.value < hi:
+        raise ParameterError(
+            f"parameter {p.name!r} = {p.value:g} {p.unit} is not strictly inside its bounds"
+            f" [{lo:g}, {hi:g}]; move the value or widen the bounds"
+        )
+    return lo, hi
 
 
 def _check_value(p: Parameter, v: float) -> None:
@@ -94,51 +172,144 @@ def _check_value(p: Parameter, v: float) -> None:
         )
 
 
-def expression_names(expr: str) -> tuple[str, ...]:
-    """Names used in a parameter expression, validating its syntax.
-
-    Only numbers, names, ``+ - * / **`` and parentheses are allowed.
-    """
+def _parse(expr: str) -> ast.expr:
+    """The syntax tree of a tie expression, within the size limits, or :class:`ParameterError`."""
+    if not isinstance(expr, str):
+        raise ParameterError(f"a parameter expression must be text, got {type(expr).__name__}")
+    if len(expr) > MAX_EXPRESSION_LENGTH:
+        raise ParameterError(
+            f"parameter expression of {len(expr)} characters is longer than the limit of"
+            f" {MAX_EXPRESSION_LENGTH}; write ties as short arithmetic such as 'Rw/2'"
+        )
     try:
         tree = ast.parse(expr, mode="eval")
     except SyntaxError as exc:
         raise ParameterError(f"invalid parameter expression {expr!r}: {exc.msg}") from None
-    names: list[str] = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Name):
-            names.append(node.id)
-        elif not isinstance(
-            node,
-            (ast.Expression, ast.BinOp, ast.UnaryOp, ast.Constant, ast.Load, *_BINOPS, *_UNOPS),
-        ):
-            raise ParameterError(
-                f"parameter expression {expr!r} uses {type(node).__name__}; only numbers,"
-                " parameter names, + - * / ** and parentheses are allowed"
-            )
-        if isinstance(node, ast.Constant) and not isinstance(node.value, (int, float)):
+    except (RecursionError, MemoryError, ValueError):
+        raise ParameterError(f"invalid parameter expression {expr!r}: too deeply nested") from None
+    return tree.body
+
+
+def _check_tree(expr: str, node: ast.AST, depth: int, count: list[int]) -> None:
+    count[0] += 1
+    if count[0] > MAX_EXPRESSION_NODES:
+        raise ParameterError(
+            f"parameter expression {expr!r} has more than {MAX_EXPRESSION_NODES} terms; write ties"
+            " as short arithmetic"
+        )
+    if depth > MAX_EXPRESSION_DEPTH:
+        raise ParameterError(
+            f"parameter expression {expr!r} is nested more than {MAX_EXPRESSION_DEPTH} levels deep"
+        )
+    if isinstance(node, ast.Name):
+        return
+    if isinstance(node, ast.Constant):
+        if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
             raise ParameterError(f"parameter expression {expr!r} contains a non-number")
-    return tuple(dict.fromkeys(names))
+        if isinstance(node.value, float) and not math.isfinite(node.value):
+            raise ParameterError(f"parameter expression {expr!r} contains a non-finite number")
+        return
+    if isinstance(node, ast.UnaryOp) and type(node.op) in _UNOPS:
+        _check_tree(expr, node.operand, depth + 1, count)
+        return
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+        if isinstance(node.op, ast.Pow):
+            k = _constant(node.right)
+            if k is not None and not abs(k) <= MAX_CONSTANT_EXPONENT:
+                raise ParameterError(
+                    f"parameter expression {expr!r}: exponent {k:g} is larger than"
+                    f" {MAX_CONSTANT_EXPONENT:g} in magnitude"
+                )
+        _check_tree(expr, node.left, depth + 1, count)
+        _check_tree(expr, node.right, depth + 1, count)
+        return
+    raise ParameterError(
+        f"parameter expression {expr!r} uses {type(node).__name__}; only numbers,"
+        " parameter names, + - * / ** and parentheses are allowed"
+    )
+
+
+def _constant(node: ast.AST) -> float | None:
+    """The value of a signed numeric literal, else None."""
+    sign = 1.0
+    while isinstance(node, ast.UnaryOp) and type(node.op) in _UNOPS:
+        sign = -sign if isinstance(node.op, ast.USub) else sign
+        node = node.operand
+    if (
+        isinstance(node, ast.Constant)
+        and isinstance(node.value, (int, float))
+        and not isinstance(node.value, bool)
+    ):
+        try:
+            return sign * float(node.value)
+        except OverflowError:
+            return math.inf
+    return None
+
+
+def expression_names(expr: str) -> tuple[str, ...]:
+    """Names used in a parameter expression, validating its syntax and size.
+
+    Only numbers, names, ``+ - * / **`` and parentheses are allowed, within
+    :data:`MAX_EXPRESSION_LENGTH` characters, :data:`MAX_EXPRESSION_NODES` nodes,
+    :data:`MAX_EXPRESSION_DEPTH` levels and constant exponents up to
+    :data:`MAX_CONSTANT_EXPONENT` in magnitude.
+    """
+    return _program(expr)[1]
+
+
+Number = float | complex
+
+
+def _real_pow(a: Number, b: Number) -> Number:
+    v = a**b
+    if isinstance(v, complex) and not (isinstance(a, complex) or isinstance(b, complex)):
+        raise ArithmeticError("is not a real number (a negative number to a fractional power)")
+    return v
+
+
+def _closure(node: ast.AST) -> Callable[[Mapping[str, Number]], Number]:
+    """A function of the parameter values that evaluates ``node`` in floating point."""
+    if isinstance(node, ast.Name):
+        name = node.id
+        return lambda v: v[name]
+    if isinstance(node, ast.Constant):
+        c = float(node.value)
+        return lambda v: c
+    if isinstance(node, ast.UnaryOp):
+        f = _closure(node.operand)
+        return (lambda v: -f(v)) if isinstance(node.op, ast.USub) else f
+    left, right = _closure(node.left), _closure(node.right)  # type: ignore[attr-defined]
+    op = _real_pow if isinstance(node.op, ast.Pow) else _BINOPS[type(node.op)]  # type: ignore[attr-defined]
+    return lambda v: op(left(v), right(v))
 
 
 @functools.lru_cache(maxsize=1024)
-def _compiled(expr: str) -> CodeType:
-    """Byte code of ``expr``, compiled once per distinct expression.
-
-    The expression is validated first (:func:`expression_names`: only numbers, names and
-    arithmetic), so evaluating it with no builtins cannot do anything but arithmetic.
-    """
-    expression_names(expr)
-    return compile(ast.parse(expr, mode="eval"), f"<parameter expression {expr!r}>", "eval")
+def _program(expr: str) -> tuple[Callable[[Mapping[str, Number]], Number], tuple[str, ...]]:
+    """``(evaluate, names)`` of a validated expression, built once per distinct expression."""
+    body = _parse(expr)
+    _check_tree(expr, body, 0, [0])
+    names = tuple(dict.fromkeys(n.id for n in ast.walk(body) if isinstance(n, ast.Name)))
+    return _closure(body), names
 
 
-def _evaluate(expr: str, values: Mapping[str, float | complex]) -> float | complex:
+def _evaluate(expr: str, values: Mapping[str, Number]) -> Number:
+    """Value of ``expr`` in floating point (complex values pass through, for complex steps)."""
+    fn, _ = _program(expr)
     try:
-        v = eval(_compiled(expr), {"__builtins__": {}}, values)  # validated arithmetic only
+        v = fn(values)
     except ZeroDivisionError:
         raise ParameterError(f"parameter expression {expr!r} divides by zero") from None
-    except NameError as exc:
-        raise ParameterError(f"parameter expression {expr!r}: {exc}") from None
-    return v if isinstance(v, complex) else float(v)
+    except OverflowError:
+        raise ParameterError(f"parameter expression {expr!r} overflows (its value is too large)") from None
+    except ArithmeticError as exc:
+        raise ParameterError(f"parameter expression {expr!r} {exc}") from None
+    except KeyError as exc:
+        raise ParameterError(f"parameter expression {expr!r}: name {exc.args[0]!r} has no value") from None
+    finite = cmath.isfinite(v) if isinstance(v, complex) else math.isfinite(v)
+    if not finite:
+        raise ParameterError(f"parameter expression {expr!r} is not finite ({v!r})")
+    return v
 
 
 def proportional_base(params: Mapping[str, Parameter], name: str) -> tuple[float, str | None] | None:
@@ -152,6 +323,7 @@ def proportional_base(params: Mapping[str, Parameter], name: str) -> tuple[float
     """
 
     def walk(node: ast.AST) -> tuple[float, str | None] | None:
+        # the expressions were validated (and so bounded) when the parameters were declared
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
             return float(node.value), None
         if isinstance(node, ast.Name):

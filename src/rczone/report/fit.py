@@ -15,7 +15,7 @@ from rczone.report.html import Report
 
 
 def parameter_rows(cal: Calibration) -> list[dict[str, object]]:
-    """One row per free parameter: estimate, standard error, construction value, ratio, flags."""
+    """One row per free parameter: estimate, unit, standard error, construction value, ratio, flags."""
     r = cal.result
     rows = []
     for n in r.names:
@@ -24,6 +24,7 @@ def parameter_rows(cal: Calibration) -> list[dict[str, object]]:
             {
                 "parameter": n,
                 "estimate": r.estimates[n],
+                "unit": r.units.get(n, ""),
                 "std. error": se if math.isfinite(se) else None,
                 "construction": r.construction[n] if math.isfinite(r.construction[n]) else None,
                 "estimate / construction": r.ratio_to_construction(n)
@@ -63,21 +64,7 @@ def fit_report(
     )
     rep.paragraph(f"Open-loop RMSE {ol.rmse_K:.3f} K, largest error {ol.max_abs_K:.3f} K.")
     rep.table(parameter_rows(cal), "Estimates beside their construction (ASHRAE) values", digits=4)
-    res = cal.residuals
-    rep.heading("Residuals")
-    rep.figure(
-        "residual_acf",
-        figs.residual_acf(res.lags, res.acf, len(ol.t)),
-        "Autocorrelation of the open-loop error",
-    )
-    rep.paragraph(
-        f"Ljung-Box Q = {res.q_statistic:.1f}, p = {res.p_value:.3g}: the residuals are "
-        + (
-            "consistent with white noise."
-            if res.white_at_5pct
-            else "<b>not</b> white; the model misses some dynamics or inputs."
-        )
-    )
+    add_residuals(rep, cal)
     if diag is not None:
         rep.heading("Can these data identify the parameters?")
         add_verdicts(rep, diag)
@@ -93,6 +80,79 @@ def fit_report(
     if checks:
         add_checks(rep, cal, checks)
     return rep
+
+
+def add_residuals(rep: Report, cal: Calibration) -> None:
+    """The innovations of an ML fit, or the open-loop error of an LS fit labelled as such."""
+    inn, olr = cal.innovations, cal.open_loop_residuals
+    if inn is not None:
+        rep.heading("Innovations: is anything left to explain?")
+        rep.paragraph(
+            "The one-step-ahead prediction errors of the Kalman filter, each divided by its predicted"
+            " standard deviation. For an adequate model they are white: no autocorrelation beyond the"
+            " band, a cumulative periodogram inside its Kolmogorov-Smirnov band, and no correlation"
+            " with past inputs."
+        )
+        for j, o in enumerate(inn.outputs):
+            _residual_figure(rep, inn, j, "innovations", "Innovations")
+            rep.paragraph(_verdict(inn, j), None if o.white else "warn")
+        if olr is not None:
+            rep.paragraph(
+                f"For comparison, the open-loop error's Ljung-Box p = {olr.ljung_box_p:.3g}: open-loop"
+                " errors accumulate the process noise and are not white even for the true model, so"
+                " their whiteness says nothing about the structure.",
+                "note",
+            )
+    elif olr is not None:
+        rep.heading("Open-loop residuals (not innovations)")
+        rep.paragraph(
+            "A least-squares fit has no noise model, hence no innovations: these are the errors of the"
+            " open-loop simulation. They accumulate every unmodelled disturbance and are <b>not expected"
+            " to be white</b>, even for the right model; fit by ML (--method ml) to test the model"
+            " structure on its innovations.",
+            "note",
+        )
+        for j, o in enumerate(olr.outputs):
+            _residual_figure(rep, olr, j, "open_loop_residuals", "Open-loop error")
+            rep.paragraph(
+                f"Ljung-Box p = {o.p_value:.3g} over {o.lb_lags} lags; autocorrelation at the first lag"
+                f" {o.acf[1]:.2f}."
+            )
+
+
+def _residual_figure(rep: Report, an, j: int, name: str, what: str) -> None:
+    o = an.outputs[j].output
+    rep.figure(
+        f"{name}_{o}" if j else name,
+        figs.residual_panels(an, j),
+        f"{what} of {o}: series, autocorrelation (lags in hours), cumulative periodogram (top axis:"
+        " period) and cross-correlation with each input, 95 % bands",
+    )
+
+
+def _verdict(an, j: int) -> str:
+    """One paragraph saying what the residual statistics of output ``j`` show."""
+    o = an.outputs[j]
+    lag1 = f"{an.lags_h[1] * 60:.0f} min" if an.lags_h[1] < 1 else f"{an.lags_h[1]:.2g} h"
+    parts = [
+        f"Ljung-Box Q = {o.q_statistic:.1f} over {o.lb_lags} lags, p = {o.p_value:.3g}: "
+        + ("consistent with white noise" if o.white else "<b>not</b> white"),
+        f"autocorrelation at {lag1}: {o.acf[1]:.2f} (band ±{o.band:.2f})",
+        "cumulative periodogram "
+        + ("inside" if o.periodogram.inside_band else "<b>outside</b>")
+        + f" its band (largest deviation {o.periodogram.max_deviation:.2f}, band {o.periodogram.band:.2f})",
+    ]
+    worst = o.worst_input()
+    if worst is not None:
+        name, value, k = worst
+        parts.append(
+            f"largest cross-correlation with an input: {html.escape(name)} {value:.2f} at"
+            f" {k * an.dt_s / 3600:.2g} h" + (" (outside the band)" if value > o.band else "")
+        )
+    text = "; ".join(parts) + "."
+    if not o.white:
+        text += " The model misses some dynamics or an input."
+    return text
 
 
 def add_checks(rep: Report, cal: Calibration, checks: dict) -> None:
@@ -127,6 +187,15 @@ def add_checks(rep: Report, cal: Calibration, checks: dict) -> None:
             }
         )
     rep.table(rows, "Checks per parameter (profiles counted per 30 min of correlated error)", digits=3)
+    shown = {n: p for n, p in checks["profiles"].items() if n in r.estimates and len(p.get("values", ())) > 1}
+    if shown:
+        rep.figure(
+            "profiles",
+            figs.profile_curves(shown, dict(r.estimates), dict(r.units)),
+            "Profile of each parameter: the cost re-minimized over the others, its rise above the"
+            " minimum (per 30 min of correlated error); dashed: the 95 % threshold; shaded: the"
+            " profile interval; vertical line: the estimate",
+        )
     if checks["disagreements"]:
         rep.table(
             [

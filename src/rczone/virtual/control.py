@@ -130,6 +130,30 @@ def controller_configs(
     return out
 
 
+def pi_reheat(integral: float, error: float, kp: float, ti: float, span: float) -> tuple[float, float]:
+    """One step of the reheat PI (positional form, clamping anti-windup); returns ``(reheat, integral)``.
+
+    ``reheat`` (K above the AHU supply) is limited to ``[0, span]``; at a limit the integral is
+    frozen while the error would drive it further into saturation.
+    """
+    integ = integral + CONTROL_DT / ti * error
+    reheat = kp * (error + integ)
+    if reheat > span:
+        reheat = span
+        integ = integral if error > 0 else integ
+    elif reheat < 0.0:
+        reheat = 0.0
+        integ = integral if error < 0 else integ
+    return reheat, integ
+
+
+def coil_lag(ts: float | None, command: float, tau: float) -> float:
+    """The reheat coil's first-order lag over one control interval (starts at ``command``)."""
+    if ts is None:
+        return command
+    return ts + (1.0 - math.exp(-CONTROL_DT / tau)) * (command - ts)
+
+
 class VAVController:
     """Run-time state of one VAV box (created per simulation, never shared).
 
@@ -166,21 +190,36 @@ class VAVController:
         if level != self.level:
             self.level = level
             self.last_change = t
-        # Reheat PI (velocity-free positional form with clamping anti-windup).
-        e_h = heat_sp - t_sensed
-        span = c.ts_max - t_ahu
-        integ = self.integral + CONTROL_DT / c.ti * e_h
-        reheat = c.kp * (e_h + integ)
-        if reheat > span:
-            reheat = span
-            integ = self.integral if e_h > 0 else integ
-        elif reheat < 0.0:
-            reheat = 0.0
-            integ = self.integral if e_h < 0 else integ
-        self.integral = integ
-        cmd = t_ahu + reheat
-        if self.ts is None:
-            self.ts = cmd
-        else:
-            self.ts += (1.0 - math.exp(-CONTROL_DT / c.tau_coil)) * (cmd - self.ts)
+        reheat, self.integral = pi_reheat(self.integral, heat_sp - t_sensed, c.kp, c.ti, c.ts_max - t_ahu)
+        self.ts = coil_lag(self.ts, t_ahu + reheat, c.tau_coil)
         return FLOW_LEVELS[self.level], self.ts
+
+
+class TightController:
+    """A constant-flow box whose fast PI loop on the discharge temperature pins the room to one setpoint.
+
+    The setpoint is the middle of the mode's band (occupied or unoccupied, as
+    :class:`VAVController`); the discharge temperature spans the AHU supply temperature to
+    ``ts_max`` through the same coil lag. With ``kp`` = 10 K per K and ``ti`` = 10 min the room
+    stays within about 0.1 K of the setpoint while ``Ts`` swings by several K.
+    """
+
+    def __init__(self, config: ControllerConfig, flow: float, kp: float = 10.0, ti: float = 600.0) -> None:
+        self.cfg = config
+        self.flow = flow
+        self.kp = kp
+        self.ti = ti
+        self.integral: float | None = None
+        self.ts: float | None = None
+
+    def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
+        """Advance one control interval; returns ``(m, Ts)`` in kg/s and degC."""
+        c = self.cfg
+        unocc = c.unocc_start <= t < c.unocc_end
+        sp = 0.5 * (c.heat_unocc + c.cool_unocc) if unocc else 0.5 * (c.heat_occ + c.cool_occ)
+        span = c.ts_max - t_ahu
+        if self.integral is None:  # bumpless start at mid-span
+            self.integral = 0.5 * span / self.kp
+        reheat, self.integral = pi_reheat(self.integral, sp - t_sensed, self.kp, self.ti, span)
+        self.ts = coil_lag(self.ts, t_ahu + reheat, c.tau_coil)
+        return self.flow, self.ts

@@ -23,14 +23,23 @@ References
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rczone.errors import ParameterError
 from rczone.simulation import zoh
 from rczone.virtual.building import VirtualBuilding
-from rczone.virtual.control import CONTROL_DT, FLOW_LEVELS, SEASONS, VAVController, controller_configs
+from rczone.virtual.control import (
+    CONTROL_DT,
+    FLOW_LEVELS,
+    SEASONS,
+    ControllerConfig,
+    TightController,
+    VAVController,
+    controller_configs,
+)
+from rczone.virtual.operation import SCHEDULE_GAIN, TIGHT_FLOW, Operation, sensor_reading
 from rczone.virtual.sensors import sense_temperature
 from rczone.virtual.weather import DIURNAL, check_season, outdoor_temperature
 
@@ -178,6 +187,7 @@ def run(
     warmup: float = 6 * 3600.0,
     forced: Mapping[str, tuple[Command, ...]] | None = None,
     sense: Callable[[np.ndarray, np.random.Generator], np.ndarray] = sense_temperature,
+    operation: Operation | None = None,
 ) -> EmulatorRun:
     """Simulate the building in closed loop from ``-warmup`` to ``duration`` s after 6 pm.
 
@@ -193,6 +203,9 @@ def run(
         Zones that follow a command schedule instead of their thermostat.
     sense : callable
         Temperature sensor model used by the controllers.
+    operation : Operation, optional
+        Loop, night deadband, unmeasured scheduled gains and thermostat placement
+        (:mod:`rczone.virtual.operation`); default: the operation of the shipped nights.
 
     Returns
     -------
@@ -213,9 +226,14 @@ def run(
         drift[k] = a * drift[k - 1] + w[k]
     t_ahu = s.t_ahu + drift
 
-    cfgs = controller_configs(season, bld.zones, g_ctrl, -warmup)
-    ctrls: dict[str, VAVController | ForcedController] = {
-        z: VAVController(cfgs[z], -warmup) for z in bld.zones
+    op = operation or Operation()
+    cfgs = {
+        z: _with_deadband(c, op.deadband_K)
+        for z, c in controller_configs(season, bld.zones, g_ctrl, -warmup).items()
+    }
+    ctrls: dict[str, VAVController | ForcedController | TightController] = {
+        z: TightController(cfgs[z], TIGHT_FLOW) if op.loop == "tight" else VAVController(cfgs[z], -warmup)
+        for z in bld.zones
     }
     for z, cmds in forced.items():
         ctrls[z] = ForcedController(cmds, VAVController(cfgs[z], -warmup))
@@ -237,11 +255,18 @@ def run(
     sensed = np.empty((n_steps + 1, len(bld.zones)))
     x[0] = _initial_state(bld, season, {z: cfgs[z].heat_occ for z in bld.zones})
     cache: dict[tuple[float, ...], tuple[np.ndarray, np.ndarray]] = {}
+    gain_idx = np.array([ss.input_names.index(bld.gain_name(z)) for z in bld.zones])
     for k in range(n_steps + 1):
-        sensed[k] = sense(x[k, air_idx], g_sense)
+        reading = x[k, air_idx]
+        if op.sensor != "room" and k > 0:
+            reading = sensor_reading(reading, u[k - 1, ts_idx], m[k - 1], op.sensor, op.diffuser_mix)
+        sensed[k] = sense(reading, g_sense)
         if k == n_steps:
             break
         uk = u_base + min(max((DAY_END - t[k]) / 3600.0, 0.0), 1.0) * u_day
+        if op.gains == "schedule":
+            occupied = np.array([not (cfgs[z].unocc_start <= t[k] < cfgs[z].unocc_end) for z in bld.zones])
+            uk[gain_idx] += SCHEDULE_GAIN * occupied
         uk[to_idx] = to[k]
         mk = np.empty(nf)
         for j, z in enumerate(bld.zones):
@@ -263,3 +288,11 @@ def run(
         flow_names=ss.flow_names,
         n_discretizations=len(cache),
     )
+
+
+def _with_deadband(cfg: ControllerConfig, deadband: float | None) -> ControllerConfig:
+    """``cfg`` with its night band narrowed or widened to ``deadband`` K about its centre."""
+    if deadband is None:
+        return cfg
+    mid = 0.5 * (cfg.heat_unocc + cfg.cool_unocc)
+    return replace(cfg, heat_unocc=mid - 0.5 * deadband, cool_unocc=mid + 0.5 * deadband)

@@ -26,6 +26,7 @@ of the paper, which is not measured), ``Tf``, ``Tc``, ``Tn1``, ``Tn2``, ``Thw`` 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -34,6 +35,7 @@ from rczone.errors import ParameterError, did_you_mean
 from rczone.virtual.building import build_building
 from rczone.virtual.control import FLOW_LEVELS, SEASONS
 from rczone.virtual.emulator import Command, run
+from rczone.virtual.operation import Operation
 from rczone.virtual.sensors import sense_flow, sense_temperature
 from rczone.virtual.weather import check_season
 
@@ -89,6 +91,7 @@ def generate_night(
     zone: str = "target",
     warmup: float = 6 * 3600.0,
     commands: tuple[Command, ...] | None = None,
+    operation: Operation | None = None,
 ) -> pd.DataFrame:
     """Generate one 6 pm to 6 am night of BMS data for the target office.
 
@@ -109,6 +112,10 @@ def generate_night(
         :func:`forced_schedule` (used by :func:`rczone.virtual.playback.play_schedule`). The
         weather, the neighbours' controllers and the sensor noise depend on ``seed`` alone,
         so the same seed with and without ``commands`` gives a paired comparison.
+    operation : Operation, optional
+        How the building is run and logged (:mod:`rczone.virtual.operation`: loop, night
+        deadband, unmeasured scheduled gains, thermostat placement, trend resolution); default:
+        as the shipped nights. The same seed with another operation gives a paired comparison.
 
     Returns
     -------
@@ -133,15 +140,17 @@ def generate_night(
     g_run, g_meas, g_sched = np.random.default_rng(seed).spawn(3)
     seeded = forced_schedule(g_sched)
     forced = {zone: tuple(commands) if commands is not None else seeded} if mode == "forced" else None
-    r = run(bld, season, g_run, duration=NIGHT, warmup=warmup, forced=forced)
+    op = operation or Operation()
+    sense = partial(sense_temperature, step_f=op.trend_quantum_F)
+    r = run(bld, season, g_run, duration=NIGHT, warmup=warmup, forced=forced, sense=sense, operation=op)
     n = round(NIGHT / SAMPLE)
     k0 = round(warmup / SAMPLE)
     sl = slice(k0, k0 + n)
     data = {
         "time": r.t[sl] - r.t[k0],
         "Ti": r.sensed[zone][sl],
-        "To": sense_temperature(r.input("To")[sl], g_meas),
-        "Ts": sense_temperature(r.input(bld.supply_name(zone))[sl], g_meas),
+        "To": sense(r.input("To")[sl], g_meas),
+        "Ts": sense(r.input(bld.supply_name(zone))[sl], g_meas),
         "m": sense_flow(r.flow(bld.flow_name(zone))[sl], g_meas),
         "Q": np.full(n, bld.gains[zone]),
     }
@@ -165,6 +174,7 @@ def generate_night(
             "true_surface_resistance_K_W": {s.name: s.resistance for s in tg.surfaces},
             "true_surface_capacity_J_K": {s.name: s.capacity for s in tg.surfaces},
             "n_discretizations": r.n_discretizations,
+            "operation": op.label(),
         }
     )
     if forced:

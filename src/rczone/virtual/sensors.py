@@ -30,10 +30,12 @@ def quantize_f(t_c: np.ndarray, step_f: float = TEMP_QUANT_F) -> np.ndarray:
     return (np.round(f / step_f) * step_f - 32.0) / 1.8
 
 
-def sense_temperature(t_c: np.ndarray, rng: np.random.Generator, noise: float = TEMP_NOISE) -> np.ndarray:
-    """Noisy, quantized reading of true temperatures ``t_c`` (degC)."""
+def sense_temperature(
+    t_c: np.ndarray, rng: np.random.Generator, noise: float = TEMP_NOISE, step_f: float = TEMP_QUANT_F
+) -> np.ndarray:
+    """Noisy reading of true temperatures ``t_c`` (degC), quantized to ``step_f`` F."""
     t_c = np.asarray(t_c, dtype=float)
-    return quantize_f(t_c + rng.normal(0.0, noise, size=t_c.shape))
+    return quantize_f(t_c + rng.normal(0.0, noise, size=t_c.shape), step_f)
 
 
 def sense_flow(m: np.ndarray, rng: np.random.Generator, noise: float = FLOW_NOISE) -> np.ndarray:

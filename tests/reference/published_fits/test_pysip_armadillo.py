@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 import json
-import os
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from rczone.estimation import Dataset, fit, ml_cost
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
+from tests.shared_data import SHARED
 
-SHARED = Path(os.environ.get("RCZONE_SHARED", "/work/shared"))
 REF_FILE = SHARED / "reference" / "published_fits.json"
 DATA_FILE = SHARED / "data" / "armadillo_pysip" / "armadillo_data_H2.csv"
 

@@ -52,7 +52,7 @@ def test_diagnose_flags_the_closed_loop_night(files, capsys):
         (["fit", "{d}/forced.csv", "--model", "second-order-papr"], "did you mean 'second-order-paper'"),
         (["fit", "{d}/forced.csv", "--free", "Rww"], "did you mean 'Rw'"),
         (["fit", "{d}/forced.csv", "--method", "lsq"], "method must be one of"),
-        (["predict", "{d}/forced.csv", "{d}/forced.csv"], "not valid JSON"),
+        (["predict", "{d}/forced.csv", "{d}/forced.csv"], "expected a model file (.toml) or a saved model"),
         (["design", "--band", "25,20"], "band must be"),
         (["design", "--ts-range", "cold"], "two numbers"),
     ],

@@ -1,13 +1,12 @@
 """Per-area R and C of the shipped ASHRAE constructions, and bad inputs.
 
-Oracles: the shared file ``/work/shared/reference/ashrae/derived_RC_per_m2.csv`` (computed
+Oracles: the shared file ``../shared/reference/ashrae/derived_RC_per_m2.csv`` (computed
 independently from the EnergyPlus transcription of ASHRAE HOF 2005 ch. 30; rounded to 4
 decimals in m2K/W and 2 in kJ/m2K) and values computed by hand here from the materials'
 published numbers.
 """
 
 import csv
-from pathlib import Path
 
 import pytest
 
@@ -22,8 +21,9 @@ from rczone.construction import (
     construction_names,
 )
 from rczone.errors import ParameterError
+from tests.shared_data import SHARED
 
-REFERENCE = Path("/work/shared/reference/ashrae/derived_RC_per_m2.csv")
+REFERENCE = SHARED / "reference" / "ashrae" / "derived_RC_per_m2.csv"
 #: The reference file used the outside (wind) film only for these constructions.
 EXTERIOR_IN_REFERENCE = ("Exterior Wall", "Roof/Ceiling")
 

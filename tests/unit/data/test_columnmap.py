@@ -185,7 +185,7 @@ def test_bad_map(doc, pattern):
 def test_invalid_toml(tmp_path):
     path = tmp_path / "m.toml"
     path.write_text("[columns\nTi = 'a'\n")
-    with pytest.raises(DataError, match=r"m.toml: invalid TOML"):
+    with pytest.raises(DataError, match=r"m.toml.: not valid TOML"):
         read_column_map(path)
 
 

@@ -25,8 +25,9 @@ Y = np.ones((4, 1))
         ({"y": np.full((4, 1), np.nan)}, DataError, "all NaN"),
         (
             {"u": np.where(np.eye(4, 2) > 0, np.nan, 1.0)},
-            InputShapeError,
-            "column 'To' is not finite at sample 0",
+            DataError,
+            r"input 'To' is missing \(NaN or infinite\) at 1 of 4 samples, first at t = 0 s \(sample 0\);"
+            " inputs must be complete",
         ),
         ({"t": np.array([0.0, 60.0, 60.0, 120.0])}, InputShapeError, "strictly increasing"),
         ({"m": np.ones((4, 1))}, InputShapeError, r"m must have shape \(n_samples, 0\)"),

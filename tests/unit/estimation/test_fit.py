@@ -34,6 +34,7 @@ def test_fit_result_to_dict_is_json_ready_and_complete() -> None:
         "upper",
         "ratio_to_construction",
         "at_bound",
+        "unit",
     }
     assert p["construction"] == 0.01 and p["ratio_to_construction"] == pytest.approx(p["estimate"] / 0.01)
     assert p["std_error"] > 0 and p["at_bound"] is False
@@ -48,13 +49,16 @@ def test_fit_result_to_dict_is_json_ready_and_complete() -> None:
 def test_multistart_keeps_every_start_and_reports_the_winner() -> None:
     data = data1()
     res = fit(NET1, data, ["Cr", "R"], n_starts=4, rng=np.random.default_rng(42), uncertainty=False)
-    assert len(res.starts) == 4 and res.n_evals == sum(s.n_evals for s in res.starts)
+    assert len(res.starts) == 4 and res.search.n_local == 4 and res.search.strategy == "global"
+    assert res.n_evals == res.search.n_sampled + sum(s.n_evals for s in res.starts)
     costs = [s.cost for s in res.starts]
     assert res.cost == min(costs) == costs[res.best_start]
     np.testing.assert_allclose(res.starts[0].start, [1e6, 0.01])  # first start: construction values
     rows = res.starts_table()
     assert sum(r["winner"] for r in rows) == 1 and "end_Cr" in rows[0]
     assert res.estimates["Cr"] == pytest.approx(1e6, rel=1e-4)
+    # every start reaches the one optimum of this convex problem: converged by agreement
+    assert res.search.n_best == 4 and res.converged and res.trustworthy
 
 
 def test_fit_does_not_mutate_the_network() -> None:
@@ -85,7 +89,8 @@ def test_estimate_at_a_bound_is_flagged() -> None:
         ({"free": ["Cx"]}, ParameterError, r"unknown free parameter 'Cx'; did you mean .*'Cr'"),
         ({"method": "ols"}, ParameterError, "method must be one of"),
         ({"optimizer": "bfgs"}, ParameterError, "optimizer must be one of"),
-        ({"n_starts": 3}, ParameterError, "needs rng"),
+        ({"n_starts": 0}, ParameterError, "n_starts must be a positive integer"),
+        ({"initial_state": "rest"}, ParameterError, "initial_state must be"),
         ({"hold": "linear"}, ParameterError, "hold must be one of"),
         ({"free": ["Cr", "sigma_v"]}, ParameterError, "cannot be estimated by least squares"),
         ({"bounds": {"Cr": (2e6, 1e6)}}, ParameterError, "must be < upper"),

@@ -7,7 +7,6 @@ the lumped element.
 """
 
 import csv
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,8 +22,9 @@ from rczone.models.split import (
     split_construction,
     symmetric_split,
 )
+from tests.shared_data import SHARED
 
-REFERENCE = Path("/work/shared/reference/ashrae/derived_RC_per_m2.csv")
+REFERENCE = SHARED / "reference" / "ashrae" / "derived_RC_per_m2.csv"
 EXTERIOR_IN_REFERENCE = ("Exterior Wall", "Roof/Ceiling")
 ALL = [(n, ext) for n in construction_names() for ext in (False, True)]
 

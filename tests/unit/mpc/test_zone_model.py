@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from rczone.errors import DataError, NetworkError, ParameterError
+from rczone.errors import ModelFileError, NetworkError, ParameterError
 from rczone.models import get_model
 from rczone.mpc import ZoneModel
 from rczone.network.serialize import network_from_dict, network_to_dict
@@ -49,13 +49,17 @@ def test_discrete_matrices_are_the_exact_exponential():
 @pytest.mark.parametrize(
     ("call", "exc", "match"),
     [
-        (lambda p: ZoneModel.load(p / "missing.json"), DataError, "does not exist"),
-        (lambda p: ZoneModel.load(_write(p, "{not json")), DataError, "not valid JSON"),
-        (lambda p: ZoneModel.load(_write(p, '{"format": "other"}')), DataError, "not an rczone model file"),
+        (lambda p: ZoneModel.load(p / "missing.json"), ModelFileError, "does not exist"),
+        (lambda p: ZoneModel.load(_write(p, "{not json")), ModelFileError, "not valid JSON"),
+        (
+            lambda p: ZoneModel.load(_write(p, '{"format": "other"}')),
+            ModelFileError,
+            "not an rczone model file",
+        ),
         (
             lambda p: network_from_dict({"format": "rczone-network/1", "name": "x"}),
             NetworkError,
-            "incomplete",
+            "has no .nodes.",
         ),
         (lambda p: ZoneModel(get_model("first-order"), {"Rww": 1.0}), ParameterError, "did you mean 'Rw'"),
     ],
@@ -69,3 +73,41 @@ def _write(folder, text):
     p = folder / "m.json"
     p.write_text(text)
     return p
+
+
+@pytest.mark.parametrize(
+    ("dt", "m", "match"),
+    [
+        (float("inf"), 0.1, "finite and > 0"),
+        (float("nan"), 0.1, "finite and > 0"),
+        (-60.0, 0.1, "finite and > 0"),
+        ("x", 0.1, "number of seconds"),
+        (60.0, float("nan"), "finite and >= 0"),
+        (60.0, -0.1, "finite and >= 0"),
+        (60.0, [0.1, 0.2], "1 value"),
+    ],
+)
+def test_discrete_refuses_unusable_sample_times_and_flows(dt, m, match):
+    from rczone.errors import InputShapeError
+
+    zm = ZoneModel(get_model("second-order-paper"))
+    with pytest.raises(InputShapeError, match=match):
+        zm.discrete(dt, m)
+
+
+def test_a_model_with_a_non_finite_element_is_refused():
+    from rczone.network import HeatInput, Parameter, RCNetwork
+
+    net = get_model("first-order")
+    bad = RCNetwork(
+        net.name,
+        net.nodes,
+        net.boundaries,
+        net.resistors,
+        [*net.parameters.values(), Parameter("g", "gain", 1.0)],
+        [HeatInput("Q", {"Ti": "g"})],
+        net.supply_air,
+    )
+    assert np.all(np.isfinite(ZoneModel(bad).discrete(60.0, 0.1).Ad))
+    with pytest.raises(ParameterError, match="not finite"):
+        ZoneModel(bad, {"g": float("nan")})

@@ -1,0 +1,157 @@
+"""Predictions with uncertainty: k-step-ahead and open-loop, from the noise and the estimates' covariance.
+
+Two sources of uncertainty are separated, as they answer different questions:
+
+* **process and measurement noise** (the stochastic model of an ML fit): the Kalman filter's
+  k-step prediction covariance ``C P_{j|j-k} C' + R``, where ``P_{j|j-k}`` propagates the filtered
+  covariance ``k`` steps with the process noise. Open loop is the filter conditioned on the
+  first measurement only (:func:`rczone.estimation.validation.open_loop_band`);
+* **the estimates' uncertainty**: the covariance ``Sigma`` of the fitted parameters carried to the
+  prediction by linearization, ``var_theta(y_j) = J_j Sigma J_j'`` with ``J_j = d y_hat_j / d theta``
+  by central differences of the predictor (first-order delta method [1]_).
+
+The two are independent to first order, so the total variance is their sum.
+
+References
+----------
+.. [1] L. Ljung, *System Identification: Theory for the User*, 2nd ed., Prentice Hall 1999,
+   section 9.6 (variance of the estimated model's output) and 7.3 (k-step-ahead predictors).
+.. [2] H. Madsen, *Time Series Analysis*, Chapman & Hall 2007, section 10.3 (k-step prediction
+   with the Kalman filter).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from rczone.errors import ParameterError
+from rczone.estimation.costs import filter_arrays
+from rczone.estimation.data import Dataset
+from rczone.estimation.kalman import input_drive, kalman_filter_arrays
+from rczone.estimation.validation import open_loop_band
+from rczone.network import RCNetwork
+
+#: Central-difference step of the parameter sensitivities, in standard errors.
+SENSITIVITY_STEP = 0.01
+
+
+def filtered_covariances(P_pred: np.ndarray, S: np.ndarray, C: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``P_{k|k}`` from the predicted covariances: ``P - P C_o' S_o^{-1} C_o P`` over the observed outputs.
+
+    Parameters
+    ----------
+    P_pred : ndarray, shape (N, n, n)
+    S : ndarray, shape (N, ny, ny)
+        Innovation covariances ``C P C' + R``.
+    C : ndarray, shape (ny, n)
+    y : ndarray, shape (N, ny)
+        NaN marks an output that was not measured (no update from it).
+    """
+    P = np.array(P_pred, dtype=float)
+    obs = np.isfinite(y)
+    for k in np.flatnonzero(obs.any(axis=1)):
+        o = obs[k]
+        PC = P_pred[k] @ C[o].T
+        P[k] = P_pred[k] - PC @ np.linalg.solve(S[k][np.ix_(o, o)], PC.T)
+    return 0.5 * (P + np.swapaxes(P, 1, 2))
+
+
+def k_step_band(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray]:
+    """k-step-ahead prediction ``y_hat[j | j - k]`` and its standard deviation from the noise.
+
+    The filtered state and covariance at ``j - k`` are propagated ``k`` intervals with the known
+    inputs and the process noise; ``values`` must hold the noise levels. The first ``k``
+    samples have no prediction (NaN).
+
+    Returns
+    -------
+    y_hat, sd : ndarray, shape (N, ny)
+    """
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+        raise ParameterError(f"k must be a positive integer (steps ahead), got {k!r}")
+    data.check_against(network)
+    args = filter_arrays(network, values, data, hold)
+    Phi, G0, G1, Qd, which, u, y, _, _, C, D, R = args
+    out = kalman_filter_arrays(*args)
+    N = y.shape[0]
+    y_hat = np.full(y.shape, np.nan)
+    sd = np.full(y.shape, np.nan)
+    if k >= N:
+        return y_hat, sd
+    drive = input_drive(G0, G1, which, u)
+    origin = np.arange(N - k)
+    x = out.x_filt[origin].copy()
+    P = filtered_covariances(out.P_pred, out.S, C, y)[origin]
+    for i in range(k):
+        w = which[origin + i]
+        x = np.einsum("kij,kj->ki", Phi[w], x) + drive[origin + i]
+        P = np.einsum("kij,kjl,kml->kim", Phi[w], P, Phi[w]) + Qd[w]
+    target = origin + k
+    y_hat[target] = x @ C.T + u[target] @ D.T
+    S = np.einsum("ij,kjl,ml->kim", C, P, C) + R
+    sd[target] = np.sqrt(np.einsum("kii->ki", S))
+    return y_hat, sd
+
+
+def noise_band(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int | None = None, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Prediction and its noise standard deviation: ``k`` steps ahead, or open loop (``k=None``)."""
+    if k is None:
+        return open_loop_band(network, values, data, hold)
+    return k_step_band(network, values, data, k, hold)
+
+
+def parameter_sd(
+    predict: Callable[[Mapping[str, float]], np.ndarray],
+    values: Mapping[str, float],
+    names: Sequence[str],
+    cov: np.ndarray,
+) -> np.ndarray:
+    """Standard deviation of a prediction due to the estimates' covariance (delta method).
+
+    Parameters
+    ----------
+    predict : callable
+        Values (every parameter the predictor needs) to the prediction, shape (N, ny).
+    values : mapping
+        The estimates and the other values ``predict`` needs.
+    names : sequence of str
+        Parameters the covariance is over (physical units).
+    cov : ndarray, shape (d, d)
+        Their covariance; a parameter with a NaN variance (held at a bound) counts as known.
+
+    Returns
+    -------
+    ndarray, shape (N, ny)
+        ``sqrt(J Sigma J')`` per sample and output, with ``J`` by central differences of
+        :data:`SENSITIVITY_STEP` standard errors.
+    """
+    cov = np.asarray(cov, dtype=float)
+    d = len(names)
+    if cov.shape != (d, d):
+        raise ParameterError(f"the covariance must be ({d}, {d}) for {list(names)}, got {cov.shape}")
+    var = np.diag(cov)
+    use = [i for i in range(d) if math.isfinite(var[i]) and var[i] > 0]
+    base = predict(values)
+    if not use:
+        return np.zeros_like(base)
+    J = np.empty((*base.shape, len(use)))
+    for col, i in enumerate(use):
+        name = names[i]
+        h = SENSITIVITY_STEP * math.sqrt(var[i])
+        v0 = values[name]
+        if v0 > 0:  # resistances, capacities, noise levels stay positive
+            h = min(h, 0.5 * v0)
+        up = predict({**values, name: v0 + h})
+        down = predict({**values, name: v0 - h})
+        J[..., col] = (up - down) / (2 * h)
+    sub = cov[np.ix_(use, use)]
+    sub = np.where(np.isfinite(sub), sub, 0.0)
+    v = np.einsum("...i,ij,...j->...", J, sub, J)
+    return np.sqrt(np.maximum(v, 0.0))

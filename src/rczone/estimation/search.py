@@ -1,0 +1,404 @@
+"""Global search: the default way rczone minimizes an identification cost.
+
+Identification costs of grey-box building models are not convex: a single local search from
+construction values can stop in a worse optimum (a resistance 60x off) and still report that it
+converged. The search here is a two-phase stochastic method [1]_:
+
+1. **Global phase.** The cost is evaluated at a Latin hypercube of points spread over the whole
+   box of bounds, in the optimizer's variables ``eta`` (log space for resistances, capacities and
+   noise levels).
+2. **Local phase.** Local searches start from the model's own start values and from the best
+   sampled points that are not near a better one already used (single linkage in the unit box).
+   They run until the best optimum has been reached from two starts, no sampled point left
+   unused has a lower cost than it, few optima remain unseen (:func:`few_unseen`) and no
+   resistance, capacity or gain of that optimum sits at a bound (such degenerate optima attract
+   many starts) - at least two runs, at most ``max_local`` - or, with a fixed number of starts,
+   that many runs.
+3. **Merge and confirm.** End points whose costs agree within a tolerance are one optimum; the
+   distinct optima, how many starts reached each, and the spread of the estimates among the starts
+   that reached the best one are reported. The result is *converged* only when the best optimum
+   was reached from more than one start, or when a second local method started at it finds nothing
+   better (where it does find lower, the first method continues from there and the check repeats,
+   a few rounds at most).
+
+Nelder-Mead searches are restarted at their end point while that still lowers the cost.
+
+References
+----------
+.. [1] A. H. G. Rinnooy Kan, G. T. Timmer, "Stochastic global optimization methods. Part I:
+   Clustering methods", Mathematical Programming 39 (1987) 27-56.
+.. [2] M. D. McKay, R. J. Beckman, W. J. Conover, "A comparison of three methods for selecting
+   values of input variables in the analysis of output from a computer code", Technometrics 21
+   (1979) 239-245.
+.. [3] W. H. Press, S. A. Teukolsky, W. T. Vetterling, B. P. Flannery, *Numerical Recipes*, 3rd
+   ed., Cambridge University Press, 2007, section 10.5 (restarting the downhill simplex at a
+   claimed minimum).
+.. [4] C. G. E. Boender, A. H. G. Rinnooy Kan, "Bayesian stopping rules for multistart global
+   optimization methods", Mathematical Programming 37 (1987) 59-80.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from rczone.errors import ParameterError
+from rczone.estimation.optimize import StartOutcome, minimize_from
+from rczone.estimation.parameters import ParameterSpec
+
+#: Costs of two end points closer than ``ABS_TOL + REL_TOL * |cost| + SCALE_TOL * scale`` are the
+#: same optimum. For likelihood costs 0.01 is far below any difference that matters (a
+#: likelihood-ratio test needs about 2); for least squares the relative part decides, and the part
+#: relative to the data's own variation (``scale``) merges end points of a near-perfect fit.
+ABS_TOL = {"ml": 0.01, "map": 0.01, "ls": 0.0}
+REL_TOL = {"ml": 1e-9, "map": 1e-9, "ls": 1e-5}
+SCALE_TOL = 1e-9
+#: Sampled points closer than this (in the unit box of eta) to a better chosen start are not starts.
+LINK_RADIUS = 0.1
+#: Restarts of Nelder-Mead from its own end point (a fresh simplex) while they still lower the cost.
+NM_RESTARTS = 2
+#: Rounds of the polish (second method, then the first again) of an optimum found by one start.
+POLISH_ROUNDS = 3
+#: The second method used to confirm an optimum found by one start only.
+SECOND_METHOD = {"nelder-mead": "powell", "powell": "nelder-mead", "lbfgs": "nelder-mead"}
+
+
+@dataclass(frozen=True)
+class Optimum:
+    """One distinct end point of the local searches.
+
+    Attributes
+    ----------
+    cost : float
+    theta : ndarray
+        Estimates at the best start of this optimum (physical units).
+    starts : tuple of int
+        Indices (into the fit's ``starts``) of the local searches that ended here.
+    """
+
+    cost: float
+    theta: np.ndarray
+    starts: tuple[int, ...]
+
+    @property
+    def count(self) -> int:
+        return len(self.starts)
+
+
+@dataclass(frozen=True)
+class SearchSummary:
+    """How the optimum was found, and how sure the search is of it.
+
+    Attributes
+    ----------
+    strategy : str
+        ``"global"`` (sample + local searches) or ``"local"`` (one start).
+    n_sampled : int
+        Cost evaluations of the global phase.
+    n_local : int
+        Local searches run (the confirmation included).
+    optima : tuple of Optimum
+        Distinct optima, best first.
+    spread : dict of name to (float, float)
+        Smallest and largest estimate among the starts that reached the best optimum.
+    confirmed_by : str or None
+        The second method that found nothing better, when the best optimum was reached once.
+    converged : bool
+        Reached from two starts, or confirmed, and the winning local search converged.
+    reason : str
+        Why it is or is not converged, in words.
+    tolerance : float
+        Cost difference below which two end points are one optimum.
+    """
+
+    strategy: str
+    n_sampled: int
+    n_local: int
+    optima: tuple[Optimum, ...]
+    spread: dict[str, tuple[float, float]]
+    confirmed_by: str | None
+    converged: bool
+    reason: str
+    tolerance: float
+
+    @property
+    def n_best(self) -> int:
+        """How many local searches reached the best optimum."""
+        return self.optima[0].count if self.optima else 0
+
+    def to_dict(self, names: tuple[str, ...]) -> dict:
+        return {
+            "strategy": self.strategy,
+            "n_sampled": self.n_sampled,
+            "n_local": self.n_local,
+            "n_best": self.n_best,
+            "converged": self.converged,
+            "reason": self.reason,
+            "confirmed_by": self.confirmed_by,
+            "tolerance": self.tolerance,
+            "optima": [
+                {
+                    "cost": _num(o.cost),
+                    "count": o.count,
+                    "starts": list(o.starts),
+                    "estimates": dict(zip(names, map(float, o.theta))),
+                }
+                for o in self.optima
+            ],
+            "spread": {k: [float(a), float(b)] for k, (a, b) in self.spread.items()},
+        }
+
+
+def _num(v: float) -> float | None:
+    return float(v) if math.isfinite(v) else None
+
+
+def cost_tolerance(method: str, cost: float, scale: float = 0.0) -> float:
+    """Largest cost difference between end points that are the same optimum (see :data:`ABS_TOL`)."""
+    return ABS_TOL.get(method, 0.0) + REL_TOL.get(method, 1e-9) * abs(cost) + SCALE_TOL * abs(scale)
+
+
+def latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` points of a Latin hypercube in the unit cube ``[0, 1)^d`` [2]_.
+
+    Each coordinate takes one value in each of the ``n`` equal strata, at a uniform position
+    inside it, in an independent random order.
+    """
+    strata = np.argsort(rng.random((d, n)), axis=1).T  # a random permutation of 0..n-1 per column
+    return (strata + rng.random((n, d))) / n
+
+
+def sample_points(spec: ParameterSpec, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` points (theta) of a Latin hypercube over the whole box of bounds, in eta, strictly inside."""
+    unit = latin_hypercube(n, spec.n_free, rng)
+    unit = 1e-6 + (1 - 2e-6) * unit
+    lo, hi = spec.eta_lower, spec.eta_upper
+    return spec.to_theta(lo + unit * (hi - lo))
+
+
+def _unit(spec: ParameterSpec, theta: np.ndarray) -> np.ndarray:
+    lo, hi = spec.eta_lower, spec.eta_upper
+    return (spec.to_eta(theta) - lo) / (hi - lo)
+
+
+def _physical_at_bound(spec: ParameterSpec, theta: np.ndarray) -> bool:
+    """An R, C or gain at a bound: degenerate optima (a wall cut off, a capacity vanishing) attract
+    many starts in flat regions, so the search does not stop early on one."""
+    physical = np.array([k in ("resistance", "capacitance", "gain") for k in spec.kinds], dtype=bool)
+    return bool(np.any(spec.near_bound(theta) & physical))
+
+
+def few_unseen(n_runs: int, n_optima: int) -> bool:
+    """Whether the local searches have probably found every optimum worth finding.
+
+    With up to two distinct optima the answer is yes (the best one reached twice is then the
+    usual stopping point). With more, the posterior expected number of optima of Boender and
+    Rinnooy Kan, ``w (n - 1) / (n - w - 2)`` for ``n`` runs that found ``w`` distinct optima, must
+    be below ``w + 1/2`` [4]_: a landscape where most runs end somewhere new needs more runs.
+    """
+    n, w = n_runs, n_optima
+    if w <= 2:
+        return True
+    return n - w - 2 > 0 and w * (n - 1) / (n - w - 2) < w + 0.5
+
+
+def local_search(
+    cost: Callable[[np.ndarray], float],
+    spec: ParameterSpec,
+    start: np.ndarray,
+    optimizer: str,
+    max_evals: int | None,
+    tol_of: Callable[[float], float],
+) -> StartOutcome:
+    """One local search; Nelder-Mead is restarted from its end point while that lowers the cost.
+
+    A Nelder-Mead simplex can collapse before it reaches a minimum, the more so the more parameters
+    there are; restarting with a fresh simplex at the claimed minimum is the standard remedy [3]_.
+    The outcome keeps the first start and sums the evaluations.
+    """
+    out = minimize_from(cost, spec, start, optimizer, max_evals)
+    if optimizer != "nelder-mead":
+        return out
+    n = out.n_evals
+    for _ in range(NM_RESTARTS):
+        again = minimize_from(cost, spec, out.end, optimizer, max_evals)
+        n += again.n_evals
+        improved = again.cost < out.cost - tol_of(out.cost)
+        if again.cost <= out.cost:
+            out = again
+        if not improved:
+            break
+    return StartOutcome(np.asarray(start, dtype=float), out.end, out.cost, out.converged, n, out.message)
+
+
+def merge_optima(
+    outcomes: list[StartOutcome], method: str, scale: float = 0.0
+) -> tuple[tuple[Optimum, ...], float]:
+    """Group end points by cost (best first); returns the optima and the tolerance used."""
+    finite = [i for i, o in enumerate(outcomes) if math.isfinite(o.cost)]
+    if not finite:
+        return (), math.nan
+    order = sorted(finite, key=lambda i: outcomes[i].cost)
+    tol = cost_tolerance(method, outcomes[order[0]].cost, scale)
+    groups: list[list[int]] = []
+    for i in order:
+        if groups and outcomes[i].cost - outcomes[groups[-1][0]].cost <= tol:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    optima = tuple(Optimum(outcomes[g[0]].cost, outcomes[g[0]].end, tuple(sorted(g))) for g in groups)
+    return optima, tol
+
+
+def global_search(
+    cost: Callable[[np.ndarray], float],
+    spec: ParameterSpec,
+    method: str,
+    rng: np.random.Generator,
+    optimizer: str = "nelder-mead",
+    n_starts: int | None = None,
+    max_evals: int | None = None,
+    n_sample: int | None = None,
+    scale: float = 0.0,
+) -> tuple[list[StartOutcome], SearchSummary]:
+    """Minimize ``cost(eta)`` globally (see the module notes).
+
+    Parameters
+    ----------
+    cost : callable
+        Cost of ``eta`` (an :class:`~rczone.estimation.costs.Objective`).
+    spec : ParameterSpec
+    method : {"ls", "ml", "map"}
+        Sets the tolerance of :func:`merge_optima`.
+    rng : numpy.random.Generator
+    optimizer : {"nelder-mead", "powell", "lbfgs"}
+        The local method.
+    n_starts : int, optional
+        ``1``: one local search from ``spec.start`` (no global phase). ``k > 1``: exactly ``k``
+        local searches. Default: adaptive, 2 to ``4 + n_free // 2`` (stops once the best optimum
+        was reached twice).
+    max_evals : int, optional
+        Evaluation budget per local search.
+    n_sample : int, optional
+        Points of the global phase; default ``16 n_free`` clipped to [32, 256].
+    scale : float
+        The cost's natural scale (for least squares, the data's variation around their mean), for
+        :func:`cost_tolerance`.
+
+    Returns
+    -------
+    outcomes : list of StartOutcome
+        Every local search, in the order run.
+    summary : SearchSummary
+    """
+    if n_starts is not None and (not isinstance(n_starts, int) or n_starts < 1):
+        raise ParameterError(f"n_starts must be a positive integer (or None for automatic), got {n_starts!r}")
+    d = spec.n_free
+    outcomes: list[StartOutcome] = []
+    n_sampled = 0
+    if n_starts == 1:
+        starts = [spec.start]
+        start_costs = [math.nan]
+        adaptive, max_local = False, 1
+    else:
+        n_sample = n_sample or int(min(256, max(32, 16 * d)))
+        pts = sample_points(spec, n_sample, rng)
+        vals = np.array([cost(spec.to_eta(p)) for p in pts])
+        n_sampled = n_sample
+        adaptive = n_starts is None
+        max_local = n_starts if n_starts is not None else 4 + d // 2
+        starts = [spec.start]
+        start_costs = [math.nan]
+        chosen = [_unit(spec, spec.start)]
+        for i in np.argsort(np.where(np.isfinite(vals), vals, np.inf)):
+            if len(starts) >= max_local or not math.isfinite(vals[i]):
+                break
+            u = _unit(spec, pts[i])
+            if all(np.max(np.abs(u - c)) > LINK_RADIUS for c in chosen):
+                starts.append(pts[i])
+                start_costs.append(float(vals[i]))
+                chosen.append(u)
+
+    def tol_of(c: float) -> float:
+        return cost_tolerance(method, c, scale)
+
+    lower_left = False
+    for k, s in enumerate(starts):
+        try:
+            outcomes.append(local_search(cost, spec, s, optimizer, max_evals, tol_of))
+        except ParameterError:
+            # the model's own start may be invalid for these data (cost not finite): skip it
+            if k == 0 and len(starts) > 1:
+                continue
+            raise
+        if adaptive and len(outcomes) >= 2:
+            optima, _ = merge_optima(outcomes, method, scale)
+            # stop once the best optimum was reached twice, unless a sampled point not yet used as a
+            # start lies below it: that point is in a better basin than any found so far
+            pending = start_costs[k + 1 :]
+            lower_left = bool(optima and any(c < optima[0].cost for c in pending))
+            if (
+                optima
+                and optima[0].count >= 2
+                and not lower_left
+                and few_unseen(len(outcomes), len(optima))
+                and not _physical_at_bound(spec, optima[0].theta)
+            ):
+                break
+    optima, tol = merge_optima(outcomes, method, scale)
+    if not optima:
+        raise ParameterError("every local search ended at a point where the cost is not finite")
+    confirmed_by = None
+    n_runs = len(outcomes)
+    if optima[0].count >= 2:
+        converged = True
+        reason = f"the best optimum was reached from {optima[0].count} of {n_runs} starts"
+    else:
+        # polish: a second method from the best point; where it finds lower, the first method again
+        second = SECOND_METHOD.get(optimizer, "powell")
+        converged = False
+        for _ in range(POLISH_ROUNDS):
+            best = optima[0]
+            check = minimize_from(cost, spec, best.theta, second, max_evals)
+            outcomes.append(check)
+            if check.cost >= best.cost - tol_of(best.cost):
+                converged, confirmed_by = True, second
+                break
+            outcomes.append(local_search(cost, spec, check.end, optimizer, max_evals, tol_of))
+            optima, tol = merge_optima(outcomes, method, scale)
+        optima, tol = merge_optima(outcomes, method, scale)
+        if converged:
+            reason = (
+                f"the best optimum was reached from 1 of {n_runs} starts and a second method ({second})"
+                " started there found nothing better"
+            )
+        else:
+            reason = (
+                f"the best optimum was reached from only 1 of {n_runs} starts and a second method ({second})"
+                f" kept finding lower costs from there ({POLISH_ROUNDS} rounds): the search has not settled"
+            )
+    best = optima[0]
+    winner = outcomes[best.starts[0]]
+    if not winner.converged and converged:
+        converged = False
+        reason += f", but the winning local search stopped early ({winner.message})"
+    if lower_left and converged:
+        converged = False
+        reason += ", but a sampled point not used as a start has a lower cost (raise the number of starts)"
+    ends = np.array([outcomes[i].end for i in best.starts])
+    spread = {n: (float(ends[:, j].min()), float(ends[:, j].max())) for j, n in enumerate(spec.names)}
+    summary = SearchSummary(
+        "global" if n_starts != 1 else "local",
+        n_sampled,
+        len(outcomes),
+        optima,
+        spread,
+        confirmed_by,
+        bool(converged),
+        reason,
+        tol,
+    )
+    return outcomes, summary

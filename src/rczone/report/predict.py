@@ -1,0 +1,87 @@
+"""The report of ``rczone predict``: measured and predicted outputs with the two-sigma band."""
+
+from __future__ import annotations
+
+import html
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from rczone.calibrate import Prediction
+from rczone.report.html import Report
+
+
+def prediction_figure(pred: Prediction, title: str = "") -> Figure:
+    """One panel per output: measurement, open-loop prediction and its band, and the error below."""
+    ny = len(pred.outputs)
+    fig = Figure(figsize=(8.5, 2.8 * ny + 1.8))
+    axes = fig.subplots(ny + 1, 1, squeeze=False, sharex=True)[:, 0]
+    h = (pred.t - pred.t[0]) / 3600.0
+    for j, (ax, o) in enumerate(zip(axes[:-1], pred.outputs, strict=True)):
+        lo = pred.predicted[:, j] - 2 * pred.sd[:, j]
+        hi = pred.predicted[:, j] + 2 * pred.sd[:, j]
+        if np.isfinite(pred.sd[:, j]).any():
+            ax.fill_between(h, lo, hi, color="#90cdf4", alpha=0.5, lw=0, label="±2 σ")
+        if (
+            pred.sd_parameters is not None
+            and pred.sd_noise is not None
+            and np.isfinite(pred.sd_noise[:, j]).any()
+        ):
+            # the part of the band the estimates' uncertainty alone would give
+            sp = pred.sd_parameters[:, j]
+            ax.fill_between(
+                h,
+                pred.predicted[:, j] - 2 * sp,
+                pred.predicted[:, j] + 2 * sp,
+                color="#2c5282",
+                alpha=0.35,
+                lw=0,
+                label="±2 σ from the estimates",
+            )
+        ax.plot(h, pred.measured[:, j], color="black", lw=1.0, label="measured")
+        ax.plot(h, pred.predicted[:, j], color="#2b6cb0", lw=1.3, label=f"predicted ({pred.horizon})")
+        ax.set_ylabel(f"{o} (°C)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    ax = axes[-1]
+    for j, o in enumerate(pred.outputs):
+        ax.plot(h, pred.error[:, j], lw=1.0, label=o)
+    ax.axhline(0.0, color="grey", lw=0.8)
+    ax.set_ylabel("error (K)")
+    ax.set_xlabel("hours from start")
+    ax.grid(alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def prediction_report(pred: Prediction, data_name: str, model_name: str) -> Report:
+    """A report with the prediction plot and its error statistics."""
+    rep = Report(f"Prediction of {model_name} on {data_name}")
+    what = (
+        "Open-loop simulation from the first measurement"
+        if pred.steps is None
+        else f"Each sample predicted {pred.horizon} from the Kalman filter's estimate of the state"
+    )
+    rep.paragraph(f"{what}; band: {html.escape(pred.band_source)}.")
+    rows = []
+    for j, o in enumerate(pred.outputs):
+        row = {
+            "output": o,
+            "RMSE (K)": float(pred.rmse_K[j]),
+            "max error (K)": float(pred.max_abs_K[j]),
+            "inside ±2σ": f"{pred.coverage[j]:.0%}" if np.isfinite(pred.coverage[j]) else "no band",
+        }
+        for key, part in (
+            ("mean σ, noise (K)", pred.sd_noise),
+            ("mean σ, estimates (K)", pred.sd_parameters),
+        ):
+            if part is not None and np.isfinite(part[:, j]).any():
+                row[key] = float(np.nanmean(part[:, j]))
+        rows.append(row)
+    rep.table(rows, f"Prediction error ({pred.horizon})", digits=3)
+    rep.figure(
+        "prediction", prediction_figure(pred, f"{model_name} on {data_name}"), "Measured and predicted"
+    )
+    return rep

@@ -1,0 +1,505 @@
+"""Fit candidate models to the same data and choose one.
+
+Every candidate is fitted by maximum likelihood (the Kalman filter of its stochastic model,
+:func:`rczone.calibrate.calibrate` with ``method="ml"``) on the *same* samples: the longest
+stretch where every input of every candidate is known. For each fit:
+
+* ``log L`` at the estimate, ``k`` free parameters (noise levels included), ``n`` observed
+  outputs. By default the process noise of *every* state is estimated (``noise="all"``), as in
+  Bacher & Madsen's stochastic models: a state whose diffusion is held at a guess cannot absorb
+  what the model misses there, which shows in the innovations and the likelihood
+  (``noise="measured"``: only the measured states', the default of ``rczone fit``);
+* ``AIC = 2 k - 2 log L`` and ``BIC = k log n - 2 log L`` [2]_ [3]_;
+* the whiteness of its standardized innovations (:mod:`rczone.estimation.innovations`);
+* for every pair where one model is nested in the other (detected by
+  :func:`rczone.selection.nesting.nesting`, never assumed), the likelihood-ratio test
+  ``2 (log L_rich - log L_simple)`` against ``chi2(d)`` (and the chi-bar-squared p-value of the
+  boundary restrictions beside it; see the nesting module).
+
+Two ways of choosing:
+
+* by an information criterion (``rule="bic"``, default, or ``"aic"``): the smallest;
+* **forward selection** (``forward=True``, Bacher & Madsen 2011 [1]_): start from the candidate
+  with the fewest parameters (the best-fitting one when several tie); fit the *smallest
+  extensions* of the current model among the candidates (those it is nested in, with no other
+  candidate in between); take the one with the highest likelihood; keep it when the
+  likelihood-ratio test rejects the current model at level ``alpha``, and stop otherwise. Only
+  the models the path reaches are fitted.
+
+Either way the chosen model should have white innovations; the result says when it does not
+(the candidates then all miss something).
+
+A richer model's likelihood cannot be below that of a model nested in it; when its fit ends
+there, its search missed the optimum, and the fit is repeated from the simpler model's estimates
+(carried over by :func:`rczone.selection.nesting.realize`, held inside the search box) and the
+better of the two kept.
+
+References
+----------
+.. [1] P. Bacher, H. Madsen, "Identifying suitable models for the heat dynamics of buildings",
+   Energy and Buildings 43 (2011) 1511-1522, section 4.
+.. [2] H. Akaike, "A new look at the statistical model identification", IEEE Trans. Automatic
+   Control 19 (1974) 716-723.
+.. [3] G. Schwarz, "Estimating the dimension of a model", Annals of Statistics 6 (1978) 461-464.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy.special import chdtrc
+
+from rczone.calibrate import Calibration, ModelLike, as_model, calibrate, complete_stretch, frame_from
+from rczone.errors import DataError, ParameterError
+from rczone.estimation.fit import default_free
+from rczone.models import ZoneModel
+from rczone.selection.nesting import Nesting, nesting, realize
+
+#: Ways of choosing among the candidates.
+RULES = ("bic", "aic")
+#: Which process-noise levels are estimated: of every state, or of the measured states only.
+NOISE = ("all", "measured")
+#: A richer model's log-likelihood may fall this far below a nested simpler one's before its fit is retried.
+LOGLIK_TOLERANCE = 1e-3
+
+
+@dataclass(frozen=True, eq=False)
+class Candidate:
+    """One candidate model fitted by ML.
+
+    Attributes
+    ----------
+    name : str
+    calibration : Calibration
+    n_obs : int
+        Observed output values the likelihood is over.
+    retried : bool
+        The first fit ended below the likelihood of a simpler model nested in this one, and the
+        fit was repeated from that model's estimates (the better of the two is kept).
+    """
+
+    name: str
+    calibration: Calibration
+    n_obs: int
+    retried: bool = False
+
+    @property
+    def loglik(self) -> float:
+        """``log L`` at the estimate (the fit's cost is ``-log L``)."""
+        return -float(self.calibration.result.cost)
+
+    @property
+    def n_params(self) -> int:
+        """Free parameters, noise levels included."""
+        return len(self.calibration.result.names)
+
+    @property
+    def aic(self) -> float:
+        return 2.0 * self.n_params - 2.0 * self.loglik
+
+    @property
+    def bic(self) -> float:
+        return self.n_params * math.log(self.n_obs) - 2.0 * self.loglik
+
+    def criterion(self, rule: str) -> float:
+        return self.aic if rule == "aic" else self.bic
+
+    def to_dict(self) -> dict:
+        r = self.calibration.result
+        inn = self.calibration.innovations
+        return {
+            "loglik": self.loglik,
+            "n_params": self.n_params,
+            "aic": self.aic,
+            "bic": self.bic,
+            "innovations": inn.to_dict() if inn is not None else None,
+            "parameters": {n: r.estimates[n] for n in r.names},
+            "std_errors": {n: r.std_errors[n] for n in r.names},
+            "units": dict(r.units),
+            "trustworthy": r.trustworthy,
+            "flags": list(r.flags),
+            "retried_from_simpler": self.retried,
+        }
+
+
+@dataclass(frozen=True)
+class LikelihoodRatioTest:
+    """The likelihood-ratio test of a simpler model nested in a richer one.
+
+    Attributes
+    ----------
+    simple, rich : str
+    nesting : Nesting
+    statistic : float
+        ``2 (log L_rich - log L_simple)`` (negative when the richer fit missed its optimum).
+    df : int
+    p_value : float
+        ``P(chi2(df) > statistic)``: conservative at the boundary, the one used to decide.
+    p_value_chi_bar : float
+        The chi-bar-squared p-value for independent boundary restrictions (Self & Liang 1987).
+    """
+
+    simple: str
+    rich: str
+    nesting: Nesting
+    statistic: float
+    df: int
+    p_value: float
+    p_value_chi_bar: float
+
+    def rejects(self, alpha: float) -> bool:
+        """Whether the richer model fits significantly better at level ``alpha``."""
+        return self.p_value < alpha
+
+    def to_dict(self) -> dict:
+        return {
+            "simple": self.simple,
+            "rich": self.rich,
+            "restriction": self.nesting.describe(),
+            "correspondence": dict(self.nesting.correspondence),
+            "statistic": self.statistic,
+            "df": self.df,
+            "p_value": self.p_value,
+            "p_value_chi_bar": self.p_value_chi_bar,
+        }
+
+
+def chi_bar_sf(statistic: float, df: int, n_boundary: int) -> float:
+    """``P(X > statistic)`` for ``X ~ sum_i C(s, i) 2^-s chi2(df - s + i)``, ``s = min(n_boundary, df)``.
+
+    The asymptotic law of the likelihood-ratio statistic when ``s`` of the ``df`` restrictions
+    put a parameter on the boundary of its domain and the information matrix separates them
+    (Self & Liang 1987, case 5); ``chi2(0)`` is a point mass at 0.
+    """
+    s = min(max(n_boundary, 0), df)
+    x = max(statistic, 0.0)
+    total = 0.0
+    for i in range(s + 1):
+        k = df - s + i
+        tail = float(chdtrc(k, x)) if k > 0 else float(x <= 0.0)
+        total += math.comb(s, i) / 2.0**s * tail
+    return total
+
+
+def likelihood_ratio_test(simple: Candidate, rich: Candidate, nest: Nesting) -> LikelihoodRatioTest:
+    """The test of ``simple`` against ``rich`` (``simple`` nested in ``rich`` by ``nest``)."""
+    stat = 2.0 * (rich.loglik - simple.loglik)
+    return LikelihoodRatioTest(
+        simple.name,
+        rich.name,
+        nest,
+        stat,
+        nest.df,
+        float(chdtrc(nest.df, max(stat, 0.0))),
+        chi_bar_sf(stat, nest.df, nest.n_boundary),
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class Selection:
+    """The candidates, the tests between nested pairs, and the chosen model.
+
+    Attributes
+    ----------
+    candidates : dict of str to Candidate
+        Every fitted candidate, in the order given.
+    tests : tuple of LikelihoodRatioTest
+        Every nested pair among the fitted candidates.
+    selected : str
+    rule : {"bic", "aic", "forward"}
+    alpha : float
+        Level of the tests.
+    path : tuple of str
+        Forward selection: the models accepted in turn (else just the selected one).
+    steps : tuple of dict
+        Forward selection: per step, the current model, the extensions tried, the best and its
+        test's p-value.
+    not_fitted : tuple of str
+        Candidates a forward selection never reached.
+    samples : dict
+        The common stretch: ``n`` samples, ``start_s``, ``end_s``, ``n_obs`` observed outputs.
+    """
+
+    candidates: Mapping[str, Candidate]
+    tests: tuple[LikelihoodRatioTest, ...]
+    selected: str
+    rule: str
+    alpha: float
+    path: tuple[str, ...]
+    steps: tuple[dict, ...] = ()
+    not_fitted: tuple[str, ...] = ()
+    samples: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def best(self) -> Candidate:
+        return self.candidates[self.selected]
+
+    def table(self) -> list[dict]:
+        """One row per fitted candidate: log L, k, AIC, BIC and their differences to the best, whiteness."""
+        aic0 = min(c.aic for c in self.candidates.values())
+        bic0 = min(c.bic for c in self.candidates.values())
+        rows = []
+        for name, c in self.candidates.items():
+            inn = c.calibration.innovations
+            rows.append(
+                {
+                    "model": name,
+                    "log L": c.loglik,
+                    "k": c.n_params,
+                    "AIC": c.aic,
+                    "dAIC": c.aic - aic0,
+                    "BIC": c.bic,
+                    "dBIC": c.bic - bic0,
+                    "Ljung-Box p": inn.ljung_box_p if inn is not None else None,
+                    "white": ("yes" if inn.white else "no") if inn is not None else "n/a",
+                    "selected": "<-" if name == self.selected else "",
+                }
+            )
+        return rows
+
+    def to_dict(self) -> dict:
+        return {
+            "selected": self.selected,
+            "rule": self.rule,
+            "alpha": self.alpha,
+            "samples": dict(self.samples),
+            "models": {n: c.to_dict() for n, c in self.candidates.items()},
+            "tests": [t.to_dict() for t in self.tests],
+            "forward": {"path": list(self.path), "steps": list(self.steps)}
+            if self.rule == "forward"
+            else None,
+            "not_fitted": list(self.not_fitted),
+            "selected_white": bool(self.best.calibration.innovations.white)
+            if self.best.calibration.innovations is not None
+            else None,
+        }
+
+
+def common_stretch(models: Sequence[ZoneModel], frame: pd.DataFrame, constants) -> pd.DataFrame:
+    """The rows of ``frame`` in the longest stretch where every input of every model is known."""
+    signals = [zm.signals(frame, constants) for zm in models]
+    outs = {zm.network.outputs for zm in models}
+    if len(outs) > 1:
+        raise DataError(
+            "the candidate models measure different outputs ("
+            + "; ".join(f"{zm.label}: {', '.join(zm.network.outputs)}" for zm in models)
+            + "); a likelihood compares models of the same measurements"
+        )
+    u = np.column_stack([s[1] for s in signals])
+    m = (
+        np.column_stack([s[2] for s in signals])
+        if any(s[2].size for s in signals)
+        else np.zeros((len(frame), 0))
+    )
+    sl = complete_stretch(u, m, signals[0][3])
+    if sl.stop - sl.start < 10:
+        raise DataError(
+            "fewer than 10 samples where every input of every candidate is known; check the data's gaps"
+            " and the candidates' inputs"
+        )
+    return frame.iloc[sl].reset_index(drop=True)
+
+
+def candidate_free(network, noise: str = "all") -> tuple[str, ...]:
+    """The free parameters of a candidate: the ML default, with every state's process noise for ``"all"``."""
+    free = list(default_free(network, "ml"))
+    if noise == "all":
+        free += [f"sigma_w_{s}" for s in network.state_names if f"sigma_w_{s}" not in free]
+    return tuple(free)
+
+
+def family_candidates(columns: Sequence[str]) -> list[str]:
+    """The Bacher & Madsen family with the options the data can drive (``Ph``, ``Ps``, ``Q``, ``m`` and ``Ts``)."""
+    from rczone.models.library import FAMILY
+
+    opts = [o for o, col in (("heater", "Ph"), ("solar", "Ps"), ("gain", "Q")) if col in columns]
+    if "m" in columns and "Ts" in columns:
+        opts.append("air")
+    return ["+".join((base, *opts)) for base in FAMILY]
+
+
+def select_models(
+    models: Sequence[ModelLike],
+    frame: pd.DataFrame,
+    constants: Mapping[str, float] | None = None,
+    rule: str = "bic",
+    forward: bool = False,
+    alpha: float = 0.05,
+    n_starts: int | None = None,
+    seed: int = 0,
+    progress: Callable[[str], None] | None = None,
+    noise: str = "all",
+) -> Selection:
+    """Fit the candidate ``models`` to ``frame`` by ML and choose one (see the module notes).
+
+    Parameters
+    ----------
+    models : sequence of model
+        At least two: built-in names, model files or :class:`~rczone.models.ZoneModel`.
+    frame : DataFrame
+        As for :func:`rczone.calibrate.calibrate`.
+    constants : mapping, optional
+        Inputs held constant.
+    rule : {"bic", "aic"}
+        Information criterion (without ``forward``).
+    forward : bool
+        Forward selection by likelihood-ratio tests from the simplest candidate.
+    alpha : float
+        Level of the likelihood-ratio tests.
+    n_starts, seed
+        As for :func:`rczone.calibrate.calibrate`.
+    progress : callable, optional
+        Called with the name of each model before it is fitted.
+    noise : {"all", "measured"}
+        Estimate the process noise of every state (default), or of the measured states only.
+    """
+    if rule not in RULES:
+        raise ParameterError(f"rule must be one of {RULES}, got {rule!r}")
+    if not 0 < alpha < 1:
+        raise ParameterError(f"alpha must be in (0, 1), got {alpha!r}")
+    if noise not in NOISE:
+        raise ParameterError(f"noise must be one of {NOISE}, got {noise!r}")
+    zms = [as_model(m) for m in models]
+    if len(zms) < 2:
+        raise ParameterError("model selection needs at least two candidate models")
+    names = [zm.label for zm in zms]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise ParameterError(f"candidate {dup[0]!r} is given twice")
+    by_name = dict(zip(names, zms))
+    frame = common_stretch(zms, frame_from(frame), constants)
+    free = {n: candidate_free(zm.network, noise) for n, zm in by_name.items()}
+    nests: dict[tuple[str, str], Nesting] = {}
+    for a in names:
+        for b in names:
+            if a != b:
+                found = nesting(
+                    by_name[a].network,
+                    by_name[b].network,
+                    free[a],
+                    free[b],
+                    by_name[a].theta,
+                    by_name[b].theta,
+                )
+                if found is not None:
+                    nests[(a, b)] = found
+    fitted: dict[str, Candidate] = {}
+
+    def fit_one(name: str) -> Candidate:
+        if name in fitted:
+            return fitted[name]
+        if progress is not None:
+            progress(name)
+
+        def run(zm: ZoneModel) -> Calibration:
+            return calibrate(zm, frame, "ml", free[name], n_starts=n_starts, seed=seed, constants=constants)
+
+        cal = run(by_name[name])
+        simpler = [fitted[a] for (a, b) in nests if b == name and a in fitted]
+        retried = False
+        if simpler:
+            best = max(simpler, key=lambda c: c.loglik)
+            if -cal.result.cost < best.loglik - LOGLIK_TOLERANCE:
+                # below a special case of itself: the search missed the optimum; start where the simpler one is
+                again = run(_warm_start(by_name[name], best, nests[(best.name, name)]))
+                retried = True
+                if again.result.cost < cal.result.cost:
+                    cal = again
+        fitted[name] = Candidate(name, cal, int(np.isfinite(cal.open_loop.error).sum()), retried)
+        return fitted[name]
+
+    order = sorted(names, key=lambda n: len(free[n]))
+    steps: list[dict] = []
+    if forward:
+        fewest = len(free[order[0]])
+        first = [fit_one(n) for n in order if len(free[n]) == fewest]
+        current = max(first, key=lambda c: c.loglik).name
+        path = [current]
+        while True:
+            ext = [b for b in names if (current, b) in nests and b not in path]
+            smallest = [b for b in ext if not any((c, b) in nests for c in ext if c != b)]
+            if not smallest:
+                break
+            tried = [fit_one(b) for b in smallest]
+            best = max(tried, key=lambda c: c.loglik)
+            test = likelihood_ratio_test(fitted[current], best, nests[(current, best.name)])
+            accept = test.rejects(alpha)
+            steps.append(
+                {
+                    "from": current,
+                    "tried": [c.name for c in tried],
+                    "best": best.name,
+                    "statistic": test.statistic,
+                    "df": test.df,
+                    "p_value": test.p_value,
+                    "accepted": accept,
+                }
+            )
+            if not accept:
+                break
+            current = best.name
+            path.append(current)
+        selected, rule_used = current, "forward"
+    else:
+        for n in order:
+            fit_one(n)
+        selected = min(fitted.values(), key=lambda c: c.criterion(rule)).name
+        path, rule_used = [selected], rule
+    tests = tuple(
+        likelihood_ratio_test(fitted[a], fitted[b], nest)
+        for (a, b), nest in nests.items()
+        if a in fitted and b in fitted
+    )
+    t = frame["time"].to_numpy(float)
+    cands = {n: fitted[n] for n in names if n in fitted}
+    return Selection(
+        cands,
+        tests,
+        selected,
+        rule_used,
+        alpha,
+        tuple(path),
+        tuple(steps),
+        tuple(n for n in names if n not in fitted),
+        {
+            "n": len(frame),
+            "start_s": float(t[0]),
+            "end_s": float(t[-1]),
+            "n_obs": next(iter(cands.values())).n_obs,
+        },
+    )
+
+
+def _warm_start(zm: ZoneModel, simpler: Candidate, nest: Nesting) -> ZoneModel:
+    """``zm`` with its start values at the estimates of a fitted simpler model nested in it (inside the bounds)."""
+    source = simpler.calibration.model
+    values = realize(nest, {**source.theta, **source.noise}, dict(zm.theta))
+    theta = {}
+    for k, v in values.items():
+        p = zm.network.parameters.get(k)
+        if p is None or p.is_tied:
+            continue
+        if p.bounds is not None:
+            theta[k] = _inside(v, *p.bounds)
+        elif not any(k == q for q, _ in nest.restriction):
+            # (without declared bounds the box is relative to the start: a limit value would ruin it)
+            theta[k] = v
+    noise = {k: v for k, v in source.noise.items() if k in ("sigma_v",) or k.startswith("sigma_v_")}
+    for k, v in source.noise.items():
+        if k.startswith("sigma_w_"):
+            state = nest.node_map.get(k[len("sigma_w_") :])
+            if state is not None:
+                noise[f"sigma_w_{state}"] = v
+    return zm.with_values(theta, {**zm.noise, **noise})
+
+
+def _inside(v: float, lo: float, hi: float) -> float:
+    """``v`` moved 1 % inside ``[lo, hi]`` (in log scale for a positive box)."""
+    if lo > 0:
+        return float(np.exp(np.clip(np.log(max(v, lo)), np.log(lo) + 0.01, np.log(hi) - 0.01)))
+    pad = 0.01 * (hi - lo)
+    return float(np.clip(v, lo + pad, hi - pad))

@@ -1,0 +1,76 @@
+"""`rczone select`, the residual lines of `rczone fit` and `rczone predict --steps` on files."""
+
+import json
+
+import pytest
+
+from rczone.cli.main import main
+from tests.unit.selection.synthetic import prbs_zone
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("select")
+    prbs_zone(days=2, seed=2).to_csv(d / "zone.csv", index=False)
+    return d
+
+
+def test_select_table_json_report_and_model(files, capsys):
+    out, rep, model = files / "sel.json", files / "rep", files / "best.json"
+    args = ["select", str(files / "zone.csv"), "--model", "Ti+heater", "--model", "TiTe+heater"]
+    rc = main([*args, "--json", str(out), "--report", str(rep), "--save-model", str(model)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "selected: TiTe+heater (BIC)" in text and "Ce -> 0" in text
+    res = json.loads(out.read_text())
+    assert res["selected"] == "TiTe+heater" and res["rule"] == "bic"
+    for name in ("Ti+heater", "TiTe+heater"):
+        m = res["models"][name]
+        assert {"loglik", "n_params", "aic", "bic"} <= set(m) and 0 <= m["innovations"]["ljung_box_p"] <= 1
+    assert res["tests"][0]["df"] == 3 and res["tests"][0]["restriction"] == "Ce -> 0"
+    html = (rep / "report.html").read_text()
+    assert "Likelihood-ratio tests" in html and "Forward selection" not in html
+    assert (rep / "innovations_compared.png").stat().st_size > 1000
+    assert json.loads(model.read_text())["network"]["name"] == "TiTe+heater"
+    # forward selection, JSON on stdout
+    assert main([*args, "--forward", "--json", "-"]) == 0
+    fwd = json.loads(capsys.readouterr().out)
+    assert fwd["forward"]["path"] == ["Ti+heater", "TiTe+heater"] and fwd["selected"] == "TiTe+heater"
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--model", "Ti+heater"], "at least two"),
+        (["--model", "Ti+heater", "--model", "TiTe+heater", "--criterion", "hqc"], "bic or aic"),
+        (["--model", "Ti+heater", "--model", "TiTe+heatr"], "did you mean"),
+    ],
+)
+def test_select_mistakes_exit_2_with_one_line(files, capsys, extra, message):
+    rc = main(["select", str(files / "zone.csv"), *extra])
+    err = capsys.readouterr().err
+    assert rc == 2 and message in err and "Traceback" not in err
+
+
+def test_fit_reports_innovations_for_ml_and_labelled_open_loop_residuals_for_ls(files, capsys):
+    ml, ls, model = files / "ml.json", files / "ls.json", files / "ml_model.json"
+    zone = str(files / "zone.csv")
+    base = ["fit", zone, "--model", "TiTe+heater", "--no-profiles"]
+    assert main([*base, "--method", "ml", "--json", str(ml), "--save-model", str(model)]) in (0, 3)
+    text = capsys.readouterr().out
+    assert "innovations of Ti (one-step, standardized)" in text
+    d = json.loads(ml.read_text())
+    assert d["innovations"]["kind"] == "innovations" and 0 <= d["innovations"]["ljung_box_p"] <= 1
+    assert d["innovations"]["outputs"]["Ti"]["acf"]["lag_h"][1] == pytest.approx(5 / 60)
+    assert d["open_loop_residuals"]["kind"] == "open-loop"
+    assert main([*base, "--method", "ls", "--json", str(ls)]) in (0, 3)
+    assert "not expected to be white" in capsys.readouterr().out
+    d = json.loads(ls.read_text())
+    assert d["innovations"] is None and "not expected" in d["open_loop_residuals"]["note"]
+    # k steps ahead with the ML model: a band from the noise and from the estimates
+    pred = files / "pred.json"
+    assert main(["predict", str(model), zone, "--steps", "6", "--json", str(pred)]) == 0
+    p = json.loads(pred.read_text())
+    assert p["horizon"] == "6 steps ahead" and 0.85 < p["coverage_2sigma"]["Ti"] <= 1.0
+    assert set(p["mean_sd_K"]) == {"noise", "estimates"}
+    assert p["mean_sd_K"]["estimates"]["Ti"] < p["mean_sd_K"]["noise"]["Ti"]

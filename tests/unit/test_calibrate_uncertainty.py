@@ -1,0 +1,65 @@
+"""The calibration workflow's residual analysis, saved covariance and prediction bands."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from rczone.calibrate import calibrate, prediction, saved_covariance
+from rczone.errors import DataError
+from tests.unit.selection.synthetic import TRUE_MODEL, prbs_zone
+
+
+@pytest.fixture(scope="module")
+def zone():
+    return prbs_zone(days=2, seed=3)
+
+
+@pytest.fixture(scope="module")
+def ml(zone):
+    return calibrate(TRUE_MODEL, zone.iloc[:400], "ml", n_starts=2)
+
+
+def test_ml_fit_carries_its_innovations_and_ls_its_labelled_open_loop_residuals(zone, ml):
+    assert ml.innovations is not None and ml.innovations.kind == "innovations"
+    assert ml.open_loop_residuals.kind == "open-loop"
+    # the open-loop error of even a good fit is far from white; the innovations are not
+    assert ml.open_loop_residuals.outputs[0].acf[1] > 0.8 > abs(ml.innovations.outputs[0].acf[1])
+    ls = calibrate(TRUE_MODEL, zone.iloc[:400], "ls", n_starts=1)
+    assert ls.innovations is None and "not expected to be white" in ls.open_loop_residuals.note
+
+
+def test_the_saved_covariance_is_the_fits_and_feeds_the_prediction_band(zone, ml):
+    r = ml.result
+    names, cov = saved_covariance(ml.model)
+    assert names == list(r.names)
+    se = np.sqrt(np.diag(cov))
+    np.testing.assert_allclose(se, [r.std_errors[n] for n in names], rtol=1e-12)
+    later = zone.iloc[400:]
+    pred = prediction(ml.model, later)
+    assert "covariance" in pred.band_source and pred.steps is None
+    np.testing.assert_allclose(pred.sd**2, pred.sd_noise**2 + pred.sd_parameters**2, rtol=1e-12)
+    assert 0.0 < np.mean(pred.sd_parameters) < np.mean(pred.sd_noise)
+    plain = prediction(ml.model, later, parameters=False)
+    assert plain.sd_parameters is None and np.all(plain.sd <= pred.sd + 1e-15)
+    ahead = prediction(ml.model, later, steps=3)
+    assert ahead.horizon == "3 steps ahead" and np.isnan(ahead.predicted[:3]).all()
+    assert np.nanmean(ahead.sd) < np.nanmean(pred.sd)  # three steps ahead is surer than open loop
+    frame = ahead.to_frame()
+    assert {"Ti_sd_noise", "Ti_sd_parameters", "Ti_lower"} <= set(frame.columns)
+
+
+def test_k_steps_need_noise_levels_and_a_malformed_covariance_is_an_error(zone, ml):
+    ls_model = ml.model.with_values({}, noise={})
+    with pytest.raises(DataError, match="noise levels"):
+        prediction(ls_model, zone.iloc[400:], steps=2)
+    bad = ml.model.with_values({}, covariance={"names": ["Ci"], "matrix": [[1.0, 2.0]]})
+    with pytest.raises(DataError, match="covariance is malformed"):
+        prediction(bad, zone.iloc[400:])
+
+
+def test_no_residual_analysis_on_a_handful_of_measurements(zone):
+    few = zone.iloc[:200].copy()
+    few.loc[few.index[8:], "Ti"] = np.nan  # eight measured samples
+    cal = calibrate(TRUE_MODEL, few, "ml", n_starts=1, uncertainty=False)
+    assert cal.innovations is None and cal.open_loop_residuals is None

@@ -1,0 +1,31 @@
+"""Forward model selection on the Bacher & Madsen PRBS data (outside the project; skips without them)."""
+
+import json
+
+import pytest
+
+from tests.shared_data import SHARED
+
+from .scripts import load_script as load
+
+
+def load_script():
+    return load("model_selection")
+
+
+def test_skips_cleanly_without_data(tmp_path, capsys):
+    assert load_script().main(["--shared", str(tmp_path / "nothing"), "--out", str(tmp_path)]) == 0
+    assert "skipped: data not found" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not (SHARED / "data" / "bacher_madsen_prbs").is_dir(), reason="shared real data absent")
+def test_forward_selection_runs_on_the_prbs_experiment(tmp_path):
+    assert load_script().main(["--shared", str(SHARED), "--out", str(tmp_path)]) == 0
+    res = json.loads((tmp_path / "model_selection.json").read_text())
+    steps = res["forward"]["steps"]
+    assert res["forward"]["path"][0] == "Ti+heater+solar" and steps[0]["accepted"]
+    # each accepted step raised the likelihood significantly; the selected model is the last accepted
+    assert all(s["p_value"] < 0.05 for s in steps if s["accepted"])
+    assert res["selected"] == res["forward"]["path"][-1] != "Ti+heater+solar"
+    assert (tmp_path / "model_selection" / "report.html").is_file()

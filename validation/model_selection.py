@@ -1,0 +1,89 @@
+"""Forward model selection on the Bacher & Madsen PRBS experiment (real data, kept outside the project).
+
+Usage::
+
+    python validation/model_selection.py [--shared ../shared] [--out validation-output]
+
+Reads ``data/bacher_madsen_prbs/inputPRBS1.csv`` from the shared folder (its licence does not
+allow shipping it; nothing is copied into the project) through the column map
+``validation/maps/bacher_madsen.toml`` (``Ta`` is the outdoor temperature ``To``, kW to W) and runs
+
+    rczone select DATA --columns validation/maps/bacher_madsen.toml --forward --json ... --report ...
+
+on it: the Bacher & Madsen family with a heater and solar gains, grown from ``Ti`` by
+likelihood-ratio tests. Prints 'skipped: data not found' and exits 0 when the data are absent.
+Writes ``<out>/model_selection.json``, ``<out>/model_selection/report.html`` and prints the tables
+as Markdown (the form in docs/validation.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from rczone.cli.main import main as rczone
+
+HERE = Path(__file__).resolve().parent
+DEFAULT_SHARED = HERE.parent.parent / "shared"
+DATA = Path("data") / "bacher_madsen_prbs" / "inputPRBS1.csv"
+COLUMN_MAP = HERE / "maps" / "bacher_madsen.toml"
+
+
+def markdown(res: dict) -> str:
+    """The candidates and the forward steps as Markdown tables."""
+    lines = [
+        "| model | log L | k | AIC | BIC | Ljung-Box p (innovations) | white |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for name, m in res["models"].items():
+        p = m["innovations"]["ljung_box_p"]
+        mark = " **(selected)**" if name == res["selected"] else ""
+        lines.append(
+            f"| {name}{mark} | {m['loglik']:.1f} | {m['n_params']} | {m['aic']:.1f} | {m['bic']:.1f} |"
+            f" {p:.2g} | {'yes' if m['innovations']['white'] else 'no'} |"
+        )
+    lines += [
+        "",
+        "| step | from | extensions fitted | best | LR | df | p | decision |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for k, s in enumerate(res["forward"]["steps"], 1):
+        lines.append(
+            f"| {k} | {s['from']} | {', '.join(s['tried'])} | {s['best']} | {s['statistic']:.1f} | {s['df']} |"
+            f" {s['p_value']:.2g} | {'accepted' if s['accepted'] else 'stop'} |"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--shared", type=Path, default=DEFAULT_SHARED)
+    ap.add_argument("--out", type=Path, default=Path("validation-output"))
+    args = ap.parse_args(argv)
+    if not (args.shared / DATA).is_file():
+        print(f"skipped: data not found under {args.shared / DATA.parent}")
+        return 0
+    out_json = args.out / "model_selection.json"
+    rc = rczone(
+        [
+            "select",
+            str(args.shared / DATA),
+            "--columns",
+            str(COLUMN_MAP),
+            "--forward",
+            "--json",
+            str(out_json),
+            "--report",
+            str(args.out / "model_selection"),
+        ]
+    )
+    if rc not in (0, 3):
+        return rc
+    print(markdown(json.loads(out_json.read_text())))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
