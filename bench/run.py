@@ -168,7 +168,15 @@ def jml_cases(rng: np.random.Generator) -> list[Case]:
     noise_fixed = {"sigma_w_Tw": 1e-5, "sigma_x0_Ti": 0.1, "sigma_x0_Tw": 1.0}
 
     def ours_fit() -> np.ndarray:
-        res = fit(net, data, free=free + list(noise_free), method="ml", fixed=noise_fixed, uncertainty=False)
+        res = fit(
+            net,
+            data,
+            free=free + list(noise_free),
+            method="ml",
+            fixed=noise_fixed,
+            uncertainty=False,
+            n_starts=1,
+        )
         return np.array([res.estimates[n] for n in free])
 
     def plain_fit() -> np.ndarray:
@@ -241,8 +249,9 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
 
     def fit4():
         return fit(
-            net4, data4, problems.FOUR_ZONE_FREE, "ml", "lbfgs", start=start4, fixed=fixed4, uncertainty=False
-        )
+            net4, data4, problems.FOUR_ZONE_FREE, "ml", "lbfgs", start=start4, fixed=fixed4, uncertainty=False,
+            n_starts=1,
+        )  # fmt: skip
 
     out.append(
         Case(
@@ -326,6 +335,9 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
         free = problems.PEER_FREE
 
         def fitp():
+            return fit(netp, arma, free, "ml", "lbfgs", start=startp, fixed=fixedp, hold="foh", n_starts=1)
+
+        def fitp_global():
             return fit(netp, arma, free, "ml", "lbfgs", start=startp, fixed=fixedp, hold="foh")
 
         def plain_fitp():
@@ -335,13 +347,27 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
             Case(
                 "fit_ml_peer",
                 "complete ML fit of the peer task on pySIP's Armadillo data (232 samples, FOH): Ro, Ri, Cw, Ci,"
-                " x0_Tw, sigma_w_Tw, sigma_w_Ti, sigma_v free from a factor 2 off, L-BFGS with exact gradients,"
-                " standard errors included; plain = L-BFGS-B with forward differences; agreement on Ro, Ri, Cw, Ci",
+                " x0_Tw, sigma_w_Tw, sigma_w_Ti, sigma_v free from a factor 2 off, one local search (n_starts=1: L-BFGS"
+                " with exact gradients, then the search's confirmation), standard errors included; plain = L-BFGS-B"
+                " with forward differences; agreement on Ro, Ri, Cw, Ci",
                 fitp,
                 plain_fitp,
                 lambda res, p: max(abs(res.estimates[n] / p[i] - 1) for i, n in enumerate(free[:4])),
                 slow=True,
                 target_s=30e-3,
+            )
+        )
+        out.append(
+            Case(
+                "fit_ml_peer_global",
+                "as fit_ml_peer with the default global search of rczone.estimation.fit (sampling of the box,"
+                " several L-BFGS searches, confirmation); plain = the plain single search of fit_ml_peer (a lower"
+                " bound of a plain global search); agreement = relative difference of -log L from fit_ml_peer's",
+                fitp_global,
+                None,
+                lambda res, _: abs(res.cost / fitp().cost - 1),
+                slow=True,
+                plain_bound=lambda res, done: done["fit_ml_peer"]["plain_median_s"],
             )
         )
     return out
