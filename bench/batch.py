@@ -26,9 +26,15 @@ import tempfile
 import time
 from pathlib import Path
 
-from rczone.atomic import write_json_atomic
-from rczone.batch import read_manifest, run_batch
-from rczone.virtual.scenarios import generate_night
+# single-threaded BLAS, as in bench/run.py (set before numpy loads it; the workers inherit it):
+# the matrices are tiny, and BLAS threads contending for the cores made data generation 5-10x
+# slower on a loaded 2-core machine, and SciPy's L-BFGS-B with them too
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+from rczone.atomic import write_json_atomic  # noqa: E402
+from rczone.batch import read_manifest, run_batch  # noqa: E402
+from rczone.virtual.scenarios import generate_night  # noqa: E402
 
 
 def main(argv: list[str] | None = None) -> int:

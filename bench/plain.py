@@ -35,6 +35,17 @@ def van_loan(A: np.ndarray, Qc: np.ndarray, dt: float) -> np.ndarray:
     return E[n:, n:].T @ E[:n, n:]
 
 
+def discretize_foh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """FOH ``(Phi, G0, G1)`` from the exponential of ``[[A, B, 0], [0, 0, I/dt], [0, 0, 0]] dt``."""
+    n, p = B.shape
+    blk = np.zeros((n + 2 * p, n + 2 * p))
+    blk[:n, :n] = A * dt
+    blk[:n, n : n + p] = B * dt
+    blk[n : n + p, n + p :] = np.eye(p)
+    E = expm(blk)
+    return E[:n, :n], E[:n, n : n + p] - E[:n, n + p :], E[:n, n + p :]
+
+
 def discretize_all(ss, t: np.ndarray, m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """One ZOH discretization per interval, shapes ``(N-1, n, n)`` and ``(N-1, n, p)``."""
     Phi = np.empty((t.size - 1, ss.n_states, ss.n_states))
@@ -70,44 +81,58 @@ def kalman_nll(
     P0: np.ndarray,
     Qc: np.ndarray,
     R: np.ndarray,
+    hold: str = "zoh",
 ) -> float:
-    """``-log L`` of the one-output measurements by a Python-loop Kalman filter (Joseph form)."""
+    """``-log L`` of the measurements by a Python-loop Kalman filter (joint update of the observed outputs).
+
+    One ``expm`` per sample for the hold matrices and one for Van Loan's ``Qd``; the observed
+    outputs of a sample are updated together (``S = C P C' + R``, gain by ``solve``, Joseph form).
+    """
     x = np.array(x0, dtype=float)
     P = np.array(P0, dtype=float)
-    c = ss.C[0]
-    r = float(R[0, 0])
-    eye = np.eye(ss.n_states)
+    n = ss.n_states
+    eye = np.eye(n)
     nll = 0.0
-    n_obs = 0
     for k in range(t.size):
-        yk = y[k, 0] - ss.D[0] @ u[k]
-        if not np.isnan(yk):
-            Pc = P @ c
-            s = c @ Pc + r
-            e = yk - c @ x
-            K = Pc / s
-            x = x + K * e
-            IKC = eye - np.outer(K, c)
-            P = IKC @ P @ IKC.T + r * np.outer(K, K)
+        yk = y[k] - ss.D @ u[k]
+        obs = ~np.isnan(yk)
+        if obs.any():
+            C = ss.C[obs]
+            Rk = R[np.ix_(obs, obs)]
+            S = C @ P @ C.T + Rk
+            e = yk[obs] - C @ x
+            K = np.linalg.solve(S, C @ P).T
+            x = x + K @ e
+            IKC = eye - K @ C
+            P = IKC @ P @ IKC.T + K @ Rk @ K.T
             P = 0.5 * (P + P.T)
-            nll += 0.5 * (np.log(2 * np.pi * s) + e * e / s)
-            n_obs += 1
+            _, logdet = np.linalg.slogdet(S)
+            nll += 0.5 * (obs.sum() * np.log(2 * np.pi) + logdet + e @ np.linalg.solve(S, e))
         if k < t.size - 1:
             A = ss.A + np.tensordot(m[k], ss.N, axes=1)
             B = ss.B + np.tensordot(m[k], ss.M, axes=1)
             dt = t[k + 1] - t[k]
-            Phi, Gam = discretize(A, B, dt)
-            x = Phi @ x + Gam @ u[k]
+            if hold == "foh":
+                Phi, G0, G1 = discretize_foh(A, B, dt)
+                x = Phi @ x + G0 @ u[k] + G1 @ u[k + 1]
+            else:
+                Phi, Gam = discretize(A, B, dt)
+                x = Phi @ x + Gam @ u[k]
             P = Phi @ P @ Phi.T + van_loan(A, Qc, dt)
     return float(nll)
 
 
-def initial_state(ss, u0: np.ndarray, m0: np.ndarray, y0: float) -> np.ndarray:
-    """State 0 at the first measurement, the other states in steady state given it."""
+def initial_state(ss, u0: np.ndarray, m0: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """Measured states (outputs that are a state) at the first measurement, the others in steady state given them."""
     A = ss.A + np.tensordot(m0, ss.N, axes=1)
     B = ss.B + np.tensordot(m0, ss.M, axes=1)
-    rest = np.linalg.solve(A[1:, 1:], -(A[1:, 0] * y0 + B[1:] @ u0))
-    return np.concatenate([[y0], rest])
+    y0 = np.atleast_1d(y0)
+    meas = [int(np.argmax(ss.C[j])) for j in range(ss.C.shape[0])]
+    rest = [i for i in range(ss.n_states) if i not in meas]
+    x = np.empty(ss.n_states)
+    x[meas] = y0
+    x[rest] = np.linalg.solve(A[np.ix_(rest, rest)], -(A[np.ix_(rest, meas)] @ y0 + B[rest] @ u0))
+    return x
 
 
 def fit_ml(
@@ -129,9 +154,43 @@ def fit_ml(
         v = {**noise_fixed, **dict(zip(names, np.exp(eta)))}
         ss = network.state_space({n: v[n] for n in free})
         sw = np.array([v[f"sigma_w_{s}"] for s in states])
-        x0 = initial_state(ss, u[0], m[0], y[0, 0])
+        x0 = initial_state(ss, u[0], m[0], y[0])
         R = np.array([[v["sigma_v"] ** 2]])
         return kalman_nll(ss, t, m, u, y, x0, np.diag(sx**2), np.diag(sw**2), R)
 
     res = minimize(cost, start, method="Nelder-Mead", options={"xatol": 1e-4, "fatol": 1e-6, "maxfev": 2000})
     return np.exp(res.x), int(res.nfev)
+
+
+def fit_ml_lbfgs(
+    network, names: list[str], start: dict[str, float], fixed: dict[str, float], data, hold: str
+):
+    """L-BFGS-B on ``log`` of the positive parameters (``x0_*`` as they are) with a forward-difference gradient.
+
+    The plain way to fit a gradient-free likelihood: scipy's default finite-difference gradient
+    (``d + 1`` likelihoods per gradient) on :func:`kalman_nll`. Returns the estimates (in
+    ``names`` order) and the number of likelihood evaluations.
+    """
+    states = network.state_names
+    log = np.array([not n.startswith("x0_") for n in names])
+    x_start = np.array([np.log(start[n]) if lg else start[n] for n, lg in zip(names, log)])
+    n_evals = [0]
+
+    def cost(x: np.ndarray) -> float:
+        n_evals[0] += 1
+        v = {**fixed, **{n: (np.exp(xi) if lg else xi) for n, xi, lg in zip(names, x, log)}}
+        ss = network.state_space({n: v[n] for n in network.free_parameter_names if n in v})
+        sw = np.array([v[f"sigma_w_{s}"] for s in states])
+        sx = np.array([v[f"sigma_x0_{s}"] for s in states])
+        x0 = initial_state(ss, data.u[0], data.m[0], data.y[0])
+        for i, s in enumerate(states):
+            if f"x0_{s}" in v:
+                x0[i] = v[f"x0_{s}"]
+        outs = network.outputs
+        sv = np.array([v["sigma_v"]] if len(outs) == 1 else [v[f"sigma_v_{o}"] for o in outs])
+        return kalman_nll(
+            ss, data.t, data.m, data.u, data.y, x0, np.diag(sx**2), np.diag(sw**2), np.diag(sv**2), hold
+        )
+
+    res = minimize(cost, x_start, method="L-BFGS-B")
+    return np.where(log, np.exp(res.x), res.x), n_evals[0]

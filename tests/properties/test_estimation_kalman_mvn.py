@@ -16,7 +16,13 @@ from scipy.integrate import quad_vec
 from scipy.linalg import expm
 from scipy.stats import multivariate_normal
 
-from rczone.estimation.kalman import kalman_filter_arrays, kalman_nll_fast, stochastic_matrices
+from rczone.errors import InputShapeError
+from rczone.estimation.kalman import (
+    kalman_filter_arrays,
+    kalman_filter_reference,
+    kalman_nll,
+    stochastic_matrices,
+)
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 
 NET = RCNetwork(
@@ -51,7 +57,9 @@ X0 = np.array([21.0, 18.0])
 P0 = np.diag([0.3**2, 0.5**2])
 
 
-def brute_force_logpdf(y: np.ndarray, C: np.ndarray, R: np.ndarray, hold: str) -> float:
+def brute_force_logpdf(
+    y: np.ndarray, C: np.ndarray, R: np.ndarray, hold: str, D: np.ndarray | None = None
+) -> float:
     ss = NET.state_space()
     n, N = 2, T.size
     Phis, means = [], [X0]
@@ -91,7 +99,7 @@ def brute_force_logpdf(y: np.ndarray, C: np.ndarray, R: np.ndarray, hold: str) -
     ny = C.shape[0]
     Cb = np.kron(np.eye(N), C)
     covY = Cb @ covX @ Cb.T + np.kron(np.eye(N), R)
-    meanY = Cb @ np.concatenate(means)
+    meanY = Cb @ np.concatenate(means) + (0.0 if D is None else (U @ D.T).reshape(-1))
     yv = y.reshape(-1)
     obs = np.isfinite(yv)
     assert obs.sum() < N * ny  # the case must include a missing measurement
@@ -108,21 +116,52 @@ def test_scalar_output_nll_equals_dense_mvn(hold: str) -> None:
     out = kalman_filter_arrays(Phi, G0, G1, Qd, which, U, y, X0, P0, ss.C, ss.D, R)
     assert out.n_obs == 5
     assert out.nll == pytest.approx(ref, abs=1e-10)
-    fast = kalman_nll_fast(Phi, G0, G1, Qd, which, U, y, X0, P0, ss.C, ss.D, R)
+    fast = kalman_nll(Phi, G0, G1, Qd, which, U, y, X0, P0, ss.C, ss.D, R)
     assert fast == pytest.approx(ref, abs=1e-10)
 
 
-def test_two_outputs_with_partly_missing_sample_equals_dense_mvn() -> None:
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_three_outputs_each_missing_on_its_own_equal_dense_mvn(hold: str) -> None:
+    """Per-output measurement noise; an output missing at a sample is skipped alone, the others update."""
     ss = NET.state_space()
-    C = np.eye(2)
-    D = np.zeros((2, 3))
-    y = np.array([[21.2, 18.1], [20.5, np.nan], [np.nan, np.nan], [19.0, 18.3], [19.8, 18.2], [20.1, 18.0]])
+    C = np.array([[1.0, 0.0], [0.0, 1.0], [0.3, 0.7]])  # the third a mix (a surface sensor)
+    D = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 1e-3]])
+    y = np.array(
+        [
+            [21.2, 18.1, 19.0],
+            [20.5, np.nan, 19.2],
+            [np.nan, np.nan, np.nan],
+            [np.nan, 18.3, 18.9],
+            [19.8, 18.2, np.nan],
+            [20.1, 18.0, 18.8],
+        ]
+    )
+    R = np.diag([0.05**2, 0.08**2, 0.2**2])
+    ref = -brute_force_logpdf(y, C, R, hold, D)
+    Phi, G0, G1, Qd, which = stochastic_matrices(ss, T, MFLOW, np.diag(SIG_W**2), hold)
+    twin = kalman_filter_reference(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R)
+    compiled = kalman_filter_arrays(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R)
+    assert twin.n_obs == compiled.n_obs == 12
+    assert twin.nll == pytest.approx(ref, abs=1e-10)
+    assert compiled.nll == pytest.approx(ref, abs=1e-10)
+    assert kalman_nll(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R) == pytest.approx(ref, abs=1e-10)
+    for a, b in (
+        (twin.innovations, compiled.innovations),
+        (twin.S, compiled.S),
+        (twin.x_filt, compiled.x_filt),
+    ):
+        np.testing.assert_allclose(b, a, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(np.isnan(compiled.innovations), np.isnan(y))
+
+
+def test_correlated_measurement_noise_is_refused() -> None:
+    ss = NET.state_space()
+    Phi, G0, G1, Qd, which = stochastic_matrices(ss, T, MFLOW, np.diag(SIG_W**2), "zoh")
     R = np.array([[0.05**2, 0.0004], [0.0004, 0.08**2]])
-    ref = -brute_force_logpdf(y, C, R, "foh")
-    Phi, G0, G1, Qd, which = stochastic_matrices(ss, T, MFLOW, np.diag(SIG_W**2), "foh")
-    out = kalman_filter_arrays(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R)
-    assert out.n_obs == 9
-    assert out.nll == pytest.approx(ref, abs=1e-10)
+    y = np.full((T.size, 2), 20.0)
+    for f in (kalman_filter_reference, kalman_filter_arrays):
+        with pytest.raises(InputShapeError, match="R must be diagonal"):
+            f(Phi, G0, G1, Qd, which, U, y, X0, P0, np.eye(2), np.zeros((2, 3)), R)
 
 
 @pytest.mark.parametrize("dt", [1.0, 600.0, 3600.0])
@@ -132,7 +171,7 @@ def test_process_noise_covariance_is_accurate_for_stiff_models(dt: float) -> Non
     Plain Van Loan loses everything here (its block exponential holds e^{+|lambda| dt});
     the doubling scheme must match quadrature to 1e-12 relative.
     """
-    from rczone.estimation.kalman import process_noise_covariance
+    from rczone.simulation.discretize import process_noise_covariance
 
     A = np.array([[-0.3636, 0.36], [0.36 * 27885 / 6e6, -0.36 * 27885 / 6e6 - 1e-6]])
     Qc = np.diag([1e-12, 4e-12])

@@ -15,8 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
-from rczone.estimation.kalman import kalman_nll
-from rczone.kernels.kalman import interval_groups, kalman_nll_rc2
+from rczone.estimation.kalman import kalman_filter_reference, kalman_nll_rc2
 from rczone.kernels.propagate import propagate_kernel
 from rczone.kernels.rankone import simulate_rank_one
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
@@ -29,43 +28,12 @@ from rczone.simulation.discretize import (
     spectral_transition,
     symmetrizing_scale,
 )
+from rczone.simulation.intervals import interval_groups
 from rczone.simulation.simulate import propagate_reference, transition_matrices, transition_matrices_expm
+from tests.netfactory import random_network
 
 RTOL = 1e-10
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-
-
-def random_network(rng: np.random.Generator, n_cap: int, n_massless: int, n_bound: int) -> RCNetwork:
-    """A connected RC network: random tree plus random extra edges, log-uniform R and C."""
-    cap = [f"T{i}" for i in range(n_cap)]
-    mass0 = [f"Z{i}" for i in range(n_massless)]
-    bounds = [f"B{i}" for i in range(n_bound)]
-    names = cap + mass0
-    order = rng.permutation(len(names))
-    edges = {(names[order[i]], names[order[rng.integers(0, i)]]) for i in range(1, len(names))}
-    for _ in range(rng.integers(0, len(names) + 1) if len(names) > 1 else 0):
-        a, b = rng.choice(len(names), 2, replace=False)
-        edges.add((names[a], names[b]))
-    for bnd in bounds:
-        edges.add((names[rng.integers(0, len(names))], bnd))
-    for z in mass0:  # a massless node needs two connections to be more than a dead end
-        edges.add((z, bounds[rng.integers(0, n_bound)]))
-    res, params = [], []
-    for k, (a, b) in enumerate(sorted(edges)):
-        res.append(Resistor(a, b, f"R{k}"))
-        params.append(Parameter(f"R{k}", "resistance", float(10 ** rng.uniform(-3, 0))))
-    nodes = [Node(c, f"C{i}") for i, c in enumerate(cap)] + [Node(z, None) for z in mass0]
-    params += [Parameter(f"C{i}", "capacitance", float(10 ** rng.uniform(4, 7))) for i in range(n_cap)]
-    return RCNetwork(
-        "random",
-        nodes,
-        bounds,
-        res,
-        params,
-        heat_inputs=[HeatInput("Q", {cap[rng.integers(0, n_cap)]: 1.0})],
-        supply_air=[SupplyAir(cap[rng.integers(0, n_cap)], "m", "Ts")],
-        outputs=[cap[0]],
-    )
 
 
 def nets(max_cap: int = 5) -> st.SearchStrategy:
@@ -193,7 +161,7 @@ def reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold):
         else:
             Phi[k], G0[k], G1[k] = foh(A, B, dt)
         Qd[k] = van_loan_doubling(A, Qc, dt)
-    return kalman_nll(Phi, G0, G1, Qd, np.arange(K), u, y, x0, P0, ss.C, ss.D, R)
+    return kalman_filter_reference(Phi, G0, G1, Qd, np.arange(K), u, y, x0, P0, ss.C, ss.D, R).nll
 
 
 def filter_problem(rng: np.random.Generator, p: int, N: int) -> tuple[np.ndarray, ...]:

@@ -1,47 +1,36 @@
 """When an estimation problem can run as one compiled call, and the arrays it runs on.
 
-A problem qualifies when the fused 2-state path of the costs applies (two capacitive
-states, one measured output, the network's plain conductance form, a measured first sample,
-no initial-state parameters), every resistor, capacity and noise level is a constant or
-proportional to one free parameter (``R1 = Rw/2`` is; ``R = Ra + Rb`` is not), and the
-checks the Python path makes on every parameter cannot fail unseen: every tied parameter of
-the network (used by an element or not) is proportional, every resistance and capacitance is
-positive by construction (positive constants, positive factors of log-transformed free
-parameters), and every free parameter that sets an element value is log-transformed. Then
-:func:`rczone.kernels.rc2fit.cost_z` evaluates the cost and
-:func:`rczone.kernels.rc2fit.nelder_mead` minimizes it without returning to Python.
-Anything else returns None and takes the general path, with the same results.
+A problem qualifies when the network has its plain conductance form (every node
+capacitive, numeric heat gains and ``cp``), every resistor, capacity, noise level and given
+initial state is a constant or proportional to one free parameter (``R1 = Rw/2`` is;
+``R = Ra + Rb`` is not), and the checks the Python path makes on every parameter cannot fail
+unseen: every tied parameter of the network (used by an element or not) is proportional,
+every resistance and capacitance is positive by construction (positive constants, positive
+factors of log-transformed free parameters), and every free parameter that sets an element
+value is log-transformed. Then :func:`rczone.kernels.problem.evaluate` computes the cost and
+its gradient, and :func:`rczone.kernels.neldermead.nelder_mead` minimizes it without
+returning to Python. Anything else returns None and takes the general engine of
+:mod:`rczone.estimation.costs`, with the same results.
 
-Layout of the problem tuple (contiguous float64 / int64 / bool arrays)::
-
-    (kind,                                    # LS, ML or MAP
-     (L, P, E, Gb0, Nf, Mf, output_state),    # conductance form of the network
-     (t, m, u, y, groups),                    # data, y one column, interval groups
-     (res_idx, res_k, cap_idx, cap_k, noise_idx, noise_k),
-     (eta_lower, eta_upper, log),             # direct-search transform
-     (prior_idx, prior_log_construction, prior_spread, likelihood_weight),
-     (foh, phi2, symmetry_rtol),
-     scratch)                                 # (N,) buffer for the open-loop errors
-
-A slot ``(idx, k)`` has the value ``k * theta[idx]``, or ``k`` when ``idx < 0``. Noise slots
-are ``sigma_v``, ``sigma_w_<state>`` (2), ``sigma_x0_<state>`` (2) in state order.
+The layout of the problem tuple is documented in :mod:`rczone.kernels.problem`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from rczone.estimation.costs import Objective, fused_path_applies
-from rczone.kernels import rc2fit
-from rczone.kernels.kalman import _PHI2
+from rczone.estimation.parameters import measurement_noise_names
+from rczone.kernels.kalman import STEADY_RTOL
+from rczone.kernels.problem import cost_z
 from rczone.network.parameters import proportional_base
 from rczone.simulation.discretize import SYMMETRY_RTOL
 
-_KIND = {"ls": rc2fit.LS, "ml": rc2fit.ML, "map": rc2fit.MAP}
+#: Problem kinds of :mod:`rczone.kernels.problem` (``LS, ML, MAP = 0, 1, 2``).
+_KIND = {"ls": 0, "ml": 1, "map": 2}
 
 
-def _slot(objective: Objective, name: str | float) -> tuple[int, float] | None:
-    """``(idx, k)`` of one element value, or None if it is not proportional to one parameter."""
+def _slot(objective, name: str | float) -> tuple[int, float] | None:
+    """``(idx, k)`` of one value, or None if it is not proportional to one parameter or has no value."""
     spec = objective.spec
     if not isinstance(name, str):
         return -1, float(name)
@@ -63,7 +52,7 @@ def _slot(objective: Objective, name: str | float) -> tuple[int, float] | None:
     return -1, k * float(v)
 
 
-def _always_valid(objective: Objective) -> bool:
+def _always_valid(objective) -> bool:
     """Whether every parameter value the Python path checks is valid for every free value.
 
     The compiled cost checks only the values it uses; the Python path resolves and checks
@@ -89,42 +78,60 @@ def _always_valid(objective: Objective) -> bool:
     return True
 
 
-def compiled_problem(objective: Objective) -> tuple | None:
-    """The problem tuple of ``objective`` for :mod:`rczone.kernels.rc2fit`, or None."""
+def _slots(objective, names) -> tuple[np.ndarray, np.ndarray] | None:
+    got = [_slot(objective, n) for n in names]
+    if any(g is None for g in got):
+        return None
+    return np.array([g[0] for g in got], dtype=np.int64), np.array([g[1] for g in got])
+
+
+def compiled_problem(objective) -> tuple | None:
+    """The problem tuple of an :class:`~rczone.estimation.costs.Objective` for :mod:`rczone.kernels.problem`, or None."""
     net, data, spec = objective.network, objective.data, objective.spec
-    if objective.method not in _KIND or not fused_path_applies(net, spec.fixed, data):
-        return None
-    if any(n.startswith("x0_") for n in spec.names) or not _always_valid(objective):
-        return None
     form = net.conductance_form
+    if objective.method not in _KIND or form is None or not _always_valid(objective):
+        return None
     states = net.state_names
-    names = (
-        list(form.resistances),
-        list(form.capacities),
-        ["sigma_v", *(f"sigma_w_{s}" for s in states), *(f"sigma_x0_{s}" for s in states)],
-    )
-    if objective.method == "ls":
-        names = (names[0], names[1], [])  # no noise in output-error least squares
-    slots = []
-    for group in names:
-        got = [_slot(objective, n) for n in group]
+    elements = []
+    for group in (form.resistances, form.capacities):
+        sl = _slots(objective, group)
         # a free parameter setting an element value must be positive by its transform
-        if any(g is None or (g[0] >= 0 and not spec.log[g[0]]) for g in got):
+        if sl is None or any(i >= 0 and not spec.log[i] for i in sl[0]):
             return None
-        slots.append((np.array([g[0] for g in got], dtype=np.int64), np.array([g[1] for g in got])))
-    if objective.method == "ls":
-        slots[2] = (np.full(5, -1, dtype=np.int64), np.zeros(5))
+        elements.append(sl)
+    noise = []
+    for group in (
+        measurement_noise_names(net.outputs),
+        [f"sigma_w_{s}" for s in states],
+        [f"sigma_x0_{s}" for s in states],
+    ):
+        if objective.method == "ls":
+            noise.append((np.full(len(group), -1, dtype=np.int64), np.zeros(len(group))))
+            continue
+        sl = _slots(objective, group)
+        if sl is None:
+            return None
+        noise.append(sl)
+    x0_names = [f"x0_{s}" for s in states]
+    given = np.array([n in spec.names or n in spec.fixed for n in x0_names], dtype=bool)
+    x0_idx = np.array([spec.names.index(n) if n in spec.names else -1 for n in x0_names], dtype=np.int64)
+    x0_k = np.array([1.0 if n in spec.names else float(spec.fixed.get(n, 0.0)) for n in x0_names])
     prior = np.flatnonzero(
         np.array([k in ("resistance", "capacitance") for k in spec.kinds], dtype=bool)
         & np.isfinite(spec.construction)
     )
+    keys, which = data.intervals
     groups = np.empty(0, dtype=np.int64) if data.interval_groups is None else data.interval_groups
-    c = np.ascontiguousarray
+    fused = len(states) == 2 and len(net.outputs) == 1
+
+    def c(a, dtype=None):  # writable contiguous copies: one compiled specialization for every caller
+        return np.array(a, dtype=dtype, order="C", copy=True)
+
     return (
         _KIND[objective.method],
-        (form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, int(form.output_state[0])),
-        (c(data.t), c(data.m), c(data.u), c(data.y[:, 0]), groups),
-        (slots[0][0], slots[0][1], slots[1][0], slots[1][1], slots[2][0], slots[2][1]),
+        (form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, np.array(form.output_state, dtype=np.int64)),
+        (c(data.t), c(data.m), c(data.u), c(data.y), c(keys), c(which), c(groups)),
+        (*elements[0], *elements[1], *noise[0], *noise[1], *noise[2], x0_idx, x0_k, given),
         (c(spec.eta_lower), c(spec.eta_upper), c(spec.log, dtype=bool)),
         (
             prior.astype(np.int64),
@@ -132,7 +139,7 @@ def compiled_problem(objective: Objective) -> tuple | None:
             float(objective.prior_spread),
             float(objective.likelihood_weight),
         ),
-        (objective.hold == "foh", _PHI2, float(SYMMETRY_RTOL)),
+        (objective.hold == "foh", float(SYMMETRY_RTOL), float(STEADY_RTOL), fused),
         np.empty(data.t.shape[0]),
     )
 
@@ -143,4 +150,4 @@ def compiled_cost(problem: tuple, eta: np.ndarray) -> float:
     f = (np.asarray(eta, dtype=float) - lo) / (hi - lo)
     with np.errstate(divide="ignore"):
         z = np.log(f) - np.log1p(-f)
-    return float(rc2fit.cost_z(z, problem))
+    return float(cost_z(z, problem))

@@ -14,6 +14,7 @@ import numpy as np
 
 from rczone.errors import DataError, InputShapeError, did_you_mean
 from rczone.network import RCNetwork
+from rczone.simulation.intervals import interval_groups, interval_keys, unique_rows
 from rczone.simulation.simulate import check_inputs, check_time
 
 MIN_MEASURED = 30
@@ -127,10 +128,19 @@ class Dataset:
 
     @cached_property
     def interval_groups(self) -> np.ndarray | None:
-        """Intervals sharing length and flows (:func:`rczone.kernels.kalman.interval_groups`)."""
-        from rczone.kernels.kalman import interval_groups
-
+        """Intervals sharing length and flows (:func:`rczone.simulation.intervals.interval_groups`)."""
         return interval_groups(self.t, self.m)
+
+    @cached_property
+    def intervals(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(keys, which)``: the distinct ``(dt, m)`` rows, shape (K, 1 + n_flows), and the row of each interval.
+
+        Every interval's discrete matrices depend only on its key, so each is computed once.
+        """
+        keys, _, which = unique_rows(interval_keys(self.t, self.m))
+        for arr in (keys, which):
+            arr.setflags(write=False)
+        return np.ascontiguousarray(keys), np.ascontiguousarray(which, dtype=np.int64)
 
     def check_against(self, network: RCNetwork) -> None:
         """Raise :class:`InputShapeError` unless the columns match the network's signals."""

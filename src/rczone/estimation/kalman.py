@@ -6,87 +6,55 @@ observed at discrete, possibly irregular, times:
 .. math::
 
     dx = \\big(A(m)\\,x + B(m)\\,u\\big)\\,dt + \\sigma\\,dW, \\qquad
-    y_k = C x_k + D u_k + v_k, \\quad v_k \\sim N(0, R)
+    y_k = C x_k + D u_k + v_k, \\quad v_k \\sim N(0, R), \\ R = \\mathrm{diag}(r)
 
 The flows ``m`` are known and held constant over each interval, so each interval is
-LTI and is discretized exactly: ``Phi = e^{A dt}``, the ZOH or FOH input matrices, and
-``Qd = int_0^dt e^{As} Q_c e^{A's} ds`` with ``Q_c = sigma sigma'`` (Van Loan). The
-discretizations are computed once per distinct ``(dt, m)`` (the scheme of
-:func:`rczone.simulation.simulate.transition_matrices`).
+LTI and is discretized exactly (:func:`rczone.simulation.discretize.interval_discretization`),
+once per distinct ``(dt, m)``. The measurement noise is independent between outputs
+(one ``sigma_v`` per output), so the outputs of a sample are processed one at a time: a
+missing output is skipped on its own, and the likelihood is exact [2]_.
 
-The filter loop is a pure function over arrays (:func:`kalman_filter_arrays`) so that a
-compiled version can replace it; this plain-NumPy version is the reference.
+There is one filter, :func:`rczone.kernels.kalman.kalman_filter` (compiled, with the
+forward sensitivities of the likelihood); :func:`kalman_filter_arrays`, :func:`kalman_nll`
+and :func:`kalman_innovations_fast` call it. :func:`kalman_filter_reference` is its plain
+NumPy twin, written from the same two step functions (:func:`update_step`,
+:func:`predict_step`); the tests compare the two, and both with a brute-force joint Gaussian
+density. :func:`kalman_nll_rc2` runs the fused 2-state kernel of :mod:`rczone.kernels.rc2`.
 
 References
 ----------
 .. [1] H. Madsen, J. Holst, "Estimation of continuous-time models for the heat dynamics
    of a building", Energy and Buildings 22 (1995) 67-79.
-.. [2] A. C. Harvey, *Forecasting, Structural Time Series Models and the Kalman
+.. [2] J. Durbin, S. J. Koopman, *Time Series Analysis by State Space Methods*, 2nd ed.,
+   Oxford University Press, 2012, section 6.4 (univariate treatment of multivariate series).
+.. [3] A. C. Harvey, *Forecasting, Structural Time Series Models and the Kalman
    Filter*, Cambridge University Press, 1989, section 3.4 (prediction-error
    decomposition of the likelihood).
-.. [3] R. S. Bucy, P. D. Joseph, *Filtering for Stochastic Processes with Applications
-   to Guidance*, 1968 (the Joseph-form covariance update).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
 
 from rczone.errors import InputShapeError
+from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, no_sensitivities, outputs
+from rczone.kernels.rc2 import nll_rc2
 from rczone.network.statespace import BilinearStateSpace
-from rczone.simulation.discretize import (
-    foh,
-    spectral_decomposition,
-    spectral_noise_covariance,
-    spectral_transition,
-    symmetrizing_scale,
-    van_loan,
-    zoh,
-)
+from rczone.simulation.discretize import SYMMETRY_RTOL, interval_discretization, symmetrizing_scale
 from rczone.simulation.intervals import interval_keys, unique_rows
 from rczone.simulation.simulate import HOLDS
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
-
-
-def process_noise_covariance(A: np.ndarray, Qc: np.ndarray, dt: float) -> np.ndarray:
-    """``Qd = int_0^dt e^{As} Qc e^{A's} ds`` by Van Loan on a short step and doubling.
-
-    Van Loan's block exponential contains ``e^{-A dt}``; for a stiff model over a long
-    interval (``|lambda| dt`` of hundreds) it overflows into cancellation and returns
-    garbage. Here the interval is halved ``s`` times until ``||A|| h <= 1/2``, Van Loan is
-    applied on ``h``, and the exact doubling ``Qd(2h) = Qd(h) + Phi(h) Qd(h) Phi(h)'``,
-    ``Phi(2h) = Phi(h)^2`` recovers ``dt``. Every step adds positive semidefinite terms,
-    so no cancellation occurs.
-
-    Parameters
-    ----------
-    A : ndarray, shape (n, n), 1/s
-    Qc : ndarray, shape (n, n), K^2/s
-    dt : float, s
-
-    Returns
-    -------
-    ndarray, shape (n, n), symmetric
-    """
-    norm = float(np.linalg.norm(A, 1)) * dt
-    s = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
-    h = dt / 2.0**s
-    Q = van_loan(A, Qc, h)
-    Phi = expm(A * h)
-    for _ in range(s):
-        Q = Q + Phi @ Q @ Phi.T
-        Phi = Phi @ Phi
-    return 0.5 * (Q + Q.T)
+_NO_GROUPS = np.empty(0, dtype=np.int64)
 
 
 def stochastic_matrices(
     ss: BilinearStateSpace, t: np.ndarray, m: np.ndarray, Qc: np.ndarray, hold: str = "zoh"
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Exact per-interval discretization of the stochastic model.
+    """Exact per-interval discretization of the stochastic model (plain NumPy).
 
     Parameters
     ----------
@@ -110,40 +78,31 @@ def stochastic_matrices(
     if hold not in HOLDS:
         raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
     uniq, _, which = unique_rows(interval_keys(t, m))
-    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
-    if scale is not None:
-        # RC network: every matrix in closed form from one symmetric eigen-decomposition per key
-        A = ss.A + np.tensordot(uniq[:, 1:], ss.N, axes=1)
-        B = ss.B + np.tensordot(uniq[:, 1:], ss.M, axes=1)
-        lam, V = spectral_decomposition(A, scale)
-        Phi, G0, G1 = spectral_transition(lam, V, scale, B, uniq[:, 0], hold)
-        Qd = spectral_noise_covariance(lam, V, scale, np.asarray(Qc, dtype=float), uniq[:, 0])
-        return Phi, G0, G1, Qd, which.reshape(-1)
-    n, p, K = ss.n_states, ss.n_inputs, uniq.shape[0]
-    Phi = np.empty((K, n, n))
-    G0 = np.empty((K, n, p))
-    G1 = np.zeros((K, n, p))
-    Qd = np.zeros((K, n, n))
-    noisy = bool(np.any(Qc))
-    for k in range(K):
-        A, B = ss.matrices(uniq[k, 1:]) if ss.n_flows else (ss.A, ss.B)
-        dt = float(uniq[k, 0])
-        if hold == "zoh":
-            Phi[k], G0[k] = zoh(A, B, dt)
-        else:
-            Phi[k], G0[k], G1[k] = foh(A, B, dt)
-        if noisy:
-            Qd[k] = process_noise_covariance(A, Qc, dt)
+    Phi, G0, G1, Qd = interval_discretization(ss.A, ss.N, ss.B, ss.M, ss.capacities, uniq, hold, Qc)
     return Phi, G0, G1, Qd, which.reshape(-1)
 
 
 def input_drive(G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Deterministic input contribution ``G0[w] u[k] + G1[w] u[k+1]`` per interval, shape (N-1, n)."""
-    out = np.empty((u.shape[0] - 1, G0.shape[1]))
+    out = np.empty((u.shape[0] - 1, G0.shape[1]), np.result_type(G0, G1, u))
     for w in np.unique(which):
         sel = which == w
         out[sel] = u[:-1][sel] @ G0[w].T + u[1:][sel] @ G1[w].T
     return out
+
+
+def measurement_variances(R: np.ndarray) -> np.ndarray:
+    """The diagonal of a measurement-noise covariance, which must be diagonal (one variance per output)."""
+    R = np.asarray(R)
+    if R.ndim != 2 or R.shape[0] != R.shape[1]:
+        raise InputShapeError(f"R must be a square (ny, ny) matrix, got shape {R.shape}")
+    d = np.diagonal(R)
+    if np.count_nonzero(R) != np.count_nonzero(d):
+        raise InputShapeError(
+            "R must be diagonal: the measurement noise of each output is independent (one sigma_v per"
+            " output); correlated measurement noise is not supported"
+        )
+    return np.array(d)
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,9 +114,9 @@ class FilterOutput:
     nll : float
         ``-log L`` including ``0.5 n log(2 pi)`` (n = number of observed scalars).
     innovations : ndarray, shape (N, ny)
-        ``y_k - y_k|k-1``; NaN where ``y`` is missing.
+        ``y_k - C x_k|k-1 - D u_k``; NaN where ``y`` is missing.
     S : ndarray, shape (N, ny, ny)
-        Innovation covariances (also where ``y`` is missing).
+        Innovation covariances ``C P_k|k-1 C' + R`` (also where ``y`` is missing).
     x_pred, x_filt : ndarray, shape (N, n)
         One-step predicted and filtered states.
     P_pred : ndarray, shape (N, n, n)
@@ -174,6 +133,131 @@ class FilterOutput:
     n_obs: int
 
 
+# --------------------------------------------------------------------------- the NumPy twin
+
+
+def update_step(x: np.ndarray, P: np.ndarray, c: np.ndarray, r: float, e: float) -> tuple:
+    """Scalar measurement update of one output (the ``update_step`` of :func:`rczone.kernels.kalman.kalman_filter`).
+
+    ``s = c'Pc + r``, ``k = Pc/s``, ``x + k e``, ``P - k (Pc)'``; returns ``(x, P, s)``.
+    """
+    pc = P @ c
+    s = c @ pc + r
+    k = pc / s
+    P = P - np.outer(k, pc)
+    return x + k * e, 0.5 * (P + P.T), s
+
+
+def predict_step(x: np.ndarray, P: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, drive: np.ndarray) -> tuple:
+    """Time update (the ``predict_step`` of :func:`rczone.kernels.kalman.kalman_filter`): ``(Phi x + drive, Phi P Phi' + Qd)``."""
+    P = Phi @ P @ Phi.T + Qd
+    return Phi @ x + drive, 0.5 * (P + P.T)
+
+
+def kalman_filter_reference(
+    Phi: np.ndarray,
+    Gamma0: np.ndarray,
+    Gamma1: np.ndarray,
+    Qd: np.ndarray,
+    which: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    x0: np.ndarray,
+    P0: np.ndarray,
+    C: np.ndarray,
+    D: np.ndarray,
+    R: np.ndarray,
+) -> FilterOutput:
+    """Run the filter over all samples in plain NumPy: the reference the compiled filter is tested against.
+
+    ``x0, P0`` are the prior of the state at the first sample (the first measurement is used
+    in the likelihood). The observed outputs of each sample are processed one at a time
+    (:func:`update_step`); missing ones (NaN in ``y``) are skipped. Complex matrices are
+    allowed (complex-step differentiation).
+
+    Parameters
+    ----------
+    Phi, Gamma0, Gamma1, Qd, which
+        From :func:`stochastic_matrices`.
+    u : ndarray, shape (N, p)
+    y : ndarray, shape (N, ny)
+    x0 : ndarray, shape (n,)
+    P0 : ndarray, shape (n, n)
+    C : ndarray, shape (ny, n)
+    D : ndarray, shape (ny, p)
+    R : ndarray, shape (ny, ny)
+        Measurement-noise covariance, K^2; diagonal.
+
+    Returns
+    -------
+    FilterOutput
+    """
+    r = measurement_variances(R)
+    N, n, ny = y.shape[0], x0.shape[0], y.shape[1]
+    dtype = np.result_type(Phi, Qd, x0, P0, C, D, r, float)
+    drive = input_drive(Gamma0, Gamma1, which, u)
+    yd = y - u @ D.T
+    e_all = np.full((N, ny), np.nan, dtype)
+    S_all = np.empty((N, ny, ny), dtype)
+    xp_all = np.empty((N, n), dtype)
+    xf_all = np.empty((N, n), dtype)
+    Pp_all = np.empty((N, n, n), dtype)
+    x = np.array(x0, dtype=dtype)
+    P = np.array(P0, dtype=dtype)
+    nll = 0.0
+    n_obs = 0
+    for k in range(N):
+        xp_all[k] = x
+        Pp_all[k] = P
+        S_all[k] = C @ P @ C.T + np.diag(r)
+        obs = np.flatnonzero(~np.isnan(np.real(y[k])))
+        e_all[k, obs] = yd[k, obs] - C[obs] @ x
+        for j in obs:
+            e = yd[k, j] - C[j] @ x
+            x, P, s = update_step(x, P, C[j], r[j], e)
+            nll = nll + 0.5 * (np.log(s) + e * e / s)
+            n_obs += 1
+        xf_all[k] = x
+        if k < N - 1:
+            x, P = predict_step(x, P, Phi[which[k]], Qd[which[k]], drive[k])
+    nll = nll + 0.5 * n_obs * _LOG_2PI
+    return FilterOutput(nll, e_all, S_all, xp_all, xf_all, Pp_all, n_obs)
+
+
+# --------------------------------------------------------------------------- the compiled filter
+
+
+def _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, keep: bool) -> tuple[float, int, tuple]:
+    """Run :func:`rczone.kernels.kalman.kalman_filter` on the arrays of :func:`stochastic_matrices`.
+
+    With ``keep`` the intermediate results are returned too (the ``outs`` of the kernel).
+    """
+    f = np.ascontiguousarray
+    r = measurement_variances(R).astype(float)
+    N, ny = y.shape
+    n, p = x0.shape[0], u.shape[1]
+    outs = outputs(N, n, ny, 0, False, keep)
+    nll, n_obs, _, _ = kalman_filter(
+        (*(f(a, dtype=float) for a in (Phi, Gamma0, Gamma1, Qd)), f(which, dtype=np.int64)),
+        no_sensitivities(Phi.shape[0], n, p),
+        (
+            f(C, dtype=float),
+            f(D, dtype=float),
+            r,
+            np.empty((ny, 0, n)),
+            np.empty((ny, 0, p)),
+            np.empty((ny, 0)),
+        ),
+        (f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
+        (f(u, dtype=float), f(y, dtype=float)),
+        (bool(np.any(Gamma1)), False, STEADY_RTOL),
+        outs,
+    )
+    if n_obs < 0:
+        raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")
+    return float(nll + 0.5 * n_obs * _LOG_2PI), n_obs, outs
+
+
 def kalman_filter_arrays(
     Phi: np.ndarray,
     Gamma0: np.ndarray,
@@ -188,84 +272,9 @@ def kalman_filter_arrays(
     D: np.ndarray,
     R: np.ndarray,
 ) -> FilterOutput:
-    """Run the Kalman filter over all samples; the reference implementation.
-
-    ``x0, P0`` are the prior of the state at the first sample (the first measurement
-    is used in the likelihood). Missing measurements (NaN in ``y``) skip the update;
-    with several outputs only the observed components are used. The covariance update
-    is the Joseph form, symmetrized.
-
-    Parameters
-    ----------
-    Phi, Gamma0, Gamma1, Qd, which
-        From :func:`stochastic_matrices`.
-    u : ndarray, shape (N, p)
-    y : ndarray, shape (N, ny)
-    x0 : ndarray, shape (n,)
-    P0 : ndarray, shape (n, n)
-    C : ndarray, shape (ny, n)
-    D : ndarray, shape (ny, p)
-    R : ndarray, shape (ny, ny)
-        Measurement-noise covariance, K^2.
-
-    Returns
-    -------
-    FilterOutput
-    """
-    N, n = y.shape[0], x0.shape[0]
-    ny = y.shape[1]
-    drive = input_drive(Gamma0, Gamma1, which, u)
-    yd = y - u @ D.T
-    eye = np.eye(n)
-    e_all = np.full((N, ny), np.nan)
-    S_all = np.empty((N, ny, ny))
-    xp_all = np.empty((N, n))
-    xf_all = np.empty((N, n))
-    Pp_all = np.empty((N, n, n))
-    x = np.array(x0, dtype=float)
-    P = np.array(P0, dtype=float)
-    nll = 0.0
-    n_obs = 0
-    for k in range(N):
-        xp_all[k] = x
-        Pp_all[k] = P
-        S_full = C @ P @ C.T + R
-        S_all[k] = S_full
-        obs = ~np.isnan(yd[k])
-        if obs.all() and ny == 1:
-            # scalar fast path: no matrix inverse
-            Pc = P @ C[0]
-            s = float(C[0] @ Pc) + R[0, 0]
-            e = yd[k, 0] - float(C[0] @ x)
-            K = Pc / s
-            x = x + K * e
-            IKC = eye - np.outer(K, C[0])
-            P = IKC @ P @ IKC.T + R[0, 0] * np.outer(K, K)
-            nll += 0.5 * (np.log(s) + e * e / s)
-            e_all[k, 0] = e
-            n_obs += 1
-        elif obs.any():
-            Co, Ro = C[obs], R[np.ix_(obs, obs)]
-            So = S_full[np.ix_(obs, obs)]
-            e = yd[k, obs] - Co @ x
-            L = np.linalg.cholesky(So)
-            PCt = P @ Co.T
-            K = np.linalg.solve(So, PCt.T).T
-            x = x + K @ e
-            IKC = eye - K @ Co
-            P = IKC @ P @ IKC.T + K @ Ro @ K.T
-            w = np.linalg.solve(L, e)
-            nll += float(np.sum(np.log(np.diag(L)))) + 0.5 * float(w @ w)
-            e_all[k, obs] = e
-            n_obs += int(obs.sum())
-        P = 0.5 * (P + P.T)
-        xf_all[k] = x
-        if k < N - 1:
-            wk = which[k]
-            x = Phi[wk] @ x + drive[k]
-            P = Phi[wk] @ P @ Phi[wk].T + Qd[wk]
-    nll += 0.5 * n_obs * _LOG_2PI
-    return FilterOutput(float(nll), e_all, S_all, xp_all, xf_all, Pp_all, n_obs)
+    """The compiled filter with every intermediate result; arguments and result as :func:`kalman_filter_reference`."""
+    nll, n_obs, (e, _, xp, xf, Pp, S) = _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, True)
+    return FilterOutput(nll, e, S, xp, xf, Pp, n_obs)
 
 
 def kalman_nll(
@@ -282,127 +291,8 @@ def kalman_nll(
     D: np.ndarray,
     R: np.ndarray,
 ) -> float:
-    """``-log L`` (including ``0.5 n log 2 pi``) of the measurements; see :func:`kalman_filter_arrays`."""
-    return kalman_filter_arrays(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R).nll
-
-
-def _nll_scalar_loop(
-    Phi: np.ndarray,
-    Qd: np.ndarray,
-    which: np.ndarray,
-    drive: np.ndarray,
-    yd: np.ndarray,
-    x0: np.ndarray,
-    P0: np.ndarray,
-    c: np.ndarray,
-    r: float,
-    e_out: np.ndarray,
-) -> float:
-    """Scalar-output filter loop with explicit loops, compiled by numba.
-
-    Same recursion as :func:`kalman_filter_arrays` (Joseph form, symmetrized) for one
-    output; ``yd = y - D u`` with NaN for missing samples. Returns ``-log L`` without
-    the ``0.5 n log 2 pi`` term, and the number of observations. The innovations are
-    written into ``e_out`` when it has one entry per sample (pass an empty array to skip).
-    """
-    keep = e_out.shape[0] == yd.shape[0]
-    n = x0.shape[0]
-    N = yd.shape[0]
-    x = x0.copy()
-    P = P0.copy()
-    Pc = np.empty(n)
-    K = np.empty(n)
-    T = np.empty((n, n))
-    IKC = np.empty((n, n))
-    xn = np.empty(n)
-    nll = 0.0
-    n_obs = 0
-    for k in range(N):
-        if not np.isnan(yd[k]):
-            s = r
-            e = yd[k]
-            for i in range(n):
-                acc = 0.0
-                for j in range(n):
-                    acc += P[i, j] * c[j]
-                Pc[i] = acc
-                s += c[i] * acc
-                e -= c[i] * x[i]
-            for i in range(n):
-                K[i] = Pc[i] / s
-                x[i] += K[i] * e
-            for i in range(n):
-                for j in range(n):
-                    IKC[i, j] = (1.0 if i == j else 0.0) - K[i] * c[j]
-            for i in range(n):
-                for j in range(n):
-                    acc = 0.0
-                    for a in range(n):
-                        acc += IKC[i, a] * P[a, j]
-                    T[i, j] = acc
-            for i in range(n):
-                for j in range(i, n):
-                    acc = 0.0
-                    for a in range(n):
-                        acc += T[i, a] * IKC[j, a]
-                    acc += r * K[i] * K[j]
-                    P[i, j] = acc
-                    P[j, i] = acc
-            nll += 0.5 * (np.log(s) + e * e / s)
-            n_obs += 1
-            if keep:
-                e_out[k] = e
-        if k < N - 1:
-            w = which[k]
-            for i in range(n):
-                acc = drive[k, i]
-                for j in range(n):
-                    acc += Phi[w, i, j] * x[j]
-                xn[i] = acc
-            for i in range(n):
-                x[i] = xn[i]
-            for i in range(n):
-                for j in range(n):
-                    acc = 0.0
-                    for a in range(n):
-                        acc += Phi[w, i, a] * P[a, j]
-                    T[i, j] = acc
-            for i in range(n):
-                for j in range(i, n):
-                    acc = Qd[w, i, j]
-                    for a in range(n):
-                        acc += T[i, a] * Phi[w, j, a]
-                    P[i, j] = acc
-                    P[j, i] = acc
-    return nll, n_obs
-
-
-try:  # numba is a declared dependency; the pure-Python loop stays usable without it
-    import numba
-
-    _nll_scalar_compiled = numba.njit(cache=True)(_nll_scalar_loop)
-except ImportError:  # pragma: no cover
-    _nll_scalar_compiled = _nll_scalar_loop
-
-
-def kalman_nll_fast(
-    Phi: np.ndarray,
-    Gamma0: np.ndarray,
-    Gamma1: np.ndarray,
-    Qd: np.ndarray,
-    which: np.ndarray,
-    u: np.ndarray,
-    y: np.ndarray,
-    x0: np.ndarray,
-    P0: np.ndarray,
-    C: np.ndarray,
-    D: np.ndarray,
-    R: np.ndarray,
-) -> float:
-    """Same value as :func:`kalman_nll`; compiled loop for one output, reference otherwise."""
-    if y.shape[1] != 1:
-        return kalman_nll(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R)
-    return _scalar_filter(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, np.empty(0))
+    """``-log L`` (including ``0.5 n log 2 pi``) by the compiled filter; arguments as :func:`kalman_filter_reference`."""
+    return _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, False)[0]
 
 
 def kalman_innovations_fast(
@@ -419,27 +309,125 @@ def kalman_innovations_fast(
     D: np.ndarray,
     R: np.ndarray,
 ) -> np.ndarray:
-    """One-step-ahead prediction errors, shape (N, ny), NaN where missing (compiled for one output)."""
-    if y.shape[1] != 1:
-        return kalman_filter_arrays(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R).innovations
-    e = np.full(y.shape[0], np.nan)
-    _scalar_filter(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, e)
-    return e[:, None]
+    """One-step-ahead prediction errors, shape (N, ny), NaN where missing (compiled filter)."""
+    return kalman_filter_arrays(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R).innovations
 
 
-def _scalar_filter(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, e_out) -> float:
-    drive = input_drive(Gamma0, Gamma1, which, u)
-    yd = np.ascontiguousarray((y - u @ D.T)[:, 0])
-    nll, n_obs = _nll_scalar_compiled(
-        np.ascontiguousarray(Phi),
-        np.ascontiguousarray(Qd),
-        np.ascontiguousarray(which, dtype=np.int64),
-        np.ascontiguousarray(drive),
-        yd,
-        np.ascontiguousarray(x0, dtype=float),
-        np.ascontiguousarray(P0, dtype=float),
-        np.ascontiguousarray(C[0], dtype=float),
+# --------------------------------------------------------------------------- the fused 2-state kernel
+
+
+def rc2_applicable(ss: BilinearStateSpace, n_outputs: int) -> bool:
+    """Whether :func:`kalman_nll_rc2` handles this model: 2 states, one output, RC-symmetrizable."""
+    if ss.n_states != 2 or n_outputs != 1:
+        return False
+    c = ss.capacities
+    if c.shape == (2,) and c[0] > 0 and c[1] > 0:
+        # quick scalar form of symmetrizing_scale for 2 states: c0 A01 == c1 A10, likewise for N
+        mats = [ss.A, *ss.N]
+        if all(
+            abs(c[0] * a[0, 1] - c[1] * a[1, 0])
+            <= SYMMETRY_RTOL * max(abs(c[0] * a[0, 1]), abs(c[1] * a[1, 0]))
+            for a in mats
+        ) and all(math.isfinite(x) for a in mats for x in a.flat):
+            return True
+    return symmetrizing_scale(ss.A, ss.N, ss.capacities) is not None
+
+
+def kalman_nll_rc2(
+    ss: BilinearStateSpace,
+    t: np.ndarray,
+    m: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    x0: np.ndarray,
+    P0: np.ndarray,
+    Qc: np.ndarray,
+    R: np.ndarray,
+    hold: str = "zoh",
+    innovations: np.ndarray | None = None,
+    groups: np.ndarray | None = None,
+) -> float:
+    """``-log L`` (including ``0.5 n log 2 pi``) of a 2-state RC model with one output, fused.
+
+    Equal to ``kalman_nll(*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R)``,
+    computed in one compiled pass (:func:`rczone.kernels.rc2.nll_rc2`).
+
+    Parameters
+    ----------
+    ss : BilinearStateSpace
+        Two states, symmetrizable (see :func:`rc2_applicable`).
+    t : ndarray, shape (N,)
+        Sample times, s, strictly increasing.
+    m : ndarray, shape (N, n_flows)
+    u : ndarray, shape (N, p)
+    y : ndarray, shape (N, 1)
+        Measurements; NaN where missing.
+    x0 : ndarray, shape (2,)
+    P0 : ndarray, shape (2, 2)
+    Qc : ndarray, shape (2, 2)
+        Process-noise intensity, K^2/s; diagonal.
+    R : ndarray, shape (1, 1)
+        Measurement-noise variance, K^2.
+    hold : {"zoh", "foh"}
+    innovations : ndarray, shape (N,), optional
+        Filled with the one-step prediction errors (missing samples untouched).
+    groups : ndarray, optional
+        :func:`rczone.simulation.intervals.interval_groups` of ``(t, m)``: discretize each
+        distinct interval once.
+
+    Returns
+    -------
+    float
+    """
+    if hold not in HOLDS:
+        raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
+    if ss.n_states != 2:
+        raise InputShapeError(
+            f"kalman_nll_rc2 needs a 2-state RC model, got {ss.n_states} states;"
+            " use rczone.estimation.kalman.kalman_nll instead"
+        )
+    y = np.asarray(y, dtype=np.float64)
+    if y.ndim != 2 or y.shape[1] != 1 or ss.C.shape[0] != 1:
+        raise InputShapeError(f"kalman_nll_rc2 needs one output, y of shape (N, 1); got {y.shape}")
+    if innovations is not None and (
+        innovations.shape != (y.shape[0],)
+        or innovations.dtype != np.float64
+        or not innovations.flags.c_contiguous
+    ):
+        raise InputShapeError(f"innovations must be a contiguous float64 array of shape ({y.shape[0]},)")
+    Qc = np.asarray(Qc, dtype=np.float64)
+    if Qc.shape != (2, 2) or Qc[0, 1] != 0.0 or Qc[1, 0] != 0.0:
+        raise InputShapeError(f"Qc must be a diagonal (2, 2) matrix (process noise per state), got {Qc!r}")
+    f = np.ascontiguousarray
+    # the state space's own arrays are contiguous float64 already; the data are made so (one
+    # compiled specialization serves every caller)
+    nll, n_obs = nll_rc2(
+        ss.A,
+        ss.N,
+        ss.B,
+        ss.M,
+        ss.capacities,
+        f(t, dtype=np.float64),
+        f(m, dtype=np.float64),
+        f(u, dtype=np.float64),
+        f(y[:, 0]),
+        f(x0, dtype=np.float64),
+        f(P0, dtype=np.float64),
+        ss.C[0],
+        ss.D[0],
         float(R[0, 0]),
-        e_out,
+        np.array([Qc[0, 0], Qc[1, 1]]),
+        hold == "foh",
+        SYMMETRY_RTOL,
+        STEADY_RTOL,
+        np.empty(0) if innovations is None else innovations,
+        _NO_GROUPS if groups is None else groups,
     )
+    if n_obs == -2:
+        raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")
+    if n_obs < 0:
+        raise InputShapeError(
+            "kalman_nll_rc2 needs an RC model (diag(capacities) A and diag(capacities) N symmetric);"
+            " use rczone.estimation.kalman.kalman_nll for other state spaces"
+        )
     return float(nll + 0.5 * n_obs * _LOG_2PI)

@@ -7,7 +7,8 @@ used by the Kalman-filter likelihood:
 ============================  =========  ==================================================
 name                          unit       meaning
 ============================  =========  ==================================================
-``sigma_v``                   K          measurement-noise standard deviation
+``sigma_v``                   K          measurement-noise standard deviation (one output)
+``sigma_v_<output>``          K          the same for each output of a multi-output network
 ``sigma_w_<state>``           K/sqrt(s)  process-noise intensity on state ``<state>``
 ``x0_<state>``                K / degC   initial state (default: see :func:`auto_initial_state`)
 ``sigma_x0_<state>``          K          standard deviation of the initial state
@@ -52,11 +53,16 @@ X0_HALF_WIDTH = 20.0
 _LOG_KINDS = ("resistance", "capacitance", "noise")
 
 
+def measurement_noise_names(outputs: Sequence[str]) -> tuple[str, ...]:
+    """``("sigma_v",)`` for one output, else ``sigma_v_<output>`` per output (``R`` is their squares)."""
+    return ("sigma_v",) if len(outputs) == 1 else tuple(f"sigma_v_{o}" for o in outputs)
+
+
 def noise_parameter_names(network: RCNetwork) -> tuple[str, ...]:
     """Names of the stochastic-model parameters of ``network`` (see the module table)."""
     s = network.state_names
     return (
-        "sigma_v",
+        *measurement_noise_names(network.outputs),
         *(f"sigma_w_{n}" for n in s),
         *(f"x0_{n}" for n in s),
         *(f"sigma_x0_{n}" for n in s),
@@ -75,7 +81,7 @@ def parameter_kind(network: RCNetwork, name: str) -> str:
 def _default_value(network: RCNetwork, name: str, x0_auto: Mapping[str, float] | None) -> float | None:
     if name in network.parameters:
         return network.parameters[name].value
-    if name == "sigma_v":
+    if name == "sigma_v" or name.startswith("sigma_v_"):
         return NOISE_DEFAULTS["sigma_v"]
     if name.startswith("sigma_w_"):
         return NOISE_DEFAULTS["sigma_w"]

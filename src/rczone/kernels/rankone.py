@@ -31,17 +31,13 @@ References
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 from numba import njit
 
-if TYPE_CHECKING:  # the simulation package imports this module
-    from rczone.simulation.discretize import RankOneForm
+from rczone.kernels.discretize import phi1, phi2
 
 _EPS = float(np.finfo(float).eps)
-#: Taylor coefficients 1/(k+2)!, k = 0..12, of (e^x - 1 - x)/x^2.
-_PHI2 = np.array([1.0 / math.factorial(k + 2) for k in range(13)])
 
 
 @njit(cache=True, error_model="numpy")
@@ -216,23 +212,10 @@ def _eigen(
 
 @njit(cache=True, error_model="numpy")
 def _weights(x: float, foh: bool) -> tuple[float, float, float]:
-    """``(e^x, (e^x - 1)/x, (e^x - 1 - x)/x^2)`` as :func:`rczone.simulation.discretize.phi_weights`.
-
-    The last weight is only needed for FOH (0 otherwise); near 0 it is the Taylor series
-    ``sum_k x^k/(k+2)!``, ``k = 0..12``, with the coefficients of :data:`_PHI2`.
-    """
+    """``(e^x, (e^x - 1)/x, (e^x - 1 - x)/x^2)`` (the last only for FOH, 0 otherwise)."""
     em1 = math.expm1(x)
-    w1 = 1.0 if x == 0.0 else em1 / x
-    w2 = 0.0
-    if foh:
-        if abs(x) < 0.2:
-            w2 = _PHI2[12]
-            for k in range(11, -1, -1):
-                w2 = w2 * x + _PHI2[k]
-        else:
-            w2 = (em1 - x) / (x * x)
     # em1 + 1 is exact to eps absolutely, all that Phi = U diag(e) U' (|e| <= 1 for RC) needs
-    return em1 + 1.0, w1, w2
+    return em1 + 1.0, phi1(x, em1), phi2(x, em1) if foh else 0.0
 
 
 @njit(cache=True, error_model="numpy")
@@ -388,7 +371,7 @@ def simulate_rank_one_kernel(
 
 
 def simulate_rank_one(
-    form: RankOneForm,
+    form,
     B: np.ndarray,
     M: np.ndarray,
     t: np.ndarray,
@@ -401,8 +384,9 @@ def simulate_rank_one(
 
     Parameters
     ----------
-    form : RankOneForm
-        From :func:`rczone.simulation.discretize.rank_one_form` for the model's ``A, N``.
+    form : rczone.simulation.discretize.RankOneForm
+        From :func:`rczone.simulation.discretize.rank_one_form` for the model's ``A, N``
+        (any object with its attributes ``Q, d, z, r, sigma, scale``).
     B, M : ndarray, shapes (n, p), (n, p)
         Input matrix at zero flow and its change per unit flow.
     t : ndarray, shape (N,)

@@ -1,16 +1,21 @@
-"""Exact discretization of LTI state spaces.
+"""Exact discretization of LTI state spaces: the one place that says how it is done.
 
 * zero-order hold (inputs constant over a sample),
 * first-order hold (inputs linear between samples),
 * the discrete process-noise covariance of a continuous white-noise input (Van Loan).
 
 :func:`zoh`, :func:`foh` and :func:`van_loan` work for any state space through one block
-matrix exponential. For RC networks the same matrices follow exactly from a symmetric
-eigen-decomposition (:func:`spectral_decomposition`, :func:`spectral_transition`,
+matrix exponential; :func:`process_noise_covariance` makes Van Loan's integral safe for
+stiff models over long steps. For RC networks the same matrices follow exactly from a
+symmetric eigen-decomposition (:func:`spectral_decomposition`, :func:`spectral_transition`,
 :func:`spectral_noise_covariance`; the identities are in the notes below), in closed form
 for two states, and :func:`rank_one_form` prepares the rank-one structure that the
-compiled simulation of :mod:`rczone.kernels.rankone` exploits. All functions are pure over
-arrays.
+compiled simulation of :mod:`rczone.kernels.rankone` exploits. :func:`interval_discretization`
+applies them to every distinct sampling interval of a bilinear model (the simulation and
+the reference Kalman filter both use it). All functions are pure over arrays.
+
+The compiled estimation engines use :mod:`rczone.kernels.discretize`, the compiled twin of
+these formulas (with their derivatives), which the tests compare with this module.
 
 References
 ----------
@@ -46,7 +51,7 @@ def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
     Gamma : ndarray, shape (n, p)
     """
     n, p = B.shape
-    blk = np.zeros((n + p, n + p))
+    blk = np.zeros((n + p, n + p), np.result_type(A, B))
     blk[:n, :n] = A * dt
     blk[:n, n:] = B * dt
     E = expm(blk)
@@ -64,7 +69,7 @@ def foh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
     G0, G1 : ndarray, shape (n, p)
     """
     n, p = B.shape
-    blk = np.zeros((n + 2 * p, n + 2 * p))
+    blk = np.zeros((n + 2 * p, n + 2 * p), np.result_type(A, B))
     blk[:n, :n] = A * dt
     blk[:n, n : n + p] = B * dt
     blk[n : n + p, n + p :] = np.eye(p)
@@ -88,7 +93,7 @@ def van_loan(A: np.ndarray, Qc: np.ndarray, dt: float) -> np.ndarray:
     Qd : ndarray, shape (n, n), symmetric
     """
     n = A.shape[0]
-    blk = np.zeros((2 * n, 2 * n))
+    blk = np.zeros((2 * n, 2 * n), np.result_type(A, Qc))
     blk[:n, :n] = -A * dt
     blk[:n, n:] = Qc * dt
     blk[n:, n:] = A.T * dt
@@ -96,6 +101,37 @@ def van_loan(A: np.ndarray, Qc: np.ndarray, dt: float) -> np.ndarray:
     Phi_T = E[n:, n:]
     Qd = Phi_T.T @ E[:n, n:]
     return 0.5 * (Qd + Qd.T)
+
+
+def process_noise_covariance(A: np.ndarray, Qc: np.ndarray, dt: float) -> np.ndarray:
+    """``Qd = int_0^dt e^{As} Qc e^{A's} ds`` by Van Loan on a short step and doubling.
+
+    Van Loan's block exponential contains ``e^{-A dt}``; for a stiff model over a long
+    interval (``|lambda| dt`` of hundreds) it overflows into cancellation and returns
+    garbage. Here the interval is halved ``s`` times until ``||A|| h <= 1/2``, Van Loan is
+    applied on ``h``, and the exact doubling ``Qd(2h) = Qd(h) + Phi(h) Qd(h) Phi(h)'``,
+    ``Phi(2h) = Phi(h)^2`` recovers ``dt``. Every step adds positive semidefinite terms,
+    so no cancellation occurs. Complex arguments are allowed (complex-step differentiation).
+
+    Parameters
+    ----------
+    A : ndarray, shape (n, n), 1/s
+    Qc : ndarray, shape (n, n), K^2/s
+    dt : float, s
+
+    Returns
+    -------
+    ndarray, shape (n, n), symmetric
+    """
+    norm = float(np.linalg.norm(np.real(A), 1)) * dt
+    s = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
+    h = dt / 2.0**s
+    Q = van_loan(A, Qc, h)
+    Phi = expm(A * h)
+    for _ in range(s):
+        Q = Q + Phi @ Q @ Phi.T
+        Phi = Phi @ Phi
+    return 0.5 * (Q + Q.T)
 
 
 # ---------------------------------------------------------------------------
@@ -144,6 +180,8 @@ def symmetrizing_scale(A: np.ndarray, N: np.ndarray, capacities: np.ndarray) -> 
     -------
     ndarray, shape (n,), or None
     """
+    if np.iscomplexobj(A) or np.iscomplexobj(N):
+        return None  # complex-step differentiation: the eigen-decomposition is not analytic
     c = np.asarray(capacities, dtype=float)
     if c.shape != (A.shape[0],) or not np.all(np.isfinite(c)) or np.any(c <= 0):
         return None
@@ -413,3 +451,67 @@ def rank_one_form(A: np.ndarray, N: np.ndarray, scale: np.ndarray, m_max: float)
     order = keep + deflated
     d, z = np.array(d), np.array(z)
     return RankOneForm(Q[:, order], d[order], z[keep], sigma, scale)
+
+
+def interval_discretization(
+    A: np.ndarray,
+    N: np.ndarray,
+    B: np.ndarray,
+    M: np.ndarray,
+    capacities: np.ndarray,
+    keys: np.ndarray,
+    hold: str = "zoh",
+    Qc: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    """Exact discrete matrices of ``dx/dt = (A + sum m_f N_f) x + (B + sum m_f M_f) u`` per interval.
+
+    RC networks (:func:`symmetrizing_scale` succeeds) get every matrix from one symmetric
+    eigen-decomposition per interval (batched); any other state space one matrix exponential
+    per interval (:func:`zoh` / :func:`foh`, :func:`process_noise_covariance`).
+
+    Parameters
+    ----------
+    A, N, B, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
+    capacities : ndarray, shape (n,)
+    keys : ndarray, shape (K, 1 + nf)
+        ``(dt, m_1, ..., m_nf)`` of each interval (typically the distinct ones).
+    hold : {"zoh", "foh"}
+    Qc : ndarray, shape (n, n), optional
+        Continuous process-noise intensity; ``Qd`` is computed when given.
+
+    Returns
+    -------
+    Phi : ndarray, shape (K, n, n)
+    G0, G1 : ndarray, shape (K, n, p)
+        Input matrices applied to ``u[k]`` and ``u[k+1]`` (``G1`` is zero for ZOH).
+    Qd : ndarray, shape (K, n, n), or None
+    """
+    scale = symmetrizing_scale(A, N, capacities)
+    if scale is not None:
+        Ak = A + np.tensordot(keys[:, 1:], N, axes=1)
+        Bk = B + np.tensordot(keys[:, 1:], M, axes=1)
+        lam, V = spectral_decomposition(Ak, scale)
+        Phi, G0, G1 = spectral_transition(lam, V, scale, Bk, keys[:, 0], hold)
+        Qd = (
+            None
+            if Qc is None
+            else spectral_noise_covariance(lam, V, scale, np.asarray(Qc, dtype=float), keys[:, 0])
+        )
+        return Phi, G0, G1, Qd
+    n, p, K = A.shape[0], B.shape[1], keys.shape[0]
+    dtype = np.result_type(A, N, B, M, float if Qc is None else Qc)
+    Phi = np.empty((K, n, n), dtype)
+    G0 = np.empty((K, n, p), dtype)
+    G1 = np.zeros((K, n, p), dtype)
+    Qd = None if Qc is None else np.zeros((K, n, n), dtype)
+    for k in range(K):
+        Ak = A + np.tensordot(keys[k, 1:], N, axes=1)
+        Bk = B + np.tensordot(keys[k, 1:], M, axes=1)
+        dt = float(keys[k, 0])
+        if hold == "zoh":
+            Phi[k], G0[k] = zoh(Ak, Bk, dt)
+        else:
+            Phi[k], G0[k], G1[k] = foh(Ak, Bk, dt)
+        if Qd is not None and np.any(Qc):
+            Qd[k] = process_noise_covariance(Ak, Qc, dt)
+    return Phi, G0, G1, Qd

@@ -50,3 +50,37 @@ def unique_rows(key: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def interval_keys(t: np.ndarray, m: np.ndarray) -> np.ndarray:
     """``(dt, m)`` of every interval, shape (N - 1, 1 + n_flows)."""
     return np.column_stack([np.diff(t), np.asarray(m)[:-1]])
+
+
+#: :func:`interval_groups` declines when more than this fraction of the intervals are distinct.
+GROUP_FRACTION = 0.5
+
+
+def interval_groups(t: np.ndarray, m: np.ndarray) -> np.ndarray | None:
+    """Intervals that share their length and flows, so their discrete matrices are equal.
+
+    Measured flows are quantized (a damper position, a logger resolution of 1 g/s), so a
+    night of 720 samples typically has a few dozen distinct ``(dt, m)`` pairs; the kernels
+    then discretize each pair once instead of every interval. Matching is exact (bit
+    equality), so the results are identical to discretizing every interval.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+    m : ndarray, shape (N, n_flows)
+
+    Returns
+    -------
+    groups : ndarray of int64, shape (N - 1,), or None
+        ``groups[k]`` is the group of interval ``k`` (``0 .. G - 1``); None when the groups
+        would save little (more than :data:`GROUP_FRACTION` of the intervals are distinct) or
+        there is no interval.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    m = np.asarray(m, dtype=np.float64).reshape(t.shape[0], -1)
+    if t.shape[0] < 2:
+        return None
+    uniq, _, groups = unique_rows(interval_keys(t, m))
+    if uniq.shape[0] > GROUP_FRACTION * groups.shape[0]:
+        return None
+    return groups

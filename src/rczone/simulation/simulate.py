@@ -30,12 +30,9 @@ from rczone.errors import InputShapeError
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import (
     RankOneForm,
-    foh,
+    interval_discretization,
     rank_one_form,
-    spectral_decomposition,
-    spectral_transition,
     symmetrizing_scale,
-    zoh,
 )
 from rczone.simulation.intervals import interval_keys, unique_rows
 
@@ -133,35 +130,20 @@ def transition_matrices(
     if hold not in HOLDS:
         raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
     uniq, _, which = unique_rows(interval_keys(t, m))
-    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
-    if scale is not None:
-        A = ss.A + np.tensordot(uniq[:, 1:], ss.N, axes=1)
-        B = ss.B + np.tensordot(uniq[:, 1:], ss.M, axes=1)
-        lam, V = spectral_decomposition(A, scale)
-        Phi, G0, G1 = spectral_transition(lam, V, scale, B, uniq[:, 0], hold)
-        return Phi, G0, G1, which
-    return (*transition_matrices_expm(ss, uniq, hold), which)
+    Phi, G0, G1, _ = interval_discretization(ss.A, ss.N, ss.B, ss.M, ss.capacities, uniq, hold)
+    return Phi, G0, G1, which
 
 
 def transition_matrices_expm(
     ss: BilinearStateSpace, uniq: np.ndarray, hold: str = "zoh"
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Discretizations by one matrix exponential per row of ``uniq = [dt, m...]`` (the general path).
+    """Discretizations by one matrix exponential per row of ``uniq = [dt, m...]`` (no spectral path).
 
-    Returns ``(Phi, G0, G1)`` with shapes ``(K, n, n), (K, n, p), (K, n, p)``.
+    The reference the spectral and compiled paths are tested against. Returns
+    ``(Phi, G0, G1)`` with shapes ``(K, n, n), (K, n, p), (K, n, p)``.
     """
-    n, p = ss.n_states, ss.n_inputs
-    K = uniq.shape[0]
-    Phi = np.empty((K, n, n))
-    G0 = np.empty((K, n, p))
-    G1 = np.zeros((K, n, p))
-    for k in range(K):
-        A, B = ss.matrices(uniq[k, 1:]) if ss.n_flows else (ss.A, ss.B)
-        if hold == "zoh":
-            Phi[k], G0[k] = zoh(A, B, uniq[k, 0])
-        else:
-            Phi[k], G0[k], G1[k] = foh(A, B, uniq[k, 0])
-    return Phi, G0, G1
+    no_scale = np.full(ss.n_states, np.nan)  # not a valid scale: forces the matrix exponential
+    return interval_discretization(ss.A, ss.N, ss.B, ss.M, no_scale, uniq, hold)[:3]
 
 
 def propagate(
@@ -181,9 +163,12 @@ def propagate(
 def propagate_reference(
     Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray, x0: np.ndarray
 ) -> np.ndarray:
-    """Plain NumPy version of :func:`propagate` (the reference the compiled kernel is tested against)."""
+    """Plain NumPy version of :func:`propagate` (the reference the compiled kernel is tested against).
+
+    Complex matrices are allowed (complex-step differentiation).
+    """
     N = u.shape[0]
-    x = np.empty((N, x0.shape[0]))
+    x = np.empty((N, x0.shape[0]), np.result_type(Phi, G0, G1, u, x0))
     x[0] = x0
     for k in range(N - 1):
         w = which[k]

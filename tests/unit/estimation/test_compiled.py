@@ -15,7 +15,7 @@ from rczone.estimation import Dataset, fit, make_spec
 from rczone.estimation.compiled import compiled_cost, compiled_problem
 from rczone.estimation.costs import Objective
 from rczone.estimation.optimize import minimize_from
-from rczone.kernels import rc2fit
+from rczone.kernels.neldermead import nelder_mead
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
 
 from .nets import NET1, NET2, data1, data2
@@ -49,19 +49,23 @@ def test_compiled_cost_equals_the_python_objective_at_random_points(method, hold
         assert obj(eta) == pytest.approx(obj.reference_cost(spec.to_theta(eta)), rel=1e-12)
 
 
-def test_problems_the_compiled_path_cannot_take_go_the_python_way() -> None:
+def test_problems_the_compiled_path_cannot_take_go_the_general_way() -> None:
     d2 = noisy_data()
-    # the 1-state network, a free initial state, a tie that is a sum of parameters
-    one = Objective(NET1, data1(), make_spec(NET1, ["Cr", "R"]), "ls")
-    x0 = Objective(NET2, d2, make_spec(NET2, ["Cr", "x0_Tw"], start={"x0_Tw": 20.0}), "ml")
+    # a tie that is a sum of parameters; a massless node
     summed = NET2.replace_parameters([Parameter("R2", "resistance", expr="Rw/2 + Rwin")])
     tie = Objective(summed, d2, make_spec(summed, ["Cr", "Rw"]), "ls")
+    assert compiled_problem(tie) is None and tie.engine == "general"
+    # but one state, free initial states and a missing first sample are compiled now
+    one = Objective(NET1, data1(), make_spec(NET1, ["Cr", "R"]), "ls")
+    x0 = Objective(NET2, d2, make_spec(NET2, ["Cr", "x0_Tw"], start={"x0_Tw": 20.0}), "ml")
     missing_first = Dataset(
         d2.t, d2.u, d2.m, np.r_[[[np.nan]], d2.y[1:]], d2.input_names, d2.flow_names, d2.output_names
     )
     first = Objective(NET2, missing_first, make_spec(NET2, ["Cr", "Rw"]), "ls")
-    for obj in (one, x0, tie, first):
-        assert compiled_problem(obj) is None
+    assert (one.engine, x0.engine, first.engine) == ("compiled", "rc2-fused", "rc2-fused")
+    for obj in (one, x0, first):
+        theta = obj.spec.start * 1.1
+        assert obj(obj.spec.to_eta(theta)) == pytest.approx(obj.reference_cost(theta), rel=1e-12)
     # and a chain of proportional ties is compiled
     chain = NET2.replace_parameters(
         [Parameter("Rh", "resistance", expr="Rw/2"), Parameter("R1", "resistance", expr="-(-Rh) * 1")]
@@ -78,7 +82,7 @@ def test_compiled_search_ends_where_scipy_ends(method, monkeypatch) -> None:
     data = noisy_data(seed=5)
     kw = {"correlation_time_s": 3000.0} if method == "map" else {}
     compiled = fit(NET2, data, FREE[method], method, **kw)
-    monkeypatch.setattr(compiled_module, "compiled_problem", lambda objective: None)  # all Python
+    monkeypatch.setattr(compiled_module, "compiled_problem", lambda objective: None)  # the general engine
     python = fit(NET2, data, FREE[method], method, **kw)
     assert compiled.converged and python.converged
     for n in compiled.names:
@@ -107,7 +111,7 @@ def test_compiled_nelder_mead_minimizes_and_stays_inside_the_bounds() -> None:
     z0 = spec.to_z(spec.to_eta(spec.start))
     sim = z0 + np.vstack([np.zeros(2), 0.5 * np.eye(2)])
     scale = obj(spec.to_eta(spec.start))
-    z, f, n, status = rc2fit.nelder_mead(sim, problem, scale, 1e-10, 1e-30, 4000)
+    z, f, n, status = nelder_mead(sim, problem, scale, 1e-10, 1e-30, 4000)
     theta = spec.to_theta(spec.from_z(z))
     assert status == 0 and n < 4000
     np.testing.assert_allclose(theta, [8e5, 0.01], rtol=1e-6)

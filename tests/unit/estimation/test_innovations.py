@@ -168,7 +168,8 @@ def test_two_measured_outputs_get_their_own_statistics():
     sw = {"Ti": 2e-3, "Te": 1e-3}
     _, y = simulate_sde(net, {}, t, u, sw, 0.03, rng, substeps=30)
     data = Dataset(t, u, None, y, net.input_names, (), net.outputs)
-    values = {"sigma_v": 0.03, "sigma_w_Ti": 2e-3, "sigma_w_Te": 1e-3, "sigma_x0_Ti": 0.1, "sigma_x0_Te": 0.1}
+    values = {"sigma_v_Ti": 0.03, "sigma_v_Te": 0.03, "sigma_w_Ti": 2e-3, "sigma_w_Te": 1e-3}
+    values |= {"sigma_x0_Ti": 0.1, "sigma_x0_Te": 0.1}  # two outputs: one measurement noise each
     an = innovation_analysis(net, values, data)
     assert [o.output for o in an.outputs] == ["Ti", "Te"]
     for o in an.outputs:

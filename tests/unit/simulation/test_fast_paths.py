@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from rczone.errors import InputShapeError
-from rczone.kernels.kalman import kalman_nll_rc2, rc2_applicable
+from rczone.estimation.kalman import kalman_nll_rc2, rc2_applicable
 from rczone.kernels.propagate import propagate
 from rczone.network import BilinearStateSpace, HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 from rczone.simulation import simulate, zoh

@@ -1,0 +1,360 @@
+"""How an identification cost is computed: the engines, and what they share.
+
+Every cost (:mod:`rczone.estimation.costs`) is computed by one of four engines, chosen by
+declared rules (:func:`choose_engine`), never by trying one and catching its failure:
+
+``"rc2-fused"``
+    Two states, one output, and the problem packs into arrays
+    (:func:`rczone.estimation.compiled.compiled_problem`): the value comes from the fused
+    2-state kernel (:mod:`rczone.kernels.rc2`, discretization inside the filter loop), the
+    gradient from the ``"compiled"`` engine.
+``"compiled"``
+    The problem packs into arrays: parameter values to cost and gradient in one compiled call
+    (:func:`rczone.kernels.problem.evaluate`).
+``"general"``
+    Anything else (massless nodes, ties that are not proportional, ...): the state space and
+    its exact parameter derivatives are built in Python (:meth:`RCNetwork.state_space`,
+    :meth:`RCNetwork.state_space_derivatives`), then the compiled discretization and filter run
+    on them (:func:`general_cost`).
+``"reference"``
+    Plain NumPy throughout (:func:`reference_cost`): the NumPy discretization, the NumPy twin
+    of the filter, a Python loop for the simulation. The tests compare the others with it.
+    Never chosen automatically; it has no gradient.
+
+All engines use the same model: the initial state of :func:`initial_state`, the noise of
+:func:`noise_values`, the trapezoid rule of :func:`trapezoid_sse`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from rczone.errors import ParameterError
+from rczone.estimation.data import Dataset
+from rczone.estimation.kalman import (
+    FilterOutput,
+    kalman_filter_arrays,
+    kalman_filter_reference,
+    stochastic_matrices,
+)
+from rczone.estimation.parameters import measurement_noise_names
+from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
+from rczone.kernels.kalman import (
+    STEADY_RTOL,
+    kalman_filter,
+    kalman_filter_modal,
+    modal_pays,
+    no_sensitivities,
+    outputs,
+)
+from rczone.kernels.problem import trapezoid
+from rczone.network import BilinearStateSpace, RCNetwork
+from rczone.simulation.discretize import symmetrizing_scale
+from rczone.simulation.simulate import propagate, propagate_reference, transition_matrices
+
+ENGINES = ("rc2-fused", "compiled", "general", "reference")
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+def choose_engine(n_states: int, n_outputs: int, packs: bool) -> str:
+    """The engine of a problem by the declared rules (see the module notes).
+
+    Parameters
+    ----------
+    n_states, n_outputs : int
+    packs : bool
+        Whether :func:`rczone.estimation.compiled.compiled_problem` packs the problem.
+    """
+    if not packs:
+        return "general"
+    return "rc2-fused" if n_states == 2 and n_outputs == 1 else "compiled"
+
+
+def gradient_engine(engine: str) -> str:
+    """The engine that computes gradients for a problem whose values come from ``engine``."""
+    if engine == "reference":
+        raise ParameterError("the reference engine computes values only; use engine='general' for gradients")
+    return "compiled" if engine == "rc2-fused" else engine
+
+
+# ----------------------------------------------------------------------------- shared model
+
+
+def measured_states(ss: BilinearStateSpace) -> dict[int, int]:
+    """Map state index -> output index for outputs that read one state directly (C row = e_i, D row = 0)."""
+    C = ss.C
+    direct = ((C != 0).sum(axis=1) == 1) & (C == 1.0).any(axis=1) & ~ss.D.any(axis=1)
+    out: dict[int, int] = {}
+    for j in np.flatnonzero(direct).tolist():
+        out.setdefault(int(C[j].argmax()), j)
+    return out
+
+
+def auto_initial_state(ss: BilinearStateSpace, u0: np.ndarray, m0: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """Measured states at their first measurement, the others at the conditional steady state.
+
+    Parameters
+    ----------
+    ss : BilinearStateSpace
+    u0 : ndarray, shape (p,)
+    m0 : ndarray, shape (n_flows,)
+    y0 : ndarray, shape (ny,)
+        First measurement (NaN entries are treated as unmeasured).
+
+    Returns
+    -------
+    ndarray, shape (n,)
+    """
+    A, B = ss.matrices(m0) if ss.n_flows else (ss.A, ss.B)
+    meas = {i: j for i, j in measured_states(ss).items() if math.isfinite(y0[j])}
+    x = np.zeros(ss.n_states)
+    fixed = np.array(sorted(meas), dtype=int)
+    free = np.array([i for i in range(ss.n_states) if i not in meas], dtype=int)
+    x[fixed] = [y0[meas[i]] for i in fixed]
+    if free.size == 1:  # the common 2-state case, without the LAPACK call
+        f = free[0]
+        x[f] = -(B[f] @ u0 + A[f, fixed] @ x[fixed]) / A[f, f]
+    elif free.size:
+        rhs = -(B[free] @ u0) - A[np.ix_(free, fixed)] @ x[fixed]
+        x[free] = np.linalg.solve(A[np.ix_(free, free)], rhs)
+    return x
+
+
+def initial_state(ss: BilinearStateSpace, values: Mapping[str, float], data: Dataset) -> np.ndarray:
+    """Initial state from ``x0_<state>`` values where given, else :func:`auto_initial_state`."""
+    names = [f"x0_{s}" for s in ss.state_names]
+    if all(n in values for n in names):
+        return np.array([values[n] for n in names])
+    x = auto_initial_state(ss, data.u[0], data.m[0], data.y[0])
+    for i, n in enumerate(names):
+        if n in values:
+            x[i] = values[n]
+    return x
+
+
+def network_theta(network: RCNetwork, values: Mapping[str, float]) -> dict[str, float]:
+    """The network's base parameter values out of a full value mapping."""
+    return {n: values[n] for n in network.free_parameter_names if n in values}
+
+
+def noise_values(
+    ss: BilinearStateSpace, values: Mapping[str, float]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(sigma_w, sigma_x0, sigma_v)`` from ``values``: per state, per state, per output; validated."""
+    try:
+        sw = np.array([values[f"sigma_w_{n}"] for n in ss.state_names], dtype=float)
+        sx = np.array([values[f"sigma_x0_{n}"] for n in ss.state_names], dtype=float)
+        sv = np.array([values[n] for n in measurement_noise_names(ss.output_names)], dtype=float)
+    except KeyError as exc:
+        raise ParameterError(f"noise parameter {exc.args[0]!r} has no value; fix it or free it") from None
+    for nm, v in (("sigma_v", sv), ("sigma_w_*", sw), ("sigma_x0_*", sx)):
+        if not all(0.0 <= x < math.inf for x in v):  # also rejects NaN
+            raise ParameterError(f"{nm} must be finite and >= 0, got {v}")
+    return sw, sx, sv
+
+
+def trapezoid_sse(t: np.ndarray, e: np.ndarray) -> float:
+    """``int e(t)^2 dt`` by the trapezoid rule, skipping intervals with a missing end.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+    e : ndarray, shape (N, ny)
+        Errors; NaN where the measurement is missing. Outputs are summed.
+    """
+    sq = e * e
+    seg = 0.5 * (sq[:-1] + sq[1:]) * np.diff(t)[:, None]
+    return float(np.sum(seg[np.isfinite(seg)]))
+
+
+def simulate_output(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop states and outputs, shapes (N, n) and (N, ny)."""
+    ss = network.state_space(network_theta(network, values))
+    x0 = initial_state(ss, values, data)
+    Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
+    x = propagate(Phi, G0, G1, which, data.u, x0)
+    return x, x @ ss.C.T + data.u @ ss.D.T
+
+
+def filter_arrays(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> tuple:
+    """The argument tuple of :func:`~rczone.estimation.kalman.kalman_filter_arrays` for ``values`` (NumPy discretization)."""
+    ss = network.state_space(network_theta(network, values))
+    sw, sx, sv = noise_values(ss, values)
+    x0 = initial_state(ss, values, data)
+    Phi, G0, G1, Qd, which = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2), hold)
+    return (Phi, G0, G1, Qd, which, data.u, data.y, x0, np.diag(sx**2), ss.C, ss.D, np.diag(sv**2))
+
+
+def run_filter(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> FilterOutput:
+    """Kalman filter of the stochastic model with the noise in ``values``, every intermediate result kept."""
+    return kalman_filter_arrays(*filter_arrays(network, values, data, hold))
+
+
+# ----------------------------------------------------------------------------- the reference engine
+
+
+def reference_cost(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str, method: str
+) -> float:
+    """``J_LS`` (``method="ls"``) or ``-log L`` in plain NumPy: the reference engine."""
+    if method == "ls":
+        ss = network.state_space(network_theta(network, values))
+        x0 = initial_state(ss, values, data)
+        Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
+        x = propagate_reference(Phi, G0, G1, which, data.u, x0)
+        return trapezoid_sse(data.t, data.y - (x @ ss.C.T + data.u @ ss.D.T))
+    return kalman_filter_reference(*filter_arrays(network, values, data, hold)).nll
+
+
+# ----------------------------------------------------------------------------- the general engine
+
+
+def _initial_state_derivatives(
+    ss: BilinearStateSpace, derivs: list, values: Mapping[str, float], data: Dataset, wrt: Sequence[str]
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`initial_state` and its derivatives (len(wrt), n) along ``derivs`` (None: no state-space change)."""
+    n = ss.n_states
+    names = [f"x0_{s}" for s in ss.state_names]
+    x = initial_state(ss, values, data)
+    dx = np.zeros((len(wrt), n))
+    if not all(nm in values for nm in names):
+        m0, u0 = data.m[0], data.u[0]
+        meas = {i for i, j in measured_states(ss).items() if math.isfinite(data.y[0, j])}
+        free = np.array([i for i in range(n) if i not in meas], dtype=int)
+        if free.size:
+            A, _ = ss.matrices(m0) if ss.n_flows else (ss.A, ss.B)
+            x_auto = auto_initial_state(ss, u0, m0, data.y[0])
+            rows = []
+            for d in derivs:
+                if d is None:
+                    rows.append(np.zeros(free.size))
+                    continue
+                dA = d.dA + np.tensordot(m0, d.dN, axes=1)
+                dB = d.dB + np.tensordot(m0, d.dM, axes=1)
+                rows.append(-(dA[free] @ x_auto + dB[free] @ u0))
+            if rows:
+                dx[:, free] = np.linalg.solve(A[np.ix_(free, free)], np.array(rows).T).T
+    for i, nm in enumerate(names):
+        if nm in values:
+            dx[:, i] = 0.0
+            if nm in wrt:
+                dx[list(wrt).index(nm), i] = 1.0
+    return x, dx
+
+
+def general_cost(
+    network: RCNetwork,
+    values: Mapping[str, float],
+    data: Dataset,
+    hold: str,
+    method: str,
+    wrt: Sequence[str] = (),
+) -> tuple[float, np.ndarray, np.ndarray]:
+    """``J_LS`` or ``-log L`` by the general engine, its gradient and curvature in the parameters ``wrt`` (theta units).
+
+    Parameters
+    ----------
+    network, values, data, hold
+        As :func:`rczone.estimation.costs.ml_cost`.
+    method : {"ls", "ml"}
+    wrt : sequence of str
+        Base network parameters, ``sigma_v[_<output>]``, ``sigma_w_<state>``,
+        ``sigma_x0_<state>`` or ``x0_<state>`` (given in ``values``).
+
+    Returns
+    -------
+    cost : float
+    gradient : ndarray, shape (len(wrt),)
+    curvature : ndarray, shape (len(wrt),)
+        Diagonal of the Fisher information (``-log L``) or of the Gauss-Newton Hessian (``J_LS``).
+
+    Raises
+    ------
+    ParameterError
+        For invalid parameter values.
+    numpy.linalg.LinAlgError
+        For a singular steady state or a non-positive innovation variance.
+    """
+    theta = network_theta(network, values)
+    ss = network.state_space(theta)
+    n, p, ny, nf = ss.n_states, ss.n_inputs, ss.C.shape[0], ss.n_flows
+    wrt = tuple(wrt)
+    q = len(wrt)
+    net_wrt = [w for w in wrt if w in network.parameters]
+    ders = dict(zip(net_wrt, network.state_space_derivatives(theta, net_wrt, log=False))) if net_wrt else {}
+    derivs = [ders.get(w) for w in wrt]
+    dA0, dN = np.zeros((q, n, n)), np.zeros((q, nf, n, n))
+    dB0, dM = np.zeros((q, n, p)), np.zeros((q, nf, n, p))
+    dC, dD = np.zeros((ny, q, n)), np.zeros((ny, q, p))
+    for k, d in enumerate(derivs):
+        if d is not None:
+            dA0[k], dN[k], dB0[k], dM[k] = d.dA, d.dN, d.dB, d.dM
+            dC[:, k], dD[:, k] = d.dC, d.dD
+    ls = method == "ls"
+    if ls:
+        sw, sx, r = np.zeros(n), np.zeros(n), np.ones(ny)
+    else:
+        sw, sx, sv = noise_values(ss, values)
+        r = sv**2
+    dqc, dP0, dr = np.zeros((q, n)), np.zeros((q, n, n)), np.zeros((ny, q))
+    if not ls:
+        sv_names = measurement_noise_names(ss.output_names)
+        for k, w in enumerate(wrt):
+            for i, s in enumerate(ss.state_names):
+                if w == f"sigma_w_{s}":
+                    dqc[k, i] = 2.0 * sw[i]
+                elif w == f"sigma_x0_{s}":
+                    dP0[k, i, i] = 2.0 * sx[i]
+            if w in sv_names:
+                j = sv_names.index(w)
+                dr[j, k] = 2.0 * sv[j]
+    x0, dx0 = _initial_state_derivatives(ss, derivs, values, data, wrt)
+    keys, which = data.intervals
+    foh = hold == "foh"
+    f = np.ascontiguousarray
+    A, N, B, M = f(ss.A), f(ss.N), f(ss.B), f(ss.M)
+    qc = sw**2
+    if q:
+        mats, dmats = interval_derivatives(A, N, B, M, dA0, dN, dB0, dM, keys, qc, dqc, foh, not ls)
+    else:
+        scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+        if scale is not None and not ls and modal_pays(which, n):
+            modal = modal_matrices(A, N, B, M, keys, qc, scale, foh)
+            init = (x0, np.diag(sx**2))
+            nll, n_obs = kalman_filter_modal(
+                modal, scale, which, (f(ss.C), f(ss.D), f(r)), init, (f(data.u), f(data.y)), foh
+            )
+            if n_obs < 0:
+                raise np.linalg.LinAlgError(
+                    "an innovation variance is not positive: the noise model is invalid"
+                )
+            return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
+        scale = np.empty(0) if scale is None else scale
+        mats = interval_matrices(A, N, B, M, keys, qc, scale, foh, not ls)
+        dmats = no_sensitivities(keys.shape[0], n, p)
+    y = f(data.y, dtype=float)
+    outs = outputs(data.n_samples, n, ny, q, ls, False)
+    nll, n_obs, g, fim = kalman_filter(
+        (*mats, which),
+        dmats,
+        (f(ss.C), f(ss.D), f(r), dC, dD, dr),
+        (x0, np.diag(sx**2), dx0, dP0),
+        (f(data.u, dtype=float), y),
+        (foh, ls, STEADY_RTOL),
+        outs,
+    )
+    if n_obs < 0:
+        raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")
+    if not ls:
+        return float(nll + 0.5 * n_obs * _LOG_2PI), g, fim
+    grad, curv = np.zeros(q), np.zeros(q)
+    sse = trapezoid(data.t, outs[0], outs[1], grad, curv)
+    return float(sse), grad, curv

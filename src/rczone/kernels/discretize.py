@@ -1,0 +1,673 @@
+"""Compiled exact discretization of the stochastic bilinear model, per distinct interval.
+
+The compiled twin of :mod:`rczone.simulation.discretize` (which owns the formulas, their
+derivation and the plain implementations the tests compare these with). For each distinct
+interval ``(dt, m)`` with ``A = A0 + sum m_f N_f``, ``B = B0 + sum m_f M_f`` and diagonal
+process-noise intensity ``Qc = diag(qc)``:
+
+* ``Phi = e^{A dt}``, the ZOH or FOH input matrices ``G0, G1``, and
+  ``Qd = int_0^dt e^{As} Qc e^{A's} ds``;
+* for RC networks (``diag(c) A`` symmetric, checked by the caller) these come from the
+  symmetric eigen-decomposition: in closed form for two states (one Jacobi rotation,
+  :func:`rc2_discretize`, also used per sample by the fused 2-state kernel), by LAPACK's
+  symmetric solver otherwise (:func:`spectral_modal`, in modal coordinates, where ``Phi`` is
+  diagonal, for the modal filter of :mod:`rczone.kernels.kalman`; :func:`spectral_discretize`
+  in the original ones);
+* otherwise, and whenever derivatives are wanted, from matrix exponentials
+  (:func:`expm_discretize`): the hold matrices from one block exponential, ``Qd`` by Van
+  Loan's block exponential on a step short enough that ``e^{-A h}`` is harmless, then exact
+  doubling. The derivatives with respect to directions ``(dA, dB, dqc)`` are the Fréchet
+  derivatives of the same exponentials (:func:`rczone.kernels.expm.expm_frechet`) carried
+  through the doubling, so they are exact to rounding.
+
+References
+----------
+.. [1] C. F. Van Loan, "Computing integrals involving the matrix exponential", IEEE Trans.
+   Automatic Control 23(3), 1978.
+.. [2] G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., 2013, Algorithm 8.5.1.
+.. [3] N. J. Higham, *Functions of Matrices*, SIAM, 2008, sections 1.2 and 10.7.4.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from rczone.kernels.expm import expm_frechet, matmul, norm1
+
+#: Below this ``|x|`` the series of ``(e^x - 1 - x)/x^2`` is used.
+SERIES_LIMIT = 0.2
+#: Taylor coefficients ``1/(k+2)!``, k = 0..12, of ``(e^x - 1 - x)/x^2`` (truncation < 1e-19 below the limit).
+PHI2_SERIES = np.array([1.0 / math.factorial(k + 2) for k in range(13)])
+#: Van Loan's block exponential is applied on steps with ``||A||_1 h`` at most this.
+VAN_LOAN_NORM = 0.5
+
+
+@njit(cache=True, error_model="numpy")
+def phi1(x: float, em1: float) -> float:
+    """``(e^x - 1)/x`` from ``em1 = expm1(x)``."""
+    return 1.0 if x == 0.0 else em1 / x
+
+
+@njit(cache=True, error_model="numpy")
+def phi2(x: float, em1: float) -> float:
+    """``(e^x - 1 - x)/x^2`` from ``em1 = expm1(x)``, by its series for small ``|x|``."""
+    if abs(x) < SERIES_LIMIT:
+        c = PHI2_SERIES
+        w = c[c.shape[0] - 1]
+        for k in range(c.shape[0] - 2, -1, -1):
+            w = w * x + c[k]
+        return w
+    return (em1 - x) / (x * x)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def rc2_discretize(
+    a: float,
+    a01: float,
+    a10: float,
+    d: float,
+    s0: float,
+    s1: float,
+    is0: float,
+    is1: float,
+    h: float,
+    q0: float,
+    q1: float,
+    foh: bool,
+) -> tuple:
+    """Exact discrete matrices of a 2-state RC model over ``h`` s, as 15 numbers.
+
+    ``A = [[a, a01], [a10, d]]`` with ``diag(s)^2 A`` symmetric (``s = sqrt(capacities)``), so
+    ``S = diag(s) A diag(s)^{-1}`` is symmetric; its eigen-decomposition is one Jacobi
+    rotation in closed form [2]_, without cancellation for nearly equal eigenvalues. Two
+    ``expm1`` give every matrix; ``e^{(l_0 + l_1) h} - 1`` is formed exactly from them.
+    Scalars in, scalars out: the fused kernel calls this once per interval, and arrays passed
+    to a numba function cost reference counting on every call.
+
+    Parameters
+    ----------
+    s0, s1, is0, is1 : float
+        ``sqrt`` of the capacities and their reciprocals (constant over a data set: no division here).
+    q0, q1 : float
+        Process-noise intensities of the two states, K^2/s.
+
+    Returns
+    -------
+    tuple of 15 floats
+        ``Phi`` (00, 01, 10, 11), ``H0`` and ``H1`` (each 00, 01, 10, 11) with ``G0 = H0 B`` and
+        ``G1 = H1 B`` (``H1 = 0`` for ZOH), ``Qd`` (00, 01, 11).
+    """
+    # symmetric S and its rotation [[cs, sn], [-sn, cs]]
+    b = 0.5 * (a01 * s0 * is1 + a10 * s1 * is0)
+    if b == 0.0:
+        tn = 0.0
+    else:
+        tau = (d - a) / (2.0 * b)
+        at = abs(tau)
+        # sqrt(1 + tau^2) without overflow for |tau| > 1e150
+        root = at * math.sqrt(1.0 + (1.0 / at) ** 2) if at > 1e150 else math.sqrt(1.0 + at * at)
+        tn = math.copysign(1.0, tau) / (at + root)
+    cs = 1.0 / math.sqrt(1.0 + tn * tn)
+    sn = tn * cs
+    # T = diag(s)^-1 V, U = T^-1 = V' diag(s)
+    T00, T01, T10, T11 = cs * is0, sn * is0, -sn * is1, cs * is1
+    U00, U01, U10, U11 = cs * s0, -sn * s1, sn * s0, cs * s1
+    x0 = (a - tn * b) * h
+    x1 = (d + tn * b) * h
+    em0 = math.expm1(x0)
+    em1 = math.expm1(x1)
+    e0 = em0 + 1.0
+    e1 = em1 + 1.0
+    w10 = phi1(x0, em0)
+    w11 = phi1(x1, em1)
+    if foh:
+        w20 = phi2(x0, em0)
+        w21 = phi2(x1, em1)
+        ga0, ga1 = (w10 - w20) * h, (w11 - w21) * h
+        gb0, gb1 = w20 * h, w21 * h
+    else:
+        ga0, ga1 = w10 * h, w11 * h
+        gb0, gb1 = 0.0, 0.0
+    # W = U diag(q) U' weighted by (e^{(l_i + l_j) h} - 1)/(l_i + l_j); Qd = T W T'
+    W00 = (U00 * U00 * q0 + U01 * U01 * q1) * (w10 * (0.5 * em0 + 1.0)) * h
+    W01 = (U00 * U10 * q0 + U01 * U11 * q1) * phi1(x0 + x1, em0 + em1 + em0 * em1) * h
+    W11 = (U10 * U10 * q0 + U11 * U11 * q1) * (w11 * (0.5 * em1 + 1.0)) * h
+    v00 = T00 * W00 + T01 * W01
+    v01 = T00 * W01 + T01 * W11
+    v10 = T10 * W00 + T11 * W01
+    v11 = T10 * W01 + T11 * W11
+    return (
+        T00 * e0 * U00 + T01 * e1 * U10,
+        T00 * e0 * U01 + T01 * e1 * U11,
+        T10 * e0 * U00 + T11 * e1 * U10,
+        T10 * e0 * U01 + T11 * e1 * U11,
+        T00 * ga0 * U00 + T01 * ga1 * U10,
+        T00 * ga0 * U01 + T01 * ga1 * U11,
+        T10 * ga0 * U00 + T11 * ga1 * U10,
+        T10 * ga0 * U01 + T11 * ga1 * U11,
+        T00 * gb0 * U00 + T01 * gb1 * U10,
+        T00 * gb0 * U01 + T01 * gb1 * U11,
+        T10 * gb0 * U00 + T11 * gb1 * U10,
+        T10 * gb0 * U01 + T11 * gb1 * U11,
+        v00 * T00 + v01 * T01,
+        v00 * T10 + v01 * T11,
+        v10 * T10 + v11 * T11,
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def spectral_modal(
+    A: np.ndarray, B: np.ndarray, scale: np.ndarray, qc: np.ndarray, h: float, foh: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The exact discretization of an RC model in its modal coordinates ``xi = V' diag(scale) x``.
+
+    ``S = diag(scale) A diag(scale)^-1`` (symmetrized, which removes only rounding) is
+    ``V diag(lam) V'`` (LAPACK's symmetric solver). With ``T = diag(scale)^-1 V`` and
+    ``T^-1 = V' diag(scale)`` the identities of :mod:`rczone.simulation.discretize` read, in
+    ``xi``: ``Phi = diag(e^{lam h})``, ``G0 = diag(phi1 - phi2) T^-1 B``, ``G1 = diag(phi2) T^-1 B``
+    (``phi2 = 0`` for ZOH) and ``Qd = W o F`` with ``W = T^-1 Qc T^-T`` and
+    ``F_ij = (e^{(lam_i + lam_j) h} - 1)/(lam_i + lam_j)``, all evaluated with ``expm1``.
+
+    Returns
+    -------
+    V : ndarray, shape (n, n)
+    e : ndarray, shape (n,)
+        ``e^{lam h}``.
+    H0, H1 : ndarray, shape (n, p)
+        The hold matrices in modal coordinates.
+    Qm : ndarray, shape (n, n)
+        ``Qd`` in modal coordinates.
+    """
+    n = A.shape[0]
+    p = B.shape[1]
+    S = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            S[i, j] = 0.5 * (scale[i] * A[i, j] / scale[j] + scale[j] * A[j, i] / scale[i])
+    lam, V = np.linalg.eigh(S)
+    Ti = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            Ti[j, i] = V[i, j] * scale[i]
+    e = np.empty(n)
+    w1 = np.empty(n)
+    w2 = np.zeros(n)
+    for i in range(n):
+        x = lam[i] * h
+        em = math.expm1(x)
+        e[i] = em + 1.0
+        w1[i] = phi1(x, em) * h
+        if foh:
+            w2[i] = phi2(x, em) * h
+    TiB = np.empty((n, p))
+    matmul(Ti, B, TiB)
+    H0 = np.empty((n, p))
+    H1 = np.empty((n, p))
+    for i in range(n):
+        for j in range(p):
+            H0[i, j] = (w1[i] - w2[i]) * TiB[i, j]
+            H1[i, j] = w2[i] * TiB[i, j]
+    Qm = np.empty((n, n))
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for k in range(n):
+                acc += Ti[i, k] * qc[k] * Ti[j, k]
+            x = (lam[i] + lam[j]) * h
+            acc *= phi1(x, math.expm1(x)) * h
+            Qm[i, j] = acc
+            Qm[j, i] = acc
+    return V, e, H0, H1, Qm
+
+
+@njit(cache=True, error_model="numpy")
+def spectral_discretize(
+    A: np.ndarray,
+    B: np.ndarray,
+    scale: np.ndarray,
+    qc: np.ndarray,
+    h: float,
+    foh: bool,
+    Phi: np.ndarray,
+    G0: np.ndarray,
+    G1: np.ndarray,
+    Qd: np.ndarray,
+) -> None:
+    """Exact ``Phi, G0, G1, Qd`` of an RC model: :func:`spectral_modal` brought back by ``T = diag(scale)^-1 V``."""
+    n = A.shape[0]
+    p = B.shape[1]
+    V, e, H0, H1, Qm = spectral_modal(A, B, scale, qc, h, foh)
+    T = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            T[i, j] = V[i, j] / scale[i]
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += T[i, k] * e[k] * V[j, k]
+            Phi[i, j] = acc * scale[j]
+        for j in range(p):
+            a0 = 0.0
+            a1 = 0.0
+            for k in range(n):
+                a0 += T[i, k] * H0[k, j]
+                a1 += T[i, k] * H1[k, j]
+            G0[i, j] = a0
+            if foh:
+                G1[i, j] = a1
+    TW = np.empty((n, n))
+    matmul(T, Qm, TW)
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for k in range(n):
+                acc += TW[i, k] * T[j, k]
+            Qd[i, j] = acc
+            Qd[j, i] = acc
+
+
+@njit(cache=True, error_model="numpy")
+def modal_matrices(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    keys: np.ndarray,
+    qc: np.ndarray,
+    scale: np.ndarray,
+    foh: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`spectral_modal` of each distinct interval: ``V, e, H0, H1, Qm`` stacked on a first axis of length K."""
+    n = A0.shape[0]
+    p = B0.shape[1]
+    K = keys.shape[0]
+    V = np.empty((K, n, n))
+    e = np.empty((K, n))
+    H0 = np.empty((K, n, p))
+    H1 = np.empty((K, n, p))
+    Qm = np.empty((K, n, n))
+    for k in range(K):
+        A, B = _key_matrices(A0, N, B0, M, keys[k])
+        V[k], e[k], H0[k], H1[k], Qm[k] = spectral_modal(A, B, scale, qc, keys[k, 0], foh)
+    return V, e, H0, H1, Qm
+
+
+@njit(cache=True, error_model="numpy")
+def expm_discretize(
+    A: np.ndarray,
+    B: np.ndarray,
+    qc: np.ndarray,
+    h: float,
+    foh: bool,
+    noise: bool,
+    dA: np.ndarray,
+    dB: np.ndarray,
+    dqc: np.ndarray,
+    Phi: np.ndarray,
+    G0: np.ndarray,
+    G1: np.ndarray,
+    Qd: np.ndarray,
+    dPhi: np.ndarray,
+    dG0: np.ndarray,
+    dG1: np.ndarray,
+    dQd: np.ndarray,
+) -> None:
+    """``Phi, G0, G1, Qd`` and their derivatives along ``q`` directions, by matrix exponentials.
+
+    Parameters
+    ----------
+    A, B : ndarray, shapes (n, n), (n, p)
+    qc : ndarray, shape (n,)
+        ``Qc = diag(qc)``.
+    h : float
+        Interval, s.
+    foh : bool
+    dA, dB, dqc : ndarray, shapes (q, n, n), (q, n, p), (q, n)
+        Directions (derivatives of ``A``, ``B``, ``qc`` with respect to one parameter each).
+    Phi, G0, G1, Qd : outputs (``G1`` untouched for ZOH).
+    dPhi, dG0, dG1, dQd : ndarray, shapes (q, n, n), (q, n, p), (q, n, p), (q, n, n)
+        Outputs; ``dG1`` untouched for ZOH. Without ``noise``, ``Qd`` and ``dQd`` are zero.
+    """
+    n = A.shape[0]
+    p = B.shape[1]
+    q = dA.shape[0]
+    # hold matrices: exp of [[A h, B h, 0], [0, 0, I], [0, 0, 0]] (the last block row/column for FOH)
+    nb = n + (2 * p if foh else p)
+    Z = np.zeros((nb, nb))
+    for i in range(n):
+        for j in range(n):
+            Z[i, j] = A[i, j] * h
+        for j in range(p):
+            Z[i, n + j] = B[i, j] * h
+    if foh:
+        for j in range(p):
+            Z[n + j, n + p + j] = 1.0
+    # directions that move the hold matrices
+    dyn = np.zeros(q, dtype=np.int64)
+    n_dyn = 0
+    for k in range(q):
+        moved = False
+        for i in range(n):
+            for j in range(n):
+                moved = moved or dA[k, i, j] != 0.0
+            for j in range(p):
+                moved = moved or dB[k, i, j] != 0.0
+        if moved:
+            dyn[n_dyn] = k
+            n_dyn += 1
+    dZ = np.zeros((n_dyn, nb, nb))
+    for kk in range(n_dyn):
+        k = dyn[kk]
+        for i in range(n):
+            for j in range(n):
+                dZ[kk, i, j] = dA[k, i, j] * h
+            for j in range(p):
+                dZ[kk, i, n + j] = dB[k, i, j] * h
+    E, L = expm_frechet(Z, dZ)
+    for i in range(n):
+        for j in range(n):
+            Phi[i, j] = E[i, j]
+        for j in range(p):
+            if foh:
+                G1[i, j] = E[i, n + p + j]
+                G0[i, j] = E[i, n + j] - E[i, n + p + j]
+            else:
+                G0[i, j] = E[i, n + j]
+    for k in range(q):
+        for i in range(n):
+            for j in range(n):
+                dPhi[k, i, j] = 0.0
+            for j in range(p):
+                dG0[k, i, j] = 0.0
+                if foh:
+                    dG1[k, i, j] = 0.0
+    for kk in range(n_dyn):
+        k = dyn[kk]
+        for i in range(n):
+            for j in range(n):
+                dPhi[k, i, j] = L[kk, i, j]
+            for j in range(p):
+                if foh:
+                    dG1[k, i, j] = L[kk, i, n + p + j]
+                    dG0[k, i, j] = L[kk, i, n + j] - L[kk, i, n + p + j]
+                else:
+                    dG0[k, i, j] = L[kk, i, n + j]
+    if noise:
+        _van_loan_doubling(A, qc, h, dA, dqc, Qd, dQd)
+    else:
+        for i in range(n):
+            for j in range(n):
+                Qd[i, j] = 0.0
+                for k in range(q):
+                    dQd[k, i, j] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _van_loan_doubling(
+    A: np.ndarray, qc: np.ndarray, dt: float, dA: np.ndarray, dqc: np.ndarray, Qd: np.ndarray, dQd: np.ndarray
+) -> None:
+    """``Qd`` over ``dt`` and its derivatives: Van Loan on ``h = dt / 2^s``, then exact doubling.
+
+    Van Loan's block exponential ``exp([[-A, Qc], [0, A']] h)`` holds ``e^{-A h}``; for a stiff
+    model over a long interval it would overflow into cancellation, so ``h`` is halved until
+    ``||A||_1 h <= 1/2`` and ``Qd(2h) = Qd(h) + Phi(h) Qd(h) Phi(h)'`` (every term positive
+    semidefinite), ``Phi(2h) = Phi(h)^2`` recover ``dt``; the derivatives follow the same
+    recursion by the product rule.
+    """
+    n = A.shape[0]
+    q = dA.shape[0]
+    norm = norm1(A) * dt
+    s = math.ceil(math.log2(norm / VAN_LOAN_NORM)) if norm > VAN_LOAN_NORM else 0
+    h = dt * 0.5**s
+    # directions that move Qd: A or qc
+    act = np.zeros(q, dtype=np.int64)
+    n_act = 0
+    for k in range(q):
+        moved = False
+        for i in range(n):
+            moved = moved or dqc[k, i] != 0.0
+            for j in range(n):
+                moved = moved or dA[k, i, j] != 0.0
+        if moved:
+            act[n_act] = k
+            n_act += 1
+    H = np.zeros((2 * n, 2 * n))
+    for i in range(n):
+        H[i, n + i] = qc[i] * h
+        for j in range(n):
+            H[i, j] = -A[i, j] * h
+            H[n + i, n + j] = A[j, i] * h
+    dH = np.zeros((n_act, 2 * n, 2 * n))
+    for kk in range(n_act):
+        k = act[kk]
+        for i in range(n):
+            dH[kk, i, n + i] = dqc[k, i] * h
+            for j in range(n):
+                dH[kk, i, j] = -dA[k, i, j] * h
+                dH[kk, n + i, n + j] = dA[k, j, i] * h
+    E, L = expm_frechet(H, dH)
+    # Phi(h) = E22', Qd(h) = E22' E12
+    F = np.empty((n, n))
+    Q = np.empty((n, n))
+    dF = np.zeros((n_act, n, n))
+    dQ = np.zeros((n_act, n, n))
+    for i in range(n):
+        for j in range(n):
+            F[i, j] = E[n + j, n + i]
+            acc = 0.0
+            for k in range(n):
+                acc += E[n + k, n + i] * E[k, n + j]
+            Q[i, j] = acc
+    _symmetrize(Q)
+    for kk in range(n_act):
+        for i in range(n):
+            for j in range(n):
+                dF[kk, i, j] = L[kk, n + j, n + i]
+                acc = 0.0
+                for k in range(n):
+                    acc += L[kk, n + k, n + i] * E[k, n + j] + E[n + k, n + i] * L[kk, k, n + j]
+                dQ[kk, i, j] = acc
+        _symmetrize(dQ[kk])
+    T = np.empty((n, n))
+    T2 = np.empty((n, n))
+    for _ in range(s):
+        # derivatives first (they use Q and Phi of the current step)
+        for kk in range(n_act):
+            # dQ + dF Q F' + F dQ F' + F Q dF'
+            matmul(dF[kk], Q, T)  # dF Q
+            for i in range(n):
+                for j in range(n):
+                    acc = 0.0
+                    for k in range(n):
+                        acc += T[i, k] * F[j, k]
+                    T2[i, j] = acc  # dF Q F'
+            matmul(F, dQ[kk], T)  # F dQ
+            for i in range(n):
+                for j in range(i, n):
+                    acc = 0.0
+                    for k in range(n):
+                        acc += T[i, k] * F[j, k]
+                    v = dQ[kk, i, j] + acc + T2[i, j] + T2[j, i]
+                    dQ[kk, i, j] = v
+                    dQ[kk, j, i] = v
+            matmul(dF[kk], F, T)
+            matmul(F, dF[kk], T2)
+            for i in range(n):
+                for j in range(n):
+                    dF[kk, i, j] = T[i, j] + T2[i, j]
+        matmul(F, Q, T)
+        for i in range(n):
+            for j in range(i, n):
+                acc = 0.0
+                for k in range(n):
+                    acc += T[i, k] * F[j, k]
+                v = Q[i, j] + acc
+                Q[i, j] = v
+                Q[j, i] = v
+        matmul(F, F, T)
+        for i in range(n):
+            for j in range(n):
+                F[i, j] = T[i, j]
+    for i in range(n):
+        for j in range(n):
+            Qd[i, j] = Q[i, j]
+    for k in range(q):
+        for i in range(n):
+            for j in range(n):
+                dQd[k, i, j] = 0.0
+    for kk in range(n_act):
+        k = act[kk]
+        for i in range(n):
+            for j in range(n):
+                dQd[k, i, j] = dQ[kk, i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def _symmetrize(X: np.ndarray) -> None:
+    for i in range(X.shape[0]):
+        for j in range(i + 1, X.shape[0]):
+            v = 0.5 * (X[i, j] + X[j, i])
+            X[i, j] = v
+            X[j, i] = v
+
+
+@njit(cache=True, error_model="numpy")
+def _key_matrices(
+    A0: np.ndarray, N: np.ndarray, B0: np.ndarray, M: np.ndarray, key: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``A0 + sum m_f N_f`` and ``B0 + sum m_f M_f`` for ``key = (dt, m_1, ...)``."""
+    A = A0.copy()
+    B = B0.copy()
+    for f in range(N.shape[0]):
+        mf = key[1 + f]
+        if mf != 0.0:
+            for i in range(A.shape[0]):
+                for j in range(A.shape[1]):
+                    A[i, j] += mf * N[f, i, j]
+                for j in range(B.shape[1]):
+                    B[i, j] += mf * M[f, i, j]
+    return A, B
+
+
+@njit(cache=True, error_model="numpy")
+def interval_matrices(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    keys: np.ndarray,
+    qc: np.ndarray,
+    scale: np.ndarray,
+    foh: bool,
+    noise: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``Phi, G0, G1, Qd`` (shapes (K, n, n), (K, n, p), (K, n, p), (K, n, n)) of each distinct interval.
+
+    Parameters
+    ----------
+    A0, N, B0, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
+    keys : ndarray, shape (K, 1 + nf)
+        ``(dt, m_1, ..., m_nf)`` of each distinct interval.
+    qc : ndarray, shape (n,)
+    scale : ndarray, shape (n,) or (0,)
+        ``sqrt(capacities)`` when it symmetrizes every ``A`` (an RC network: spectral
+        formulas); empty for matrix exponentials.
+    foh : bool
+    noise : bool
+        Compute ``Qd`` (zero otherwise, e.g. for open-loop least squares).
+    """
+    n = A0.shape[0]
+    p = B0.shape[1]
+    K = keys.shape[0]
+    Phi = np.empty((K, n, n))
+    G0 = np.empty((K, n, p))
+    G1 = np.zeros((K, n, p))
+    Qd = np.zeros((K, n, n))
+    none = np.empty((0, n, n))
+    zero = np.zeros(n)
+    for k in range(K):
+        A, B = _key_matrices(A0, N, B0, M, keys[k])
+        h = keys[k, 0]
+        if scale.shape[0] == 2:
+            m = rc2_discretize(
+                A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1], h,
+                qc[0], qc[1], foh,
+            )  # fmt: skip
+            Phi[k, 0, 0], Phi[k, 0, 1], Phi[k, 1, 0], Phi[k, 1, 1] = m[0], m[1], m[2], m[3]
+            Qd[k, 0, 0], Qd[k, 0, 1], Qd[k, 1, 0], Qd[k, 1, 1] = m[12], m[13], m[13], m[14]
+            for j in range(p):
+                G0[k, 0, j] = m[4] * B[0, j] + m[5] * B[1, j]
+                G0[k, 1, j] = m[6] * B[0, j] + m[7] * B[1, j]
+                G1[k, 0, j] = m[8] * B[0, j] + m[9] * B[1, j]
+                G1[k, 1, j] = m[10] * B[0, j] + m[11] * B[1, j]
+        elif scale.shape[0] == n:
+            spectral_discretize(A, B, scale, qc if noise else zero, h, foh, Phi[k], G0[k], G1[k], Qd[k])
+        else:
+            expm_discretize(
+                A, B, qc, h, foh, noise, none, np.empty((0, n, p)), np.empty((0, n)),
+                Phi[k], G0[k], G1[k], Qd[k], none, np.empty((0, n, p)), np.empty((0, n, p)), none,
+            )  # fmt: skip
+    return Phi, G0, G1, Qd
+
+
+@njit(cache=True, error_model="numpy")
+def interval_derivatives(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    dA0: np.ndarray,
+    dN: np.ndarray,
+    dB0: np.ndarray,
+    dM: np.ndarray,
+    keys: np.ndarray,
+    qc: np.ndarray,
+    dqc: np.ndarray,
+    foh: bool,
+    noise: bool,
+) -> tuple:
+    """As :func:`interval_matrices` by matrix exponentials, with the derivatives along ``q`` directions.
+
+    Parameters
+    ----------
+    dA0, dN, dB0, dM, dqc : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p), (q, n)
+
+    Returns
+    -------
+    (Phi, G0, G1, Qd) : as :func:`interval_matrices`
+    (dPhi, dG0, dG1, dQd) : ndarray, shapes (K, q, n, n), (K, q, n, p), (K, q, n, p), (K, q, n, n)
+    """
+    n = A0.shape[0]
+    p = B0.shape[1]
+    K = keys.shape[0]
+    q = dA0.shape[0]
+    Phi = np.empty((K, n, n))
+    G0 = np.empty((K, n, p))
+    G1 = np.zeros((K, n, p))
+    Qd = np.empty((K, n, n))
+    dPhi = np.empty((K, q, n, n))
+    dG0 = np.empty((K, q, n, p))
+    dG1 = np.zeros((K, q, n, p))
+    dQd = np.empty((K, q, n, n))
+    for k in range(K):
+        A, B = _key_matrices(A0, N, B0, M, keys[k])
+        dA = dA0.copy()
+        dB = dB0.copy()
+        for f in range(N.shape[0]):
+            mf = keys[k, 1 + f]
+            if mf != 0.0:
+                for d in range(q):
+                    for i in range(n):
+                        for j in range(n):
+                            dA[d, i, j] += mf * dN[d, f, i, j]
+                        for j in range(p):
+                            dB[d, i, j] += mf * dM[d, f, i, j]
+        expm_discretize(
+            A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k], dG1[k],
+            dQd[k],
+        )  # fmt: skip
+    return (Phi, G0, G1, Qd), (dPhi, dG0, dG1, dQd)

@@ -1,0 +1,136 @@
+"""Nelder–Mead over the compiled cost of a packed estimation problem, without leaving compiled code.
+
+A fit of the paper's reduced model spends a few hundred cost evaluations of ~30 us each;
+driven from Python (SciPy's Nelder–Mead, parameter mappings) every evaluation costs several
+times that again. :func:`nelder_mead` is the Nelder–Mead simplex method [1]_ with the
+standard coefficients (reflection 1, expansion 2, contraction 1/2, shrink 1/2) and the
+stopping rule of :func:`scipy.optimize.minimize` (every vertex within ``xatol`` of the best in
+every coordinate and every value within ``fatol`` of the best), on
+:func:`rczone.kernels.problem.cost_z` divided by ``scale`` with non-finite values replaced by
+``1e300``, as the Python path of :func:`rczone.estimation.optimize.minimize_from`. On the same
+function it takes SciPy's steps exactly, budget handling included; against the Python path
+the iterates differ by rounding (``math.tanh`` and NumPy's differ in the last bit) and where
+vertices tie exactly (the sort here is stable, NumPy's is not), so the two end at the same
+minimum within the tolerances, not bit for bit.
+
+References
+----------
+.. [1] J. A. Nelder, R. Mead, "A simplex method for function minimization", Computer
+   Journal 7 (1965) 308-313.
+.. [2] J. C. Lagarias, J. A. Reeds, M. H. Wright, P. E. Wright, "Convergence properties of
+   the Nelder-Mead simplex method in low dimensions", SIAM J. Optim. 9 (1998) 112-147.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from rczone.kernels.problem import cost_z
+
+#: Value handed to the simplex at invalid points (as the Python path).
+BIG = 1e300
+
+
+@njit(cache=True, error_model="numpy")
+def _scaled(z: np.ndarray, prob, scale: float) -> float:
+    v = cost_z(z, prob)
+    v = v / scale if math.isfinite(v) else math.inf
+    return min(v, BIG)
+
+
+@njit(cache=True, error_model="numpy")
+def _sort(sim: np.ndarray, fsim: np.ndarray) -> None:
+    """Order the vertices by value, best first (stable for equal values)."""
+    order = np.argsort(fsim, kind="mergesort")
+    sim[:] = sim[order]
+    fsim[:] = fsim[order]
+
+
+@njit(cache=True, error_model="numpy")
+def nelder_mead(
+    sim: np.ndarray, prob, scale: float, xatol: float, fatol: float, max_evals: int
+) -> tuple[np.ndarray, float, int, int]:
+    """Minimize :func:`cost_z` ``/ scale`` from the initial simplex ``sim`` (d + 1 rows).
+
+    Returns
+    -------
+    z : ndarray
+        Best vertex.
+    f : float
+        Its scaled cost.
+    n_evals : int
+    status : int
+        0 converged, 1 evaluation budget exhausted.
+    """
+    n_v, d = sim.shape
+    sim = sim.copy()
+    fsim = np.full(n_v, math.inf)
+    n_evals = 0
+    for k in range(n_v):
+        if n_evals >= max_evals:
+            break
+        fsim[k] = _scaled(sim[k], prob, scale)
+        n_evals += 1
+    _sort(sim, fsim)
+    status = 1
+    last = n_v - 1
+    while n_evals < max_evals:
+        xdev = 0.0
+        fdev = 0.0
+        for k in range(1, n_v):
+            fdev = max(fdev, abs(fsim[0] - fsim[k]))
+            for i in range(d):
+                xdev = max(xdev, abs(sim[k, i] - sim[0, i]))
+        if xdev <= xatol and fdev <= fatol:
+            status = 0
+            break
+        xbar = np.zeros(d)
+        for k in range(last):
+            xbar += sim[k]
+        xbar /= d
+        worst = sim[last].copy()
+        xr = 2.0 * xbar - worst
+        fxr = _scaled(xr, prob, scale)
+        n_evals += 1
+        # the new vertex and its value; an evaluation the budget does not allow ends the search
+        # before the step that needed it, as SciPy's does
+        xn = xr
+        fn = fxr
+        if fxr < fsim[0]:
+            if n_evals >= max_evals:
+                break
+            xe = 3.0 * xbar - 2.0 * worst
+            fxe = _scaled(xe, prob, scale)
+            n_evals += 1
+            if fxe < fxr:
+                xn = xe
+                fn = fxe
+        elif fxr >= fsim[last - 1]:
+            if n_evals >= max_evals:
+                break
+            if fxr < fsim[last]:  # outside contraction
+                xn = 1.5 * xbar - 0.5 * worst
+                fn = _scaled(xn, prob, scale)
+                n_evals += 1
+                shrink = not fn <= fxr
+            else:  # inside contraction
+                xn = 0.5 * xbar + 0.5 * worst
+                fn = _scaled(xn, prob, scale)
+                n_evals += 1
+                shrink = not fn < fsim[last]
+            if shrink:
+                for k in range(1, n_v):
+                    if n_evals >= max_evals:
+                        break
+                    sim[k] = sim[0] + 0.5 * (sim[k] - sim[0])
+                    fsim[k] = _scaled(sim[k], prob, scale)
+                    n_evals += 1
+                _sort(sim, fsim)
+                continue
+        sim[last] = xn
+        fsim[last] = fn
+        _sort(sim, fsim)
+    return sim[0].copy(), fsim[0], n_evals, status

@@ -1,0 +1,435 @@
+"""Compiled cost and gradient of a packed estimation problem: from parameter values to ``J`` in one call.
+
+For a network in conductance form (every node capacitive, numeric heat gains and ``cp``)
+whose resistances, capacities, noise levels and initial states are each a constant or
+proportional to one free parameter (the packing is
+:func:`rczone.estimation.compiled.compiled_problem`), :func:`evaluate`
+
+* maps ``theta`` to the element values (``k * theta[i]`` or a constant) and assembles
+  ``A = -diag(1/c) L' diag(1/R) L``, ``B = diag(1/c) (P' diag(1/R) E + Gb0)``,
+  ``N = diag(1/c) Nf``, ``M = diag(1/c) Mf`` (:attr:`rczone.network.RCNetwork.conductance_form`),
+  and, for the gradient, their exact derivatives (``dA/dR_k = diag(1/c) L_k' L_k / R_k^2``;
+  a capacity scales its row);
+* starts the measured states at their first measurement and the others at the steady state
+  given them (as :func:`rczone.estimation.costs.auto_initial_state`), unless ``x0`` values
+  are given, and differentiates that too;
+* discretizes each distinct interval (:mod:`rczone.kernels.discretize`) and runs the filter
+  (:func:`rczone.kernels.kalman.kalman_filter`) with forward sensitivities; for values only,
+  the fused 2-state kernel (:func:`rczone.kernels.rc2.nll_rc2`) where it applies, and the
+  modal filter (:func:`rczone.kernels.kalman.kalman_filter_modal`) for three or more states
+  whose intervals rarely change (:func:`rczone.kernels.kalman.modal_pays`);
+* returns ``J_LS`` (trapezoid rule on the open-loop errors, K^2 s), ``J_ML`` (``-log L``) or
+  ``J_MAP`` (tempered likelihood plus log-normal prior) and its gradient in ``theta``.
+
+Layout of the problem tuple (contiguous float64 / int64 / bool arrays)::
+
+    (kind,                                      # LS, ML or MAP
+     (L, P, E, Gb0, Nf, Mf, output_state),      # conductance form; output j reads state output_state[j]
+     (t, m, u, y, keys, which, groups),         # data; distinct intervals; interval groups or empty
+     (res_idx, res_k, cap_idx, cap_k,           # element slots
+      sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, # sigma_v per output, sigma_w and sigma_x0 per state
+      x0_idx, x0_k, x0_given),                  # x0 per state (given or derived from the data)
+     (eta_lower, eta_upper, log),               # direct-search transform
+     (prior_idx, prior_log_construction, prior_spread, likelihood_weight),
+     (foh, symmetry_rtol, steady_rtol, fused),  # fused: the 2-state kernel serves values
+     scratch)                                   # (N,) buffer for the fused open-loop errors
+
+A slot ``(idx, k)`` has the value ``k * theta[idx]``, or ``k`` when ``idx < 0``.
+
+References
+----------
+.. [1] J. R. R. A. Martins, P. Sturdza, J. J. Alonso, "The complex-step derivative
+   approximation", ACM Trans. Math. Software 29(3), 2003 (used by the tests of the gradient).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
+from rczone.kernels.expm import lu_factor, lu_solve
+from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
+from rczone.kernels.rc2 import nll_rc2
+
+#: Problem kinds.
+LS, ML, MAP = 0, 1, 2
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+@njit(cache=True, error_model="numpy")
+def _slot(theta: np.ndarray, idx: int, k: float) -> float:
+    return k * theta[idx] if idx >= 0 else k
+
+
+@njit(cache=True, error_model="numpy")
+def theta_of_z(z: np.ndarray, lo: np.ndarray, hi: np.ndarray, logp: np.ndarray) -> np.ndarray:
+    """Physical values from direct-search variables (bounds enforced by the transform)."""
+    theta = np.empty(z.shape[0])
+    for i in range(z.shape[0]):
+        eta = lo[i] + (hi[i] - lo[i]) * (0.5 * (1.0 + math.tanh(0.5 * z[i])))
+        theta[i] = math.exp(eta) if logp[i] else eta
+    return theta
+
+
+@njit(cache=True, error_model="numpy")
+def assemble(
+    L: np.ndarray, P: np.ndarray, E: np.ndarray, Gb0: np.ndarray, Nf: np.ndarray, Mf: np.ndarray, res, cap
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(A0, N, B0, M)`` of the conductance form for resistor values ``res`` and capacities ``cap``."""
+    nr, n = L.shape
+    p = E.shape[1]
+    nf = Nf.shape[0]
+    A0 = np.zeros((n, n))
+    B0 = np.zeros((n, p))
+    N = np.empty((nf, n, n))
+    M = np.empty((nf, n, p))
+    for k in range(nr):
+        g = 1.0 / res[k]
+        for i in range(n):
+            if L[k, i] != 0.0:
+                for j in range(n):
+                    A0[i, j] -= L[k, i] * g * L[k, j]
+            if P[k, i] != 0.0:
+                for j in range(p):
+                    B0[i, j] += P[k, i] * g * E[k, j]
+    for i in range(n):
+        for j in range(n):
+            A0[i, j] /= cap[i]
+        for j in range(p):
+            B0[i, j] = (B0[i, j] + Gb0[i, j]) / cap[i]
+        for f in range(nf):
+            for j in range(n):
+                N[f, i, j] = Nf[f, i, j] / cap[i]
+            for j in range(p):
+                M[f, i, j] = Mf[f, i, j] / cap[i]
+    return A0, N, B0, M
+
+
+@njit(cache=True, error_model="numpy")
+def assemble_derivatives(L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_idx, cap_k, q: int) -> tuple:
+    """Derivatives of ``(A0, N, B0, M)`` with respect to ``theta[0..q-1]`` through the element slots.
+
+    Returns arrays of shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p).
+    """
+    nr, n = L.shape
+    p = E.shape[1]
+    nf = N.shape[0]
+    dA0 = np.zeros((q, n, n))
+    dN = np.zeros((q, nf, n, n))
+    dB0 = np.zeros((q, n, p))
+    dM = np.zeros((q, nf, n, p))
+    if q == 0:
+        return dA0, dN, dB0, dM
+    for k in range(nr):
+        d = res_idx[k]
+        if d < 0:
+            continue
+        w = res_k[k] / (res[k] * res[k])  # d(1/R)/dtheta = -k / R^2
+        for i in range(n):
+            if L[k, i] != 0.0:
+                for j in range(n):
+                    dA0[d, i, j] += L[k, i] * w * L[k, j] / cap[i]
+            if P[k, i] != 0.0:
+                for j in range(p):
+                    dB0[d, i, j] -= P[k, i] * w * E[k, j] / cap[i]
+    for i in range(n):
+        d = cap_idx[i]
+        if d < 0:
+            continue
+        w = -cap_k[i] / cap[i]  # a row divided by c: d/dtheta = -(k / c) * row
+        for j in range(n):
+            dA0[d, i, j] += w * A0[i, j]
+        for j in range(p):
+            dB0[d, i, j] += w * B0[i, j]
+        for f in range(nf):
+            for j in range(n):
+                dN[d, f, i, j] += w * N[f, i, j]
+            for j in range(p):
+                dM[d, f, i, j] += w * M[f, i, j]
+    return dA0, dN, dB0, dM
+
+
+@njit(cache=True, error_model="numpy")
+def initial_state(
+    A0, N, B0, M, dA0, dN, dB0, dM, m0, u0, y0, out_state, x0_given, x0_values, x0_idx
+) -> tuple[np.ndarray, np.ndarray, bool]:
+    """Initial state and its derivatives (q, n); False when the steady state is singular.
+
+    Given ``x0`` values are used; the other states are derived from the data when needed: the
+    measured ones (first measurement finite) at ``y0``, the rest at the steady state given
+    them, ``A_ff x_f = -(B_f u0 + A_fm x_m)`` at the first flows.
+    """
+    n = A0.shape[0]
+    p = B0.shape[1]
+    q = dA0.shape[0]
+    x = np.zeros(n)
+    dx = np.zeros((q, n))
+    auto = False
+    for i in range(n):
+        auto = auto or not x0_given[i]
+    if auto:
+        A = A0.copy()
+        B = B0.copy()
+        dA = dA0.copy()
+        dB = dB0.copy()
+        for f in range(N.shape[0]):
+            mf = m0[f]
+            for i in range(n):
+                for j in range(n):
+                    A[i, j] += mf * N[f, i, j]
+                for j in range(p):
+                    B[i, j] += mf * M[f, i, j]
+                for d in range(q):
+                    for j in range(n):
+                        dA[d, i, j] += mf * dN[d, f, i, j]
+                    for j in range(p):
+                        dB[d, i, j] += mf * dM[d, f, i, j]
+        measured = np.zeros(n, dtype=np.bool_)
+        for j in range(out_state.shape[0]):
+            s = out_state[j]
+            if y0[j] == y0[j] and not measured[s]:
+                measured[s] = True
+                x[s] = y0[j]
+        free = np.empty(n, dtype=np.int64)
+        nfree = 0
+        for i in range(n):
+            if not measured[i]:
+                free[nfree] = i
+                nfree += 1
+        if nfree:
+            Aff = np.empty((nfree, nfree))
+            rhs = np.zeros((nfree, 1))
+            for a in range(nfree):
+                i = free[a]
+                for b in range(nfree):
+                    Aff[a, b] = A[i, free[b]]
+                acc = 0.0
+                for j in range(p):
+                    acc -= B[i, j] * u0[j]
+                for j in range(n):
+                    if measured[j]:
+                        acc -= A[i, j] * x[j]
+                rhs[a, 0] = acc
+            piv = np.empty(nfree, dtype=np.int64)
+            lu_factor(Aff, piv)
+            for a in range(nfree):
+                if not (Aff[a, a] != 0.0 and abs(Aff[a, a]) < math.inf):
+                    return x, dx, False
+            lu_solve(Aff, piv, rhs)
+            for a in range(nfree):
+                x[free[a]] = rhs[a, 0]
+            if q:
+                # A_ff dx_f = -(dA_f. x + dB_f u0)
+                sub = np.empty((nfree, q))
+                for a in range(nfree):
+                    i = free[a]
+                    for d in range(q):
+                        acc = 0.0
+                        for j in range(n):
+                            acc -= dA[d, i, j] * x[j]
+                        for j in range(p):
+                            acc -= dB[d, i, j] * u0[j]
+                        sub[a, d] = acc
+                lu_solve(Aff, piv, sub)
+                for a in range(nfree):
+                    for d in range(q):
+                        dx[d, free[a]] = sub[a, d]
+    for i in range(n):
+        if x0_given[i]:
+            x[i] = x0_values[i]
+            for d in range(q):
+                dx[d, i] = 0.0
+            if 0 <= x0_idx[i] < q:
+                dx[x0_idx[i], i] = 1.0
+    return x, dx, True
+
+
+@njit(cache=True, error_model="numpy")
+def trapezoid(t: np.ndarray, e: np.ndarray, de: np.ndarray, grad: np.ndarray, curv: np.ndarray) -> float:
+    """``int e^2 dt`` (trapezoid rule over intervals with both ends measured) and its gradient.
+
+    ``curv`` receives the diagonal of the Gauss-Newton Hessian ``sum (de_k^2 + de_k+1^2) h``.
+    """
+    sse = 0.0
+    q = de.shape[2]
+    for k in range(e.shape[0] - 1):
+        h = t[k + 1] - t[k]
+        for j in range(e.shape[1]):
+            a = e[k, j]
+            b = e[k + 1, j]
+            if a == a and b == b:
+                sse += 0.5 * (a * a + b * b) * h
+                for d in range(q):
+                    da = de[k, j, d]
+                    db = de[k + 1, j, d]
+                    grad[d] += (a * da + b * db) * h
+                    curv[d] += (da * da + db * db) * h
+    return sse
+
+
+@njit(cache=True, error_model="numpy")
+def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarray, np.ndarray]:
+    """The cost at physical values ``theta`` and, with ``want_grad``, its gradient in ``theta``.
+
+    The third result is a diagonal curvature estimate in ``theta`` (Fisher information for
+    ``J_ML``, Gauss-Newton for ``J_LS``; zeros without ``want_grad``). ``(inf, zeros, zeros)``
+    where the model is invalid (a non-positive element value, a singular steady state, a
+    non-positive innovation variance).
+    """
+    kind, form, data, slots, _transform, prior, consts, scratch = prob
+    L, P, E, Gb0, Nf, Mf, out_state = form
+    t, m, u, y, keys, which, groups = data
+    res_idx, res_k, cap_idx, cap_k, sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, x0_idx, x0_k, x0_given = slots
+    prior_idx, prior_logc, spread, weight = prior
+    foh, sym_rtol, steady_rtol, fused = consts
+    d = theta.shape[0]
+    grad = np.zeros(d)
+    curv = np.zeros(d)
+    nr, n = L.shape
+    ny = out_state.shape[0]
+    N_t = t.shape[0]
+    res = np.empty(nr)
+    for s in range(nr):
+        res[s] = _slot(theta, res_idx[s], res_k[s])
+        if not (res[s] > 0.0 and res[s] < math.inf):
+            return math.inf, grad, curv
+    cap = np.empty(n)
+    for s in range(n):
+        cap[s] = _slot(theta, cap_idx[s], cap_k[s])
+        if not (cap[s] > 0.0 and cap[s] < math.inf):
+            return math.inf, grad, curv
+    sv = np.empty(ny)
+    for s in range(ny):
+        sv[s] = _slot(theta, sv_idx[s], sv_k[s])
+    sw = np.empty(n)
+    sx = np.empty(n)
+    x0v = np.empty(n)
+    for s in range(n):
+        sw[s] = _slot(theta, sw_idx[s], sw_k[s])
+        sx[s] = _slot(theta, sx_idx[s], sx_k[s])
+        x0v[s] = _slot(theta, x0_idx[s], x0_k[s])
+        if not (abs(x0v[s]) < math.inf):
+            return math.inf, grad, curv
+    if kind != LS:
+        for s in range(ny):
+            if not (sv[s] >= 0.0 and sv[s] < math.inf):
+                return math.inf, grad, curv
+        for s in range(n):
+            if not (sw[s] >= 0.0 and sw[s] < math.inf and sx[s] >= 0.0 and sx[s] < math.inf):
+                return math.inf, grad, curv
+    A0, N, B0, M = assemble(L, P, E, Gb0, Nf, Mf, res, cap)
+    q = d if want_grad else 0
+    dA0, dN, dB0, dM = assemble_derivatives(
+        L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_idx, cap_k, q
+    )
+    x0, dx0, ok = initial_state(
+        A0, N, B0, M, dA0, dN, dB0, dM, m[0], u[0], y[0], out_state, x0_given, x0v, x0_idx
+    )
+    if not ok:
+        return math.inf, grad, curv
+    qc = np.zeros(n)
+    P0 = np.zeros((n, n))
+    r = np.ones(ny)
+    dqc = np.zeros((q, n))
+    dP0 = np.zeros((q, n, n))
+    dr = np.zeros((ny, q))
+    if kind != LS:
+        for s in range(n):
+            qc[s] = sw[s] * sw[s]
+            P0[s, s] = sx[s] * sx[s]
+            if q and sw_idx[s] >= 0:
+                dqc[sw_idx[s], s] += 2.0 * sw[s] * sw_k[s]
+            if q and sx_idx[s] >= 0:
+                dP0[sx_idx[s], s, s] += 2.0 * sx[s] * sx_k[s]
+        for s in range(ny):
+            r[s] = sv[s] * sv[s]
+            if q and sv_idx[s] >= 0:
+                dr[s, sv_idx[s]] += 2.0 * sv[s] * sv_k[s]
+    C = np.zeros((ny, n))  # output j reads state out_state[j]
+    for s in range(ny):
+        C[s, out_state[s]] = 1.0
+    if fused and not want_grad:
+        # values of 2-state, 1-output problems: the fused kernel (rczone.kernels.rc2)
+        e = scratch[:0]
+        if kind == LS:
+            e = scratch
+            for k in range(N_t):
+                e[k] = math.nan
+        nll, n_obs = nll_rc2(
+            A0, N, B0, M, cap, t, m, u, y[:, 0], x0, P0, C[0], np.zeros(B0.shape[1]), r[0], qc, foh,
+            sym_rtol, steady_rtol, e, groups,
+        )  # fmt: skip
+        if n_obs < 0:
+            return math.inf, grad, curv
+        if kind == LS:
+            return trapezoid(t, e.reshape((N_t, 1)), np.empty((N_t, 1, 0)), grad, curv), grad, curv
+        j = nll + 0.5 * n_obs * _LOG_2PI
+    elif q == 0 and kind != LS and modal_pays(which, n):
+        # values of larger models with flows constant over stretches: the modal filter
+        scale = np.sqrt(cap)
+        modal = modal_matrices(A0, N, B0, M, keys, qc, scale, foh)
+        nll, n_obs = kalman_filter_modal(
+            modal, scale, which, (C, np.zeros((ny, B0.shape[1])), r), (x0, P0), (u, y), foh
+        )
+        if n_obs < 0:
+            return math.inf, grad, curv
+        j = nll + 0.5 * n_obs * _LOG_2PI
+    else:
+        noise = kind != LS
+        if q:
+            mats, dmats = interval_derivatives(A0, N, B0, M, dA0, dN, dB0, dM, keys, qc, dqc, foh, noise)
+        else:
+            mats = interval_matrices(A0, N, B0, M, keys, qc, np.sqrt(cap), foh, noise)
+            dmats = no_sensitivities(keys.shape[0], n, B0.shape[1])
+        p = B0.shape[1]
+        obs = (C, np.zeros((ny, p)), r, np.zeros((ny, q, n)), np.zeros((ny, q, p)), dr)
+        Phi, G0, G1, Qd = mats
+        outs = outputs(N_t, n, ny, q, kind == LS, False)
+        nll, n_obs, g, fim = kalman_filter(
+            (Phi, G0, G1, Qd, which),
+            dmats,
+            obs,
+            (x0, P0, dx0, dP0),
+            (u, y),
+            (foh, kind == LS, steady_rtol),
+            outs,
+        )
+        if n_obs < 0:
+            return math.inf, grad, curv
+        if kind == LS:
+            return trapezoid(t, outs[0], outs[1], grad, curv), grad, curv
+        j = nll + 0.5 * n_obs * _LOG_2PI
+        for i in range(q):
+            grad[i] = g[i]
+            curv[i] = fim[i]
+    if kind == MAP:
+        pen = 0.0
+        for i in range(d):
+            grad[i] *= weight
+            curv[i] *= weight
+        for a in range(prior_idx.shape[0]):
+            i = prior_idx[a]
+            z = (math.log(theta[i]) - prior_logc[a]) / spread
+            pen += z * z
+            if want_grad:
+                grad[i] += z / (spread * theta[i])
+                curv[i] += 1.0 / (spread * theta[i]) ** 2
+        j = weight * j + 0.5 * pen
+    return j, grad, curv
+
+
+@njit(cache=True, error_model="numpy")
+def cost_theta(theta: np.ndarray, prob) -> float:
+    """The cost at physical values ``theta``; ``inf`` where the model is invalid."""
+    return evaluate(theta, prob, False)[0]
+
+
+@njit(cache=True, error_model="numpy")
+def cost_z(z: np.ndarray, prob) -> float:
+    """The cost at direct-search variables ``z`` (:func:`theta_of_z`, then :func:`cost_theta`)."""
+    lo, hi, logp = prob[4]
+    return cost_theta(theta_of_z(z, lo, hi, logp), prob)

@@ -1,0 +1,273 @@
+"""Fused likelihood of a 2-state RC model with one output: discretization and filter in one pass.
+
+With the flow ``m`` changing at every sample, a likelihood evaluation of a small model is
+dominated by the discretization (one ``Phi``, ``Gamma`` and ``Qd`` per sample), not by the
+filter. For two states the discrete matrices have a closed form
+(:func:`rczone.kernels.discretize.rc2_discretize`: one Jacobi rotation and two ``expm1``);
+this kernel computes them for every interval whose length or flows differ from the previous
+one (or once per group of equal intervals, :func:`rczone.simulation.intervals.interval_groups`)
+in a first pass, then runs the filter recursion unrolled for two states in a second. It is
+the general filter (:func:`rczone.kernels.kalman.kalman_filter`) specialized by hand: the
+same sequential update and time update, the same steady-state rule, so the same ``-log L``
+to rounding (tested against it); it is used only where it is measurably faster
+(``docs/performance.md``), and never for gradients.
+
+References
+----------
+.. [1] H. Madsen, J. Holst, "Estimation of continuous-time models for the heat dynamics of a
+   building", Energy and Buildings 22 (1995) 67-79.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from rczone.kernels.discretize import rc2_discretize
+
+
+@njit(cache=True, error_model="numpy")
+def symmetric_rc2(A0: np.ndarray, N: np.ndarray, cap: np.ndarray, rtol: float) -> bool:
+    """Whether ``diag(cap) A0`` and every ``diag(cap) N_f`` are symmetric to ``rtol`` (capacities > 0)."""
+    if not (cap[0] > 0.0 and cap[1] > 0.0 and cap[0] < math.inf and cap[1] < math.inf):
+        return False
+    for f in range(-1, N.shape[0]):
+        mat = A0 if f < 0 else N[f]
+        big = 0.0
+        for i in range(2):
+            for j in range(2):
+                v = cap[i] * mat[i, j]
+                if not abs(v) < math.inf:
+                    return False
+                big = max(big, abs(v))
+        if abs(cap[0] * mat[0, 1] - cap[1] * mat[1, 0]) > rtol * big:
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def nll_rc2(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    cap: np.ndarray,
+    t: np.ndarray,
+    m: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    x0: np.ndarray,
+    P0: np.ndarray,
+    c: np.ndarray,
+    dd: np.ndarray,
+    r: float,
+    qc: np.ndarray,
+    foh: bool,
+    rtol: float,
+    steady_rtol: float,
+    e_out: np.ndarray,
+    groups: np.ndarray,
+) -> tuple[float, int]:
+    """``-log L`` without the ``0.5 n log 2 pi`` term, and the number of observations.
+
+    Parameters
+    ----------
+    A0, N, B0, M : ndarray, shapes (2, 2), (nf, 2, 2), (2, p), (nf, 2, p)
+        Bilinear state space (``A = A0 + sum m_f N_f``, ``B = B0 + sum m_f M_f``).
+    cap : ndarray, shape (2,)
+        Capacities; ``diag(cap) A0`` and every ``diag(cap) N_f`` must be symmetric to ``rtol``
+        (:func:`symmetric_rc2`; otherwise ``(nan, -1)`` is returned; ``(nan, -2)`` for an
+        innovation variance that is not positive).
+    t : ndarray, shape (N,)
+        Sample times, s.
+    m : ndarray, shape (N, nf)
+    u : ndarray, shape (N, p)
+    y : ndarray, shape (N,)
+        Measurements; NaN where missing.
+    x0, P0 : ndarray, shapes (2,), (2, 2)
+        Prior at the first sample.
+    c, dd : ndarray, shapes (2,), (p,)
+        Output row ``y = c' x + dd' u``.
+    r : float
+        Measurement-noise variance.
+    qc : ndarray, shape (2,)
+        Process-noise intensities of the two states.
+    foh : bool
+    rtol, steady_rtol : float
+        Symmetry tolerance; relative tolerance of the steady state
+        (:data:`rczone.kernels.kalman.STEADY_RTOL`, 0 disables it).
+    e_out : ndarray, shape (N,) or (0,)
+        Receives the innovations when it has one entry per sample; entries of missing samples
+        are left as they are. With ``P0 = qc = 0`` the gain is zero, so these are the
+        open-loop output errors.
+    groups : ndarray of int64, shape (N - 1,) or (0,)
+        Intervals with equal length and flows: interval ``k`` uses the matrices of group
+        ``groups[k]``, computed at the group's first interval. Empty: discretize every
+        interval whose length or flows differ from the previous one.
+    """
+    n_t = y.shape[0]
+    keep = e_out.shape[0] == n_t
+    nf = N.shape[0]
+    p = B0.shape[1]
+    if not symmetric_rc2(A0, N, cap, rtol):
+        return math.nan, -1
+    s0 = math.sqrt(cap[0])
+    s1 = math.sqrt(cap[1])
+    is0 = 1.0 / s0
+    is1 = 1.0 / s1
+    # pass 1: the slot of each interval (its group, or its run of equal intervals) and the
+    # discrete matrices of each slot, computed at its first interval
+    n_int = max(n_t - 1, 0)
+    slot = np.empty(n_int, dtype=np.int64)
+    n_slots = 0
+    if groups.shape[0] > 0:
+        for k in range(n_int):
+            slot[k] = groups[k]
+            n_slots = max(n_slots, groups[k] + 1)
+    else:
+        for k in range(n_int):
+            fresh = k == 0 or t[k + 1] - t[k] != t[k] - t[k - 1]
+            for f in range(nf):
+                fresh = fresh or m[k, f] != m[k - 1, f]
+            if fresh:
+                n_slots += 1
+            slot[k] = n_slots - 1
+    Phi = np.empty((max(n_slots, 1), 4))
+    Qd = np.empty((max(n_slots, 1), 3))
+    G0 = np.zeros((max(n_slots, 1), 2, p))
+    G1 = np.zeros((max(n_slots, 1), 2, p))
+    ready = np.zeros(max(n_slots, 1), dtype=np.bool_)
+    for k in range(n_int):
+        g = slot[k]
+        if ready[g]:
+            continue
+        ready[g] = True
+        a, a01, a10, d = A0[0, 0], A0[0, 1], A0[1, 0], A0[1, 1]
+        for f in range(nf):
+            mf = m[k, f]
+            a += mf * N[f, 0, 0]
+            a01 += mf * N[f, 0, 1]
+            a10 += mf * N[f, 1, 0]
+            d += mf * N[f, 1, 1]
+        mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], qc[0], qc[1], foh)
+        Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3] = mt[0], mt[1], mt[2], mt[3]
+        Qd[g, 0], Qd[g, 1], Qd[g, 2] = mt[12], mt[13], mt[14]
+        for j in range(p):
+            # B(m) = B0 + sum m_f M_f, column j
+            b0 = B0[0, j]
+            b1 = B0[1, j]
+            for f in range(nf):
+                b0 += m[k, f] * M[f, 0, j]
+                b1 += m[k, f] * M[f, 1, j]
+            G0[g, 0, j] = mt[4] * b0 + mt[5] * b1
+            G0[g, 1, j] = mt[6] * b0 + mt[7] * b1
+            if foh:
+                G1[g, 0, j] = mt[8] * b0 + mt[9] * b1
+                G1[g, 1, j] = mt[10] * b0 + mt[11] * b1
+    has_dd = False
+    for j in range(p):
+        has_dd = has_dd or dd[j] != 0.0
+    # pass 2: the filter (the sequential update and time update of rczone.kernels.kalman, unrolled)
+    c0, c1 = c[0], c[1]
+    x0_, x1_ = x0[0], x0[1]
+    p00, p01, p11 = P0[0, 0], 0.5 * (P0[0, 1] + P0[1, 0]), P0[1, 1]
+    n_obs = 0
+    steady = False
+    steady_slot = -1
+    steady_obs = False
+    prev_slot = -1
+    prev_obs = False
+    k0 = k1 = s = inv_s = 0.0
+    log_sum = 0.0  # sum of log s over the updates before the steady state(s) ...
+    prod = 1.0  # ... with the product not yet logged
+    n_steady = 0  # updates in a steady state (each with the s of the steady state it is in)
+    sq_sum = 0.0  # sum e^2 / s
+    pp00 = pp01 = pp11 = 0.0  # predicted covariance of the previous sample
+    pf00 = pf01 = pf11 = 0.0  # filtered covariance (to leave the steady state from)
+    for k in range(n_t):
+        yk = y[k]
+        obs = yk == yk
+        if steady and obs != steady_obs:
+            steady = False
+            log_sum += n_steady * math.log(s) if n_steady else 0.0
+            n_steady = 0
+        if not steady:
+            pp00, pp01, pp11 = p00, p01, p11
+        if obs:
+            innov = yk - c0 * x0_ - c1 * x1_
+            if has_dd:
+                for j in range(p):
+                    innov -= dd[j] * u[k, j]
+            if keep:
+                e_out[k] = innov
+            if not steady:
+                pc0 = p00 * c0 + p01 * c1
+                pc1 = p01 * c0 + p11 * c1
+                s = r + c0 * pc0 + c1 * pc1
+                if not s > 0.0:
+                    return math.nan, -2
+                inv_s = 1.0 / s
+                k0 = pc0 * inv_s
+                k1 = pc1 * inv_s
+                p00 -= k0 * pc0
+                p01 -= k0 * pc1
+                p11 -= k1 * pc1
+                # sum log s as the log of a running product (one log per ~dozens of samples)
+                if 1e-100 < s < 1e100:
+                    prod *= s
+                    if not 1e-200 < prod < 1e200:
+                        log_sum += math.log(prod)
+                        prod = 1.0
+                else:
+                    log_sum += math.log(s)
+            else:
+                n_steady += 1
+            x0_ += k0 * innov
+            x1_ += k1 * innov
+            sq_sum += innov * innov * inv_s
+            n_obs += 1
+        if not steady:
+            pf00, pf01, pf11 = p00, p01, p11
+        if k == n_t - 1:
+            break
+        g = slot[k]
+        f00, f01, f10, f11 = Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3]
+        xn0 = f00 * x0_ + f01 * x1_
+        xn1 = f10 * x0_ + f11 * x1_
+        for j in range(p):
+            xn0 += G0[g, 0, j] * u[k, j]
+            xn1 += G0[g, 1, j] * u[k, j]
+        if foh:
+            for j in range(p):
+                xn0 += G1[g, 0, j] * u[k + 1, j]
+                xn1 += G1[g, 1, j] * u[k + 1, j]
+        x0_ = xn0
+        x1_ = xn1
+        if steady and g != steady_slot:
+            steady = False
+            log_sum += n_steady * math.log(s) if n_steady else 0.0
+            n_steady = 0
+            p00, p01, p11 = pf00, pf01, pf11
+        if not steady:
+            # P <- Phi P Phi' + Qd
+            a0 = f00 * p00 + f01 * p01
+            a1 = f00 * p01 + f01 * p11
+            b0 = f10 * p00 + f11 * p01
+            b1 = f10 * p01 + f11 * p11
+            p00 = Qd[g, 0] + a0 * f00 + a1 * f01
+            p01 = Qd[g, 1] + a0 * f10 + a1 * f11
+            p11 = Qd[g, 2] + b0 * f10 + b1 * f11
+            if steady_rtol > 0.0 and g == prev_slot and obs == prev_obs:
+                big = max(abs(p00), abs(p01), abs(p11))
+                diff = max(abs(p00 - pp00), abs(p01 - pp01), abs(p11 - pp11))
+                if diff <= steady_rtol * big:
+                    steady = True
+                    steady_slot = g
+                    steady_obs = obs
+        prev_slot = g
+        prev_obs = obs
+    if n_steady:
+        log_sum += n_steady * math.log(s)
+    return 0.5 * (log_sum + math.log(prod) + sq_sum), n_obs
