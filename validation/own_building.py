@@ -37,9 +37,21 @@ DEFAULT_SHARED = HERE.parent.parent / "shared"
 
 #: Real data: (data file under the shared folder, column map, model file).
 REAL = {
-    "bacher_madsen_prbs": ("data/bacher_madsen_prbs/inputPRBS1.csv", "bacher_madsen.toml", "bacher_madsen_tite.toml"),
-    "armadillo_pysip": ("data/armadillo_pysip/armadillo_data_H2.csv", "armadillo.toml", "armadillo_twti.toml"),
-    "leec_classroom_vav": ("data/leec_classroom_vav/LEEC_classroom_VAV_hourly.csv", "leec.toml", "leec_titm.toml"),
+    "bacher_madsen_prbs": (
+        "data/bacher_madsen_prbs/inputPRBS1.csv",
+        "bacher_madsen.toml",
+        "bacher_madsen_tite.toml",
+    ),
+    "armadillo_pysip": (
+        "data/armadillo_pysip/armadillo_data_H2.csv",
+        "armadillo.toml",
+        "armadillo_twti.toml",
+    ),
+    "leec_classroom_vav": (
+        "data/leec_classroom_vav/LEEC_classroom_VAV_hourly.csv",
+        "leec.toml",
+        "leec_titm.toml",
+    ),
 }
 
 SYNTHETIC_MODEL = """\
@@ -95,11 +107,17 @@ def synthetic_data(folder: Path, seed: int = 1, days: float = 4.0) -> tuple[Path
     heat = np.repeat(rng.choice([0.0, 3000.0], t.size // 9 + 1), 9)[: t.size]  # 90-min blocks
     vent = np.where((t % 86400) < 9 * 3600, 0.0, 0.05)
     y = simulate(
-        zm.network.state_space(TRUTH), t, np.column_stack([to, heat]), vent[:, None], x0=np.array([20.0, 23.0, 12.0])
+        zm.network.state_space(TRUTH),
+        t,
+        np.column_stack([to, heat]),
+        vent[:, None],
+        x0=np.array([20.0, 23.0, 12.0]),
     ).y[:, 0]
     measured = np.round((y + rng.normal(0, 0.03, t.size)) / 0.05) * 0.05  # sensor noise, 0.05 K trend log
     data = folder / "floor_heated.csv"
-    pd.DataFrame({"time": t, "Ti": measured, "To": np.round(to, 2), "Pf": heat, "mv": vent}).to_csv(data, index=False)
+    pd.DataFrame({"time": t, "Ti": measured, "To": np.round(to, 2), "Pf": heat, "mv": vent}).to_csv(
+        data, index=False
+    )
     return model, data
 
 

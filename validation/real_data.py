@@ -22,13 +22,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from rczone.atomic import write_json_atomic
 from rczone.data import load_zone_data
 from rczone.data.quality import RczoneWarning
 from rczone.diagnostics import diagnose
 from rczone.estimation import Dataset, fit
 from rczone.estimation.validation import open_loop_error
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
-from rczone.atomic import write_json_atomic
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_SHARED = HERE.parent.parent / "shared"

@@ -159,7 +159,7 @@ def calibrate(
     frame: pd.DataFrame,
     method: str = "ls",
     free: Sequence[str] | None = None,
-    optimizer: str = "nelder-mead",
+    optimizer: str = "auto",
     n_starts: int | None = None,
     seed: int = 0,
     constants: Mapping[str, float] | None = None,
@@ -180,7 +180,7 @@ def calibrate(
     method : {"ls", "ml", "map"}
     free : sequence of str, optional
         Default :func:`rczone.estimation.fit.default_free`.
-    optimizer : {"nelder-mead", "powell", "lbfgs"}
+    optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
     n_starts : int, optional
         Default: the global search (see :func:`rczone.estimation.fit`); 1: one local search.
     seed : int

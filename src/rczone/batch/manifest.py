@@ -6,7 +6,7 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
 
     model = "second-order-paper"     # a built-in model, or a model file (rczone.models.load_model)
     methods = ["ls", "ml"]           # one task per zone and method
-    optimizer = "nelder-mead"
+    optimizer = "auto"
     n_starts = 1
     diagnose = true                  # identifiability verdicts per zone
     # free = ["Cr", "Rw"]            # default: the method's usual set for the model
@@ -58,7 +58,7 @@ MAX_STARTS = 1000
 """Most optimizer starts per calibration."""
 MODEL_FILE_SUFFIXES = (".toml", ".json")
 METHODS = ("ls", "ml", "map")
-OPTIMIZERS = ("nelder-mead", "powell", "lbfgs")
+OPTIMIZERS = ("auto", "nelder-mead", "powell", "lbfgs")
 SEASONS = ("summer", "winter", "autumn")
 MODES = ("closed-loop", "forced")
 SETTINGS = ("model", "methods", "optimizer", "n_starts", "diagnose", "free", "columns", "constants")
@@ -68,7 +68,7 @@ TOP_KEYS = (*SETTINGS, "zone", "generate")
 DEFAULTS: dict[str, object] = {
     "model": "second-order-paper",
     "methods": ("ls", "ml"),
-    "optimizer": "nelder-mead",
+    "optimizer": "auto",
     "n_starts": 1,
     "diagnose": True,
     "free": None,
@@ -88,7 +88,7 @@ class Task:
     method: str
     model: str
     source: tuple
-    optimizer: str = "nelder-mead"
+    optimizer: str = "auto"
     n_starts: int = 1
     diagnose: bool = True
     free: tuple[str, ...] | None = None

@@ -102,8 +102,12 @@ def fit(
         ),
     ] = None,
     optimizer: Annotated[
-        str, typer.Option(help="Local method: nelder-mead, powell or lbfgs.")
-    ] = "nelder-mead",
+        str,
+        typer.Option(
+            help="Local method: auto (compiled Nelder-Mead for 2-state models, L-BFGS with exact gradients"
+            " otherwise), nelder-mead, powell or lbfgs."
+        ),
+    ] = "auto",
     starts: Annotated[
         str,
         typer.Option(

@@ -106,7 +106,7 @@ def fit(
     data: Dataset,
     free: Sequence[str] | None = None,
     method: str = "ls",
-    optimizer: str = "nelder-mead",
+    optimizer: str = "auto",
     n_starts: int | None = None,
     bounds: Mapping[str, tuple[float, float]] | None = None,
     rng: np.random.Generator | None = None,
@@ -141,8 +141,10 @@ def fit(
     method : {"ls", "ml", "map"}
         Output-error least squares (SPEC eq. 8), Kalman-filter maximum likelihood
         (eq. 9), or ML with a log-normal prior on the free R and C.
-    optimizer : {"nelder-mead", "powell", "lbfgs"}
-        The local method.
+    optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
+        The local method. ``"auto"``: the compiled Nelder-Mead for a two-state single-output problem
+        (the fused kernel, cheapest per evaluation), L-BFGS with the exact gradient otherwise (one
+        evaluation per step; Nelder-Mead needs tens of thousands in ten dimensions).
     n_starts : int, optional
         Local searches: default automatic (2 or more, see the search); ``1`` is one local search
         from the start values (no global phase); ``k`` runs exactly ``k``.
@@ -180,8 +182,8 @@ def fit(
     """
     if method not in METHODS:
         raise ParameterError(f"method must be one of {METHODS}, got {method!r}")
-    if optimizer not in OPTIMIZERS:
-        raise ParameterError(f"optimizer must be one of {OPTIMIZERS}, got {optimizer!r}")
+    if optimizer != "auto" and optimizer not in OPTIMIZERS:
+        raise ParameterError(f"optimizer must be 'auto' or one of {OPTIMIZERS}, got {optimizer!r}")
     if hold not in HOLDS:
         raise ParameterError(f"hold must be one of {HOLDS}, got {hold!r}")
     if initial_state not in ("estimate", "steady"):
@@ -215,6 +217,8 @@ def fit(
     weight = min(1.0, float(np.median(np.diff(data.t))) / correlation_time_s) if method == "map" else 1.0
     objective = Objective(network, data, spec, method, hold, prior_spread, weight)
     scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if method == "ls" else 0.0
+    if optimizer == "auto":
+        optimizer = "nelder-mead" if objective.engine == "rc2-fused" else "lbfgs"
     outcomes, search = global_search(
         objective, spec, method, rng, optimizer, n_starts, max_evals, scale=scale
     )

@@ -58,6 +58,13 @@ REL_TOL = {"ml": 1e-9, "map": 1e-9, "ls": 1e-5}
 SCALE_TOL = 1e-9
 #: Sampled points closer than this (in the unit box of eta) to a better chosen start are not starts.
 LINK_RADIUS = 0.1
+#: Most local searches of the automatic search (``4 + n_free // 2`` below this).
+MAX_AUTO_STARTS = 8
+#: Evaluation budget of one stage of a local search from a sampled point: the fewest evaluations a
+#: finished search took (at least :data:`MIN_BUDGET`); a search continues for up to
+#: :data:`MAX_STAGES` stages only while it is below the best optimum found so far.
+MIN_BUDGET = 100
+MAX_STAGES = 4
 #: Restarts of Nelder-Mead from its own end point (a fresh simplex) while they still lower the cost.
 NM_RESTARTS = 2
 #: Rounds of the polish (second method, then the first again) of an optimum found by one start.
@@ -234,6 +241,40 @@ def local_search(
     return StartOutcome(np.asarray(start, dtype=float), out.end, out.cost, out.converged, n, out.message)
 
 
+def budgeted_search(
+    cost: Callable[[np.ndarray], float],
+    spec: ParameterSpec,
+    start: np.ndarray,
+    optimizer: str,
+    max_evals: int | None,
+    tol_of: Callable[[float], float],
+    done: list[StartOutcome],
+) -> StartOutcome:
+    """A local search from a sampled point, in stages of the evaluations the easiest finished search took.
+
+    Most points of a box of bounds spanning decades in every parameter lie in poor regions; a search
+    from there that has not settled after as much work as the first search needed, and is still
+    above the best optimum found, is stopped (its outcome says so). One that is below continues, so a
+    better basin is never given up.
+    """
+    stage = max(MIN_BUDGET, min(o.n_evals for o in done))
+    if max_evals is not None:
+        stage = min(stage, max_evals)
+    best = (
+        min(o.cost for o in done if math.isfinite(o.cost))
+        if any(math.isfinite(o.cost) for o in done)
+        else math.inf
+    )
+    out = local_search(cost, spec, start, optimizer, stage, tol_of)
+    n = out.n_evals
+    for _ in range(MAX_STAGES - 1):
+        if out.converged or not out.cost < best - tol_of(best):
+            break
+        out = local_search(cost, spec, out.end, optimizer, stage, tol_of)
+        n += out.n_evals
+    return StartOutcome(np.asarray(start, dtype=float), out.end, out.cost, out.converged, n, out.message)
+
+
 def merge_optima(
     outcomes: list[StartOutcome], method: str, scale: float = 0.0
 ) -> tuple[tuple[Optimum, ...], float]:
@@ -309,7 +350,7 @@ def global_search(
         vals = np.array([cost(spec.to_eta(p)) for p in pts])
         n_sampled = n_sample
         adaptive = n_starts is None
-        max_local = n_starts if n_starts is not None else 4 + d // 2
+        max_local = n_starts if n_starts is not None else min(MAX_AUTO_STARTS, 4 + d // 2)
         starts = [spec.start]
         start_costs = [math.nan]
         chosen = [_unit(spec, spec.start)]
@@ -328,7 +369,10 @@ def global_search(
     lower_left = False
     for k, s in enumerate(starts):
         try:
-            outcomes.append(local_search(cost, spec, s, optimizer, max_evals, tol_of))
+            if outcomes and k > 0:
+                outcomes.append(budgeted_search(cost, spec, s, optimizer, max_evals, tol_of, outcomes))
+            else:
+                outcomes.append(local_search(cost, spec, s, optimizer, max_evals, tol_of))
         except ParameterError:
             # the model's own start may be invalid for these data (cost not finite): skip it
             if k == 0 and len(starts) > 1:
@@ -382,9 +426,11 @@ def global_search(
             )
     best = optima[0]
     winner = outcomes[best.starts[0]]
-    if not winner.converged and converged:
+    # the optimum is a minimum when at least one search that reached it ended by its own test (a
+    # line search that fails at a perfect fit, cost 1e-23, is not evidence against it)
+    if converged and not any(outcomes[i].converged for i in best.starts):
         converged = False
-        reason += f", but the winning local search stopped early ({winner.message})"
+        reason += f", but every search that reached it stopped early ({winner.message})"
     if lower_left and converged:
         converged = False
         reason += ", but a sampled point not used as a start has a lower cost (raise the number of starts)"

@@ -121,9 +121,10 @@ def test_starts_that_reach_the_same_cost_but_disagree_are_flagged_and_exit_3(zon
             'Ra = { value = 3.0, unit = "K/kW" }\nRb = { value = 3.0, unit = "K/kW" }',
         )
     )
-    rc, out, d = _fit(zone, capsys, split, "--starts", "4")
+    # Nelder-Mead walks the flat ridge to different points from different starts
+    rc, out, d = _fit(zone, capsys, split, "--starts", "4", "--optimizer", "nelder-mead")
     assert rc == 3
-    assert "starts_disagree" in d["issues"]
+    assert "starts_disagree" in d["issues"], d["search"]
     lo, hi = d["search"]["spread"]["Ra"]
     assert hi / lo > 1.1
     assert "starts:" in out and "disagree on Ra" in out
