@@ -20,6 +20,8 @@ the close name), so a typo never silently drops a setting::
     format = "auto"               # "auto" | "iso" | "seconds" | "milliseconds" (Unix epoch, UTC)
     timezone = "America/New_York" # IANA zone of naive local stamps and of the night window
                                   # (default "UTC"; a fixed offset is e.g. "Etc/GMT+5" = UTC-5)
+    start = "2014-07-01"          # only the rows from this local date (or date and time) on ...
+    end = "2014-08-15"            # ... and before this one (either may be left out)
     ambiguous = "infer"           # repeated local hour at the end of DST:
                                   #   "infer" (from the order of the rows, default), "first"
                                   #   (summer time), "second" (standard time), "drop", "raise"
@@ -112,7 +114,7 @@ _TOP_KEYS = (
     "night",
 )
 _SECTION_KEYS = {
-    "time": ("column", "format", "timezone", "ambiguous", "nonexistent"),
+    "time": ("column", "format", "timezone", "ambiguous", "nonexistent", "start", "end"),
     "long": ("point", "value"),
     "resample": ("step", "max_gap", "hold_max_gap"),
     "night": ("start", "end"),
@@ -165,6 +167,8 @@ class ColumnMap:
     step: float | None = None
     max_gap: float | None = None
     hold_max_gap: float | None = None
+    start: float | None = None
+    end: float | None = None
     night_start: str = "18:00"
     night_end: str = "06:00"
     na_values: tuple[str, ...] = ()
@@ -239,6 +243,29 @@ def _choice(value, choices: Sequence[str], what: str, source: str) -> str:
         hint = f"; {hint}" if hint.startswith("did you mean") else ""
         raise DataError(f"column map {source}: {what} = {value!r} is not one of {', '.join(choices)}{hint}")
     return value
+
+
+def _instant(time: Mapping, key: str, tz: str, source: str) -> float | None:
+    """``[time] start/end``: a date or date and time, local to the map's time zone, as UTC epoch seconds."""
+    if key not in time:
+        return None
+    text = time[key]
+    if hasattr(text, "isoformat"):  # TOML dates and date-times arrive as Python objects
+        text = text.isoformat()
+    text = _text(text, f"[time] {key}", source)
+    import pandas as pd
+
+    try:
+        ts = pd.Timestamp(text)
+    except (ValueError, OverflowError):
+        raise DataError(
+            f'column map {source}: [time] {key} = {text!r} is not a date or date-time (e.g. "2014-07-01" or'
+            ' "2014-07-01 18:00")'
+        ) from None
+    if ts is pd.NaT:
+        raise DataError(f"column map {source}: [time] {key} = {text!r} is not a date")
+    ts = ts.tz_localize(tz) if ts.tzinfo is None else ts
+    return float(ts.value) / 1e9
 
 
 def check_timezone(tz: str, source: str = "<defaults>") -> str:
@@ -355,12 +382,14 @@ def parse_column_map(
     if isinstance(min_samples, bool) or not isinstance(min_samples, int) or min_samples < 2:
         raise DataError(f"column map {source}: min_samples must be an integer >= 2, got {min_samples!r}")
     max_gap = _number(res["max_gap"], "[resample] max_gap", source) if "max_gap" in res else None
-    return ColumnMap(
+    cmap = ColumnMap(
         channels=tuple(channels),
         surroundings=tuple(surr),
         time_column=_text(time.get("column", "time"), "[time] column", source),
         time_format=_choice(time.get("format", "auto"), TIME_FORMATS, "[time] format", source),
         timezone=check_timezone(time.get("timezone", "UTC"), source),
+        start=_instant(time, "start", time.get("timezone", "UTC"), source),
+        end=_instant(time, "end", time.get("timezone", "UTC"), source),
         ambiguous=_choice(time.get("ambiguous", "infer"), AMBIGUOUS, "[time] ambiguous", source),
         nonexistent=_choice(time.get("nonexistent", "raise"), NONEXISTENT, "[time] nonexistent", source),
         long_point=_text(long["point"], "[long] point", source) if long else None,
@@ -378,6 +407,9 @@ def parse_column_map(
         name=str(doc.get("name", "")),
         source=source,
     )
+    if cmap.start is not None and cmap.end is not None and not cmap.start < cmap.end:
+        raise DataError(f"column map {source}: [time] start must be before end")
+    return cmap
 
 
 def default_column_map(

@@ -305,6 +305,26 @@ def _hours(seconds: float) -> str:
     return f"{seconds / 3600:.3g} h"
 
 
+def _window(axis: np.ndarray, samples: dict, cmap: ColumnMap, source: str):
+    """Only the samples within ``[start, end)`` of the column map (UTC epoch seconds)."""
+    lo = -np.inf if cmap.start is None else cmap.start
+    hi = np.inf if cmap.end is None else cmap.end
+    keep = (axis >= lo) & (axis < hi)
+    if not keep.any():
+        first, last = (
+            pd.Timestamp(x, unit="s", tz="UTC").tz_convert(cmap.timezone) for x in (axis[0], axis[-1])
+        )
+        raise DataError(
+            f"{source}: no rows between [time] start and end of the column map; the data run from"
+            f" {first:%Y-%m-%d %H:%M} to {last:%Y-%m-%d %H:%M} ({cmap.timezone})"
+        )
+    out = {}
+    for name, (t_c, raw, rows) in samples.items():
+        k = (t_c >= lo) & (t_c < hi)
+        out[name] = (t_c[k], raw[k], rows[k])
+    return axis[keep], out
+
+
 def zone_data_from_frame(
     frame: pd.DataFrame,
     column_map: ColumnMap | None = None,
@@ -331,6 +351,8 @@ def zone_data_from_frame(
         axis, samples = _samples_long(frame, cmap, source, notes)
     else:
         axis, samples = _samples_wide(frame, cmap, source, notes)
+    if cmap.start is not None or cmap.end is not None:
+        axis, samples = _window(axis, samples, cmap, source)
 
     collected: list[str] = []
     for n in notes:
