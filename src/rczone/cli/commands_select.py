@@ -187,6 +187,11 @@ def select(
         out.print("not reached (not fitted): " + ", ".join(map(esc, sel.not_fitted)))
     best = sel.best
     out.print(f"selected: [bold]{esc(sel.selected)}[/] ({how})")
+    out.print(
+        f"the same fit alone: rczone fit {esc(data)} --model {esc(sel.selected)} --noise {esc(noise.strip().lower())};"
+        " check its open-loop prediction on held-out data (rczone predict) before using it for control:"
+        " process noise on every state raises the likelihood but can leave the deterministic part poor"
+    )
     inn = best.calibration.innovations
     if inn is not None and not inn.white:
         out.print(

@@ -97,6 +97,12 @@ class Disagreement:
         return {k: v for k, v in vars(self).items() if k != "name"}
 
 
+def _inside(value: float, lo: float, hi: float) -> float:
+    """An estimate at (or, by rounding, just past) a bound, moved a hair inside it: a start must be."""
+    eps = 1e-9 * (hi - lo)
+    return float(min(max(value, lo + eps), hi - eps))
+
+
 def _objective(model, frame: pd.DataFrame, res: FitResult, constants) -> tuple[Objective, float]:
     from rczone.calibrate import as_model, dataset
 
@@ -113,7 +119,7 @@ def _objective(model, frame: pd.DataFrame, res: FitResult, constants) -> tuple[O
         network,
         res.names,
         bounds={n: (res.lower[n], res.upper[n]) for n in res.names},
-        start=res.estimates,
+        start={n: _inside(res.estimates[n], res.lower[n], res.upper[n]) for n in res.names},
         fixed=fixed,
         x0_auto=x0_auto,
     )
