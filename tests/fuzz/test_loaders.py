@@ -25,6 +25,8 @@ from hypothesis import strategies as st
 from rczone.batch.manifest import parse_manifest, read_manifest
 from rczone.data import parse_column_map, read_column_map
 from rczone.errors import RczoneError
+from rczone.models import ZoneModel, load_model
+from rczone.models.modelfile import model_from_document
 from rczone.sources import read_frame
 
 QUICK, LONG = 60, 10_000
@@ -77,6 +79,43 @@ seasons = ["autumn"]
 modes = ["forced", "closed-loop"]
 seeds = "0..3"
 """
+VALID_MODEL = b"""name = "office"
+boundaries = ["To"]
+outputs = ["Ti"]
+resistors = [["Ti", "Te", "Rie"], ["Te", "To", "Rea"], ["Ti", "Tm", "R1"], ["Tm", "To", "R1"]]
+[nodes]
+Ti = { capacity = "Ci", description = "air" }
+Te = "Ce"
+Tm = {}
+[heat_inputs]
+Ph = "Ti"
+Ps = { to = { Ti = "Aw", Te = 0.3 }, unit = "W/m2" }
+[[supply_air]]
+node = "Ti"
+flow = "m"
+temperature = "Ts"
+cp = 1005
+[parameters]
+Ci = { value = 1.2, unit = "MJ/K", bounds = [0.01, 100] }
+Ce = { value = 15, unit = "MJ/K" }
+Rie = { value = 2, unit = "K/kW" }
+Rea = { value = 20, unit = "K/kW", fixed = true }
+Rw = { value = 8, unit = "K/kW" }
+R1 = { expr = "Rw/2" }
+Aw = { value = 2, unit = "m2", bounds = [0, 50] }
+[inputs]
+Ph = { default = 0, description = "heater, W" }
+"""
+
+
+def _valid_saved() -> bytes:
+    import json
+
+    zm = load_model("second-order-paper").with_values({"Rw": 0.02}, {"sigma_v": 0.05}, method="ml")
+    return json.dumps(zm.to_dict()).encode()
+
+
+VALID_SAVED = _valid_saved()
 
 
 @st.composite
@@ -138,6 +177,18 @@ structures = st.recursive(
                     "generate",
                     "methods",
                     "model",
+                    "nodes",
+                    "resistors",
+                    "parameters",
+                    "heat_inputs",
+                    "supply_air",
+                    "capacity",
+                    "expr",
+                    "bounds",
+                    "fixed",
+                    "network",
+                    "theta",
+                    "format",
                 ]
             ),
             inner,
@@ -193,6 +244,24 @@ def _manifest(content: bytes) -> None:
     _in_file(".toml", content, read_manifest)
 
 
+def _model(content: bytes) -> None:
+    _in_file(".toml", content, load_model)
+
+
+def _saved(content: bytes) -> None:
+    _in_file(".json", content, load_model)
+
+
+def _model_structure(doc) -> None:
+    _one_line_or_result(lambda: model_from_document(doc if isinstance(doc, dict) else {"nodes": doc}))
+
+
+def _saved_structure(doc) -> None:
+    if isinstance(doc, dict):
+        doc = {"format": "rczone-model/1", **doc}
+    _one_line_or_result(lambda: ZoneModel.from_dict(doc))
+
+
 def _map_structure(doc) -> None:
     _one_line_or_result(lambda: parse_column_map(doc if isinstance(doc, dict) else {"columns": doc}))
 
@@ -228,6 +297,10 @@ def test_valid_inputs_load():
             assert len(read_frame(Path(d) / "log.csv")) == 40
         assert read_column_map(Path(d) / "map.toml").step == 300
         assert len(read_manifest(Path(d) / "m.toml").tasks) == 1 + 8 * 2
+        (Path(d) / "model.toml").write_bytes(VALID_MODEL)
+        (Path(d) / "saved.json").write_bytes(VALID_SAVED)
+        assert load_model(Path(d) / "model.toml").network.state_names == ("Ti", "Te")
+        assert load_model(Path(d) / "saved.json").theta["Rw"] == 0.02
     assert tomllib.loads(VALID_MAP.decode())
 
 
@@ -238,6 +311,10 @@ CASES = {
     "column-map-generated": (structures, _map_structure),
     "manifest-mutated": (mutated(VALID_MANIFEST), _manifest),
     "manifest-generated": (structures, _manifest_structure),
+    "model-file-mutated": (mutated(VALID_MODEL), _model),
+    "model-file-generated": (structures, _model_structure),
+    "saved-model-mutated": (mutated(VALID_SAVED), _saved),
+    "saved-model-generated": (structures, _saved_structure),
 }
 
 
