@@ -216,6 +216,11 @@ class IdentifiabilityReport:
     signals: pd.DataFrame | None = field(default=None, repr=False)
     settings: dict = field(default_factory=dict)
 
+    def to_frame(self) -> pd.DataFrame:
+        """One row per free parameter: verdict, value, expected relative standard error and bias, reason."""
+        rows = [{"parameter": n, **v.to_dict()} for n, v in self.parameters.items()]
+        return pd.DataFrame(rows).set_index("parameter")
+
     def to_dict(self) -> dict:
         return {
             "parameters": {k: v.to_dict() for k, v in self.parameters.items()},

@@ -261,6 +261,10 @@ class Selection:
             )
         return rows
 
+    def to_frame(self) -> pd.DataFrame:
+        """:meth:`table` as a frame indexed by model."""
+        return pd.DataFrame(self.table()).set_index("model")
+
     def to_dict(self) -> dict:
         return {
             "selected": self.selected,

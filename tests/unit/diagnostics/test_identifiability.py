@@ -245,3 +245,15 @@ def test_a_parameter_at_zero_is_left_out_by_default_and_refused_by_name():
     assert "Aw" not in diagnose(zm, frame, operating_point="model").names
     with pytest.raises(ParameterError, match=r"'Aw' is 0; the analysis is in log\(Aw\)"):
         diagnose(zm, frame, free=["Ci", "Aw"], operating_point="model")
+
+
+def test_report_converts_to_a_frame() -> None:
+    import pandas as pd
+
+    from rczone import datasets
+    from rczone.models import load_model
+
+    rep = diagnose(load_model("second-order-paper"), datasets.load("C"))
+    df = rep.to_frame()
+    assert isinstance(df, pd.DataFrame) and list(df.index) == list(rep.names)
+    assert df.loc["Rw", "verdict"] == rep.parameters["Rw"].verdict

@@ -36,6 +36,8 @@ def test_bic_selects_the_true_structure_over_a_simpler_and_a_richer_nested_one(b
     n = sel.samples["n_obs"]
     assert c[TRUE_MODEL].bic == pytest.approx(7 * np.log(n) - 2 * c[TRUE_MODEL].loglik)
     assert c[TRUE_MODEL].aic == pytest.approx(14 - 2 * c[TRUE_MODEL].loglik)
+    df = sel.to_frame()
+    assert list(df.index) == list(CANDIDATES) and df.loc[TRUE_MODEL, "selected"] == "<-"
 
 
 def test_the_true_structure_has_white_innovations_and_the_too_simple_one_not(by_bic):
