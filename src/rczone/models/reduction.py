@@ -47,7 +47,6 @@ from dataclasses import dataclass, replace
 from functools import cache
 
 import numpy as np
-from scipy.optimize import least_squares, minimize
 
 from rczone.construction.room import AIR_CP, ZoneGeometry, office_241
 from rczone.errors import ParameterError, did_you_mean
@@ -303,6 +302,8 @@ def _band_matched(
         return np.abs(errors(x)).max(axis=(0, 2))
 
     x0 = _x_from(start, free)
+    from scipy.optimize import least_squares, minimize  # imported here: 0.2 s at start-up
+
     ls = least_squares(lambda x: errors(x).view(float).ravel(), x0, xtol=1e-12, ftol=1e-12)
     x1 = ls.x
     scale = max(float(worst(x1).max()), 1e-12)

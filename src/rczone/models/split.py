@@ -55,7 +55,6 @@ from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from rczone.construction.materials import Construction
 from rczone.errors import ParameterError, did_you_mean
@@ -266,6 +265,8 @@ def matched_split(construction: Construction) -> WallSplit:
 
     # x = (log s1 - log s3, log s2 - log s3, logit of C1/C): the symmetric split is (0, log 2, 0)
     x0 = np.array([0.0, np.log(2.0), 0.0])
+    from scipy.optimize import least_squares  # imported here: scipy.optimize costs 0.2 s at start-up
+
     sol = least_squares(res, x0, bounds=([-12.0, -12.0, -9.0], [12.0, 12.0, 9.0]), xtol=1e-10, ftol=1e-10)
     best = _from_x(sol.x, construction)
     cost_sym = float(np.sum(res(x0) ** 2))
