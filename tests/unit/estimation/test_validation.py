@@ -67,3 +67,24 @@ def test_ljung_box_bad_arguments(kwargs, match) -> None:
         ljung_box(np.random.default_rng(0).standard_normal(50), **kwargs)
     with pytest.raises(ParameterError, match="constant"):
         ljung_box(np.ones(50))
+
+
+def test_a_non_finite_prediction_is_an_error_not_a_perfect_fit(monkeypatch) -> None:
+    """NaN predictions dropped by nan-aware means once printed 'open-loop RMSE 0.000 K'."""
+    import numpy as np
+    import pytest
+
+    from rczone.errors import InputShapeError
+    from rczone.estimation import validation
+
+    from .nets import NET1, data1
+
+    data = data1()
+
+    def broken(network, values, data, hold="zoh"):
+        y = np.full(data.y.shape, np.nan)
+        return np.zeros((data.n_samples, 1)), y
+
+    monkeypatch.setattr(validation, "simulate_output", broken)
+    with pytest.raises(InputShapeError, match="not finite from sample 0"):
+        validation.open_loop_error(NET1, {}, data)
