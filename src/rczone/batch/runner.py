@@ -18,7 +18,7 @@ import os
 import time
 from collections import Counter, deque
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, Future, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -161,7 +161,13 @@ def _process_results(groups: list[list[Task]], workers: int, retries: int) -> It
             while queue and len(running) < workers:
                 ex = idle.pop() if idle else ProcessPoolExecutor(max_workers=1)
                 i = queue.popleft()
-                running[ex.submit(run_tasks, groups[i])] = (ex, i)
+                try:
+                    fut = ex.submit(run_tasks, groups[i])
+                except BrokenExecutor:  # an idle worker died between zones: a fresh one takes the zone
+                    ex.shutdown(wait=False, cancel_futures=True)
+                    ex = ProcessPoolExecutor(max_workers=1)
+                    fut = ex.submit(run_tasks, groups[i])
+                running[fut] = (ex, i)
             finished, _ = wait(running, return_when=FIRST_COMPLETED)
             for fut in finished:
                 ex, i = running.pop(fut)

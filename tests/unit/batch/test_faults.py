@@ -119,6 +119,26 @@ def test_killing_a_worker_loses_nothing_and_stores_no_failure(tmp_path, quick, m
     assert set(counts.index) == set(zones) and counts.max() == 1
 
 
+def test_a_worker_killed_between_zones_is_replaced(tmp_path, quick, monkeypatch):
+    """An idle worker that died made the next submission raise BrokenProcessPool out of the batch."""
+    monkeypatch.setenv("RCZONE_TEST_SLEEP", "0.05")
+    zones = [f"z{i}" for i in range(5)]
+    m = read_manifest(write_manifest(tmp_path, zones))
+    killed = []
+
+    def on_result(row, done, total):
+        if done in (1, 3):  # the only worker is idle now: its zone is done, the next not yet submitted
+            for child in multiprocessing.active_children():
+                os.kill(child.pid, signal.SIGKILL)
+                killed.append(child.pid)
+            time.sleep(0.2)  # let the executor notice, so the next submission meets a broken pool
+
+    run = run_batch(m, tmp_path / "out", backend="processes", workers=1, on_result=on_result)
+    assert killed
+    assert (run.computed, run.failed, run.lost) == (5, 0, 0)
+    assert sorted(pd.read_parquet(run.results)["zone"]) == sorted(zones)
+
+
 @pytest.mark.parametrize("culprit", ["die-0", "oom-0"])
 def test_a_zone_that_kills_its_worker_is_retried_never_stored(tmp_path, quick, capsys, culprit):
     """Defect 1: a zone exhausting memory took the queue with it and the command exited 0."""

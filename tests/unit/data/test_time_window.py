@@ -41,7 +41,10 @@ def test_only_a_start_or_only_an_end(tmp_path) -> None:
     [
         ('start = "2014-07-03"\nend = "2014-07-02"', "start must be before end"),
         ('start = "soon"', "is not a date"),
-        ('start = "2015-01-01"', r"no rows between .* the data run from 2014-07-01 00:00 to 2014-07-04 23:00"),
+        (
+            'start = "2015-01-01"',
+            r"no rows between .* the data run from 2014-07-01 00:00 to 2014-07-04 23:00",
+        ),
     ],
 )
 def test_bad_windows_are_one_line(tmp_path, extra, match) -> None:
