@@ -72,10 +72,14 @@ SCENARIOS = {
 }
 
 
-def forced_schedule(rng: np.random.Generator, duration: float = NIGHT) -> tuple[Command, ...]:
-    """A forced-response command schedule: blocks of 60-150 min cycling cold / hot / min."""
+def forced_schedule(rng: np.random.Generator, duration: float = NIGHT, phase: int = 0) -> tuple[Command, ...]:
+    """A forced-response command schedule: blocks of 60-150 min cycling cold / hot / min.
+
+    ``phase`` is the position in :data:`FORCED_CYCLE` of the first block (0: "cold"), so that
+    several zones forced at once do not start in step.
+    """
     out: list[Command] = []
-    t, i = 0.0, 0
+    t, i = 0.0, phase
     while t < duration:
         m, reheat = FORCED_LEVELS[FORCED_CYCLE[i % len(FORCED_CYCLE)]]
         out.append(Command(t, m, reheat))
