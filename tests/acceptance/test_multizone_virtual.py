@@ -24,12 +24,16 @@ from rczone.models import load_model
 from rczone.virtual.building import true_geometry
 from rczone.virtual.multizone import column_names, generate_multizone_night
 from rczone.virtual.scenarios import FORCED_LEVELS
-from tests.acceptance.multizone_truth import RATIO, partition_admittance_error, true_values
+from tests.acceptance.multizone_truth import (
+    RATIO,
+    hour_scale_partition_capacity,
+    partition_admittance_ratio,
+    true_values,
+)
 
 MODEL = Path(__file__).resolve().parents[2] / "validation" / "models" / "virtual_two_zones.toml"
 SEED = 1
 #: Parameters whose recovery within 15 % is claimed (see docs/multizone-draft-virtual.md).
-CLAIMED = ("Rp", "Cp", "Ca_t", "Ca_n1")
 TOLERANCE = 0.15
 
 
@@ -165,9 +169,25 @@ def test_truth_is_the_true_construction():
     assert abs(v["Cl_t"] / t["Cl_t"] - 1) > 0.05 and abs(v["Rp"] / t["Rp"] - 1) > 0.02
 
 
-def test_partition_element_matches_the_true_wall_at_the_forced_periods():
-    err = partition_admittance_error()
-    assert max(err.values()) < 0.25 and err[14400.0] < 0.1
+def test_partition_truth_at_the_forced_periods():
+    """With the construction Cp the element passes 10-21 % too little heat at 1-4 h; the hour-scale Cp fixes that."""
+    periods = (3600.0, 7200.0, 14400.0)
+    t = true_values()
+    raw = partition_admittance_ratio(t["Cp"], periods)["transfer"]
+    assert np.all((raw > 0.75) & (raw < 0.92))
+    cp = hour_scale_partition_capacity()
+    assert 0.8 < cp / t["Cp"] < 0.95
+    matched = partition_admittance_ratio(cp, periods)["transfer"]
+    np.testing.assert_allclose(matched, 1.0, atol=0.02)  # the whole 1-4 h band, not just 2 h
+    # at DC the element is exact whatever Cp: its resistance is the true one
+    dc = partition_admittance_ratio(cp, (1e9,))
+    np.testing.assert_allclose([dc["room"][0], dc["transfer"][0]], 1.0, atol=1e-4)
+
+
+def claimed_truth() -> dict[str, float]:
+    """The truths the recovery is claimed against (stated before fitting)."""
+    t = true_values()
+    return {"Rp": t["Rp"], "Cp": hour_scale_partition_capacity(), "Ca_t": t["Ca_t"], "Ca_n1": t["Ca_n1"]}
 
 
 # ---- the joint fit from the CLI ------------------------------------------------------------------
@@ -183,6 +203,6 @@ def test_cli_joint_fit_recovers_the_truth(night, tmp_path):
     res = json.loads(out.read_text())
     assert rc in (0, 3), rc
     est = {k: v["estimate"] for k, v in res["parameters"].items()}
-    truth = true_values()
-    ratios = {k: est[k] / truth[k] for k in CLAIMED}
+    truth = claimed_truth()
+    ratios = {k: est[k] / v for k, v in truth.items()}
     assert all(abs(r - 1) <= TOLERANCE for r in ratios.values()), ratios
