@@ -185,9 +185,9 @@ def test_partition_truth_at_the_forced_periods():
 
 
 def claimed_truth() -> dict[str, float]:
-    """The truths the recovery is claimed against (stated before fitting)."""
+    """The truths recovery within 15 % is claimed against (stated before fitting)."""
     t = true_values()
-    return {"Rp": t["Rp"], "Cp": hour_scale_partition_capacity(), "Ca_t": t["Ca_t"], "Ca_n1": t["Ca_n1"]}
+    return {"Rp": t["Rp"], "Ca_t": t["Ca_t"], "Ca_n1": t["Ca_n1"]}
 
 
 # ---- the joint fit from the CLI ------------------------------------------------------------------
@@ -201,8 +201,13 @@ def test_cli_joint_fit_recovers_the_truth(night, tmp_path):
     night.to_csv(data, index=False)
     rc = main(["fit", str(data), "--model", str(MODEL), "--json", str(out), "--no-profiles"])
     res = json.loads(out.read_text())
-    assert rc in (0, 3), rc
+    assert rc == 0, rc  # a trustworthy fit: no estimate at a bound, starts agree
     est = {k: v["estimate"] for k, v in res["parameters"].items()}
     truth = claimed_truth()
     ratios = {k: est[k] / v for k, v in truth.items()}
     assert all(abs(r - 1) <= TOLERANCE for r in ratios.values()), ratios
+    # the partition's capacity: one night pins it to ~15 % (its standard error), so it is checked
+    # against the hour-scale truth within its own uncertainty, not claimed within 15 %
+    cp = res["parameters"]["Cp"]
+    assert abs(cp["estimate"] - hour_scale_partition_capacity()) < 2.5 * cp["std_error"]
+    assert 0.08 < cp["std_error"] / cp["estimate"] < 0.25
