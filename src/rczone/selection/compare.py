@@ -536,7 +536,9 @@ def _condition(fitted: dict[str, Candidate], frame: pd.DataFrame, basis: Basis, 
 
     Returns the samples with a target value.
     """
-    terms, measured = conditional_logliks({n: c.calibration for n, c in fitted.items()}, frame, basis, constants)
+    terms, measured = conditional_logliks(
+        {n: c.calibration for n, c in fitted.items()}, frame, basis, constants
+    )
     cols = frame[list(basis.targets)].to_numpy(float)
     n_obs = int(np.isfinite(cols[measured]).sum())
     for n, c in fitted.items():

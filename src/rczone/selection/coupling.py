@@ -157,7 +157,9 @@ def _logpdf_batch(e: np.ndarray, S: np.ndarray) -> np.ndarray:
     return -0.5 * (e.shape[1] * _LOG_2PI + logdet + (z * z).sum(axis=1))
 
 
-def conditional_terms(e: np.ndarray, S: np.ndarray, targets: Sequence[int], given: Sequence[int]) -> np.ndarray:
+def conditional_terms(
+    e: np.ndarray, S: np.ndarray, targets: Sequence[int], given: Sequence[int]
+) -> np.ndarray:
     """Per-sample ``log p(y_targets,k | past, y_given,k)`` from one-step innovations.
 
     ``log N(e_{T+G}; 0, S_{T+G}) - log N(e_G; 0, S_GG)`` on the observed coordinates of each

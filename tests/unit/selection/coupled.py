@@ -84,9 +84,7 @@ def write_models(folder) -> dict[str, str]:
 def joint_matrices(v=TRUE) -> tuple[np.ndarray, np.ndarray]:
     """``A`` (2, 2), ``B`` (2, 3) of the two rooms, inputs ``(To, P1, P2)``, states ``(T1, T2)``."""
     C1, C2, R1, R2, R12 = (v[k] for k in ("C1", "C2", "R1", "R2", "R12"))
-    A = np.array(
-        [[-(1 / R1 + 1 / R12) / C1, 1 / (R12 * C1)], [1 / (R12 * C2), -(1 / R2 + 1 / R12) / C2]]
-    )
+    A = np.array([[-(1 / R1 + 1 / R12) / C1, 1 / (R12 * C1)], [1 / (R12 * C2), -(1 / R2 + 1 / R12) / C2]])
     B = np.array([[1 / (R1 * C1), 1 / C1, 0.0], [1 / (R2 * C2), 0.0, 1 / C2]])
     return A, B
 

@@ -61,13 +61,13 @@ def test_conditional_terms_equal_scipy_conditional_densities_with_missing_values
     # two targets: the joint minus the marginal, by scipy
     both = conditional_terms(e[:3], S[:3], [0, 1], [2])
     for k in range(3):
-        ref = multivariate_normal(np.zeros(3), S[k]).logpdf(e[k]) - norm(0, np.sqrt(S[k, 2, 2])).logpdf(e[k, 2])
+        ref = multivariate_normal(np.zeros(3), S[k]).logpdf(e[k]) - norm(0, np.sqrt(S[k, 2, 2])).logpdf(
+            e[k, 2]
+        )
         assert both[k] == pytest.approx(ref, rel=1e-10)
 
 
-@pytest.mark.parametrize(
-    ("targets", "given", "match"), [([], [1], "non-empty"), ([0], [0], "disjoint")]
-)
+@pytest.mark.parametrize(("targets", "given", "match"), [([], [1], "non-empty"), ([0], [0], "disjoint")])
 def test_conditional_terms_bad_indices(targets, given, match):
     with pytest.raises(ParameterError, match=match):
         conditional_terms(np.zeros((2, 2)), np.tile(np.eye(2), (2, 1, 1)), targets, given)
@@ -89,7 +89,9 @@ def test_vuong_statistic_and_p_value():
     d = la - lb
     z = d.sum() / np.sqrt(d.size * newey_west_variance(d))
     assert v.statistic == pytest.approx(z) and v.p_value == pytest.approx(2 * norm.sf(abs(z)))
-    assert v.statistic_bic == pytest.approx((d.sum() - np.log(400)) / np.sqrt(d.size * newey_west_variance(d)))
+    assert v.statistic_bic == pytest.approx(
+        (d.sum() - np.log(400)) / np.sqrt(d.size * newey_west_variance(d))
+    )
     same = vuong_test("a", "b", la, la, 3, 1)
     assert same.statistic == 0 and same.closer(0.05) is None
     with pytest.raises(ParameterError, match="at least 10"):
