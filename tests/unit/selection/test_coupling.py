@@ -170,9 +170,11 @@ def test_the_comparison_picks_the_right_model(paths, case, right):
 
 
 # ----------------------------------------------------------------------------- the CLI
-def test_select_cli_reports_the_basis_and_vuong(paths, capsys):
+def test_select_cli_reports_the_basis_and_vuong(paths, capsys, tmp_path):
     args = ["select", paths["noisy"], "--model", paths["joint"], "--model", paths["single"], "--starts", "1"]
-    assert main([*args, "--json", "-"]) == 0
+    assert main([*args, "--json", "-", "--report", str(tmp_path / "rep")]) == 0
+    page = (tmp_path / "rep" / "report.html").read_text()
+    assert "Vuong tests between non-nested candidates" in page and "conditional on T2" in page
     res = json.loads(capsys.readouterr().out)
     assert res["basis"] == "conditional on T2" and res["targets"] == ["T1"]
     (v,) = [t for t in res["tests"] if t["kind"] == "vuong"]
