@@ -8,7 +8,8 @@ Usage::
 alternating seeds) are generated once and written as Parquet files (timed separately: data
 generation is not calibration); zone ``i`` reads night ``i mod nights``. Then
 ``rczone.batch.run_batch`` calibrates the paper's reduced model for every zone by LS and by
-ML (one start, uncertainty included, no diagnosis) into a fresh results folder, end to end:
+ML (the manifest defaults: global search, uncertainty included; no diagnosis) into a fresh
+results folder, end to end:
 cluster start, reading and checking each zone's file, fitting, storing every result and
 consolidating the table. Every zone is calibrated on its own (nothing is shared between
 zones). Prints the figures, the time scaled to 1,000 zone-nights, and one JSON line

@@ -9,6 +9,7 @@ in a new :class:`~rczone.models.zone.ZoneModel`.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -152,6 +153,16 @@ class Calibration:
     def to_frame(self) -> pd.DataFrame:
         """The parameter table (:meth:`FitResult.to_frame`)."""
         return self.result.to_frame()
+
+    def output_errors(self) -> list[tuple[str, float, float]]:
+        """``(output, open-loop RMSE, largest error)`` of every measured output, K (missing samples skipped)."""
+        out = []
+        for j, o in enumerate(self.model.network.outputs):
+            e = self.open_loop.error[:, j]
+            e = e[np.isfinite(e)]
+            rmse = float(np.sqrt(np.mean(e**2))) if e.size else math.nan
+            out.append((o, rmse, float(np.max(np.abs(e))) if e.size else math.nan))
+        return out
 
 
 def calibrate(

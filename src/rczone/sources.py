@@ -21,6 +21,7 @@ def read_frame(
     column_map: str | Path | None = None,
     signals: Mapping[str, str] | None = None,
     required: Sequence[str] = (),
+    outputs: Sequence[str] = ("Ti",),
 ) -> pd.DataFrame:
     """A zone's data as a frame in rczone's default columns (SI units, ``time`` in s).
 
@@ -29,8 +30,8 @@ def read_frame(
     ``column_map``. Built-in data sets can be named directly (``A``, ``B``, ``C``). ``signals``
     (name -> quantity, :meth:`rczone.models.ZoneModel.signal_quantities`) are the model's: without a
     map, the columns named as them are read in SI units, and the ``required`` ones must exist. A
-    record with fewer than :data:`~rczone.estimation.data.MIN_MEASURED` measured ``Ti`` samples
-    is an error: it would fit anything.
+    record with fewer than :data:`~rczone.estimation.data.MIN_MEASURED` measured samples of one
+    of the ``outputs`` is an error: it would fit anything.
     """
     from rczone.data import load_zone_data
 
@@ -44,12 +45,21 @@ def read_frame(
             f"data file {str(path)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
         )
     frame = load_zone_data(path, column_map, signals=signals, required=required).to_frame()
-    if "Ti" in frame:
-        measured = int(np.isfinite(frame["Ti"].to_numpy(float)).sum())
+    for name in outputs:
+        if name not in frame:
+            continue
+        measured = int(np.isfinite(frame[name].to_numpy(float)).sum())
         if measured < MIN_MEASURED:
             raise DataError(
-                f"{path}: only {measured} of {len(frame)} samples have a measured room temperature Ti;"
+                f"{path}: only {measured} of {len(frame)} samples have a measured {name};"
                 f" at least {MIN_MEASURED} are needed (rczone.estimation.data.MIN_MEASURED): use a longer"
                 " record with fewer gaps"
             )
     return frame
+
+
+def read_model_frame(path: str | Path, column_map: str | Path | None, model) -> pd.DataFrame:
+    """A zone's data for ``model`` (a :class:`~rczone.models.ZoneModel`): its signals, every output checked."""
+    return read_frame(
+        path, column_map, model.signal_quantities(), model.required_signals(), model.network.outputs
+    )

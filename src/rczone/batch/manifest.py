@@ -7,7 +7,7 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
     model = "second-order-paper"     # a built-in model, or a model file (rczone.models.load_model)
     methods = ["ls", "ml"]           # one task per zone and method
     optimizer = "auto"
-    n_starts = 1
+    n_starts = "auto"                # global search (rczone fit's default); 1 = one local search
     diagnose = true                  # identifiability verdicts per zone
     # free = ["Cr", "Rw"]            # default: the method's usual set for the model
     # columns = "maps/bms.toml"      # default column map for data files
@@ -69,7 +69,7 @@ DEFAULTS: dict[str, object] = {
     "model": "second-order-paper",
     "methods": ("ls", "ml"),
     "optimizer": "auto",
-    "n_starts": 1,
+    "n_starts": "auto",
     "diagnose": True,
     "free": None,
     "columns": None,
@@ -89,7 +89,7 @@ class Task:
     model: str
     source: tuple
     optimizer: str = "auto"
-    n_starts: int = 1
+    n_starts: int | None = None
     diagnose: bool = True
     free: tuple[str, ...] | None = None
     constants: tuple[tuple[str, float], ...] = ()
@@ -184,10 +184,12 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
             f"unknown optimizer {out['optimizer']!r}; " + did_you_mean(str(out["optimizer"]), OPTIMIZERS),
         )
     n_starts = out["n_starts"]
-    if not isinstance(n_starts, int) or isinstance(n_starts, bool) or not 1 <= n_starts <= MAX_STARTS:
+    if n_starts != "auto" and (
+        not isinstance(n_starts, int) or isinstance(n_starts, bool) or not 1 <= n_starts <= MAX_STARTS
+    ):
         raise _err(
             where,
-            f"n_starts must be an integer from 1 to {MAX_STARTS} (rczone.batch.manifest.MAX_STARTS),"
+            f'n_starts must be "auto" or an integer from 1 to {MAX_STARTS} (rczone.batch.manifest.MAX_STARTS),'
             f" got {n_starts!r}",
         )
     if not isinstance(out["diagnose"], bool):
@@ -286,7 +288,7 @@ def _tasks(zone: str, source: tuple, s: Mapping[str, object]) -> list[Task]:
             model=str(s["model"]),
             source=source,
             optimizer=str(s["optimizer"]),
-            n_starts=int(s["n_starts"]),
+            n_starts=None if s["n_starts"] == "auto" else int(s["n_starts"]),
             diagnose=bool(s["diagnose"]),
             free=tuple(s["free"]) if s["free"] else None,
             constants=tuple(sorted((k, float(v)) for k, v in (s["constants"] or {}).items())),

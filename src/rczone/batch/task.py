@@ -20,18 +20,19 @@ from rczone.batch.manifest import Task
 from rczone.errors import RczoneError
 
 
-def load_task_data(task: Task) -> pd.DataFrame:
-    """The zone's data frame in rczone's default columns."""
+def load_task_data(task: Task, zm=None) -> pd.DataFrame:
+    """The zone's data frame: the columns the model ``zm`` reads (default: rczone's default columns)."""
     kind = task.source[0]
     if kind == "virtual":
         from rczone.virtual.scenarios import generate_night
 
         _, season, mode, seed = task.source
         return generate_night(season, mode, seed)
-    from rczone.sources import read_frame
+    from rczone.sources import read_frame, read_model_frame
 
     _, path, columns = task.source
-    return read_frame(Path(path), Path(columns) if columns else None)
+    columns = Path(columns) if columns else None
+    return read_frame(Path(path), columns) if zm is None else read_model_frame(Path(path), columns, zm)
 
 
 def task_model(task: Task):
@@ -74,7 +75,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
         zm = task_model(task)
         net = zm.network
         if "frame" not in cache:
-            cache["frame"] = load_task_data(task)
+            cache["frame"] = load_task_data(task, zm)
         frame = cache["frame"]
         constants = dict(task.constants) or None
         cal = calibrate(zm, frame, task.method, task.free, task.optimizer, task.n_starts, constants=constants)
@@ -99,7 +100,8 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
 
             rc = tuple(n for n in r.names if n in net.parameters)
             if rc and ("diagnose", rc) not in cache:
-                d = diagnose(net, frame, free=list(rc), constants=cal.model.provenance.get("constants"))
+                # at the fitted values: an operating point consistent with this zone's data
+                d = diagnose(cal.model, frame, free=list(rc), constants=cal.model.provenance.get("constants"))
                 cache["diagnose", rc] = {n: v.verdict for n, v in d.parameters.items()}
             for n, verdict in cache.get(("diagnose", rc), {}).items():
                 row[f"{n}_verdict"] = verdict

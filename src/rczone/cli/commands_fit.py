@@ -196,6 +196,12 @@ def fit(
         f"open-loop RMSE {cal.open_loop.rmse_K:.3f} K, max {cal.open_loop.max_abs_K:.3f} K;"
         f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K; {r.n_evals} evaluations"
     )
+    per_output = cal.output_errors()
+    if len(per_output) > 1:
+        out.print(
+            "open loop per output: "
+            + "; ".join(f"{esc(o)} RMSE {rmse:.3f} K, max {worst:.3f} K" for o, rmse, worst in per_output)
+        )
     for line in _residual_lines(cal):
         out.print(line)
     used = cal.model.provenance.get("constants") or {}
@@ -237,6 +243,10 @@ def fit(
             model=zm.label,
             open_loop_rmse_K=cal.open_loop.rmse_K,
             open_loop_max_error_K=cal.open_loop.max_abs_K,
+            outputs={
+                o: {"open_loop_rmse_K": rmse, "open_loop_max_error_K": worst, "sigma_v_K": _sigma_v(r, o)}
+                for o, rmse, worst in per_output
+            },
             ljung_box_p=cal.residuals.p_value,
             innovations=cal.innovations.to_dict() if cal.innovations is not None else None,
             open_loop_residuals=cal.open_loop_residuals.to_dict() if cal.open_loop_residuals else None,
@@ -289,6 +299,14 @@ def _residual_lines(cal) -> list[str]:
             text += f"; largest input cross-correlation {esc(name)} {value:.2f} at {k * an.dt_s / 3600:.2g} h"
         lines.append(text)
     return lines
+
+
+def _sigma_v(r, output: str) -> float | None:
+    """The estimated measurement-noise level of ``output``, K (None when the fit did not estimate it)."""
+    for name in (f"sigma_v_{output}", "sigma_v"):
+        if name in r.estimates:
+            return r.estimates[name]
+    return None
 
 
 def _save(zm, path: Path) -> None:

@@ -75,6 +75,27 @@ def _tests_table(sel):
     return table
 
 
+def _vuong_table(sel):
+    from rich.table import Table
+
+    table = Table(
+        title=f"Vuong tests between non-nested candidates ({esc(sel.basis.describe())}; two-sided, level {sel.alpha:g})"
+    )
+    for c in ("a vs b", "log L_a - log L_b", "Z", "p", "Z (Schwarz)", "p (Schwarz)", "closer"):
+        table.add_column(c)
+    for v in sel.vuong:
+        table.add_row(
+            f"{esc(v.a)} vs {esc(v.b)}",
+            f"{v.loglik_ratio:.1f}",
+            f"{v.statistic:.2f}",
+            f"{v.p_value:.3g}",
+            f"{v.statistic_bic:.2f}",
+            f"{v.p_value_bic:.3g}",
+            esc(v.closer(sel.alpha) or "neither (not significant)"),
+        )
+    return table
+
+
 @app.command()
 def select(
     data: Annotated[Path, typer.Argument(help="CSV/Parquet file, or a built-in data set name (A, B, C).")],
@@ -127,7 +148,10 @@ def select(
 
     Prints log-likelihood, number of parameters, AIC, BIC and the whiteness of each candidate's
     innovations; likelihood-ratio tests between the pairs where one model is nested in the other
-    (detected from the networks); and the selected model. Exit code 0; 3 when the selected
+    (detected from the networks); and the selected model. Candidates that measure different
+    outputs (two coupled rooms fitted jointly, and one room with the neighbour's measured
+    temperature as a boundary) are compared on the likelihood of their common outputs
+    conditional on the others' measurements, with Vuong's test between non-nested pairs. Exit code 0; 3 when the selected
     model's fit is flagged; 2 for a mistake in the input.
     """
     from rczone.cli.commands_fit import _save, _starts
@@ -172,11 +196,22 @@ def select(
             noise=noise.strip().lower(),
         )
     how = f"forward selection, alpha = {alpha:g}" if forward else criterion.upper()
-    out.print(_table(sel, f"Candidates fitted to {esc(label)} by ML ({sel.samples['n']} samples)"))
+    title = f"Candidates fitted to {esc(label)} by ML ({sel.samples['n']} samples)"
+    if sel.basis is not None and sel.basis.conditional:
+        title += f"; log L of {esc(', '.join(sel.basis.targets))} {esc(sel.basis.describe())}"
+    out.print(_table(sel, title))
+    if sel.basis is not None and sel.basis.conditional:
+        out.print(
+            f"the candidates measure different outputs: compared on the likelihood of"
+            f" {esc(', '.join(sel.basis.targets))} {esc(sel.basis.describe())} (the measured"
+            f" {esc(', '.join(sel.basis.given))}, an output of some candidates and an input of the others)"
+        )
     if sel.tests:
         out.print(_tests_table(sel))
-    else:
+    elif not sel.vuong:
         out.print("no candidate is nested in another: no likelihood-ratio test")
+    if sel.vuong:
+        out.print(_vuong_table(sel))
     for step in sel.steps:
         verdict = "accepted" if step["accepted"] else "rejected: stop"
         out.print(

@@ -59,10 +59,9 @@ def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None 
     With the model ``zm``, a file without a column map is read by the model's signal names.
     """
     from rczone.sources import read_frame as read
+    from rczone.sources import read_model_frame
 
-    if zm is None:
-        return read(path, column_map)
-    return read(path, column_map, zm.signal_quantities(), zm.required_signals())
+    return read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
 
 
 def split(text: str | None) -> list[str] | None:

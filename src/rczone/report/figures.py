@@ -81,43 +81,6 @@ def gain_errors(fc: FrequencyComparison, inputs: Sequence[str] = ("Ts", "Tsd")) 
     return fig
 
 
-def data_overview(frame: pd.DataFrame, title: str = "") -> Figure:
-    """Room, surrounding, outdoor and supply temperatures, and the supply flow, over time."""
-    fig = Figure(figsize=(8.5, 5.2))
-    ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1.2, 1]})
-    h = _hours(frame["time"].to_numpy(float))
-    ax1.plot(h, frame["Ti"], color="black", lw=1.2, label="Ti (room)")
-    for c, col in (
-        ("Tf", "#805ad5"),
-        ("Tc", "#d53f8c"),
-        ("Tn1", "#dd6b20"),
-        ("Tn2", "#38a169"),
-        ("Thw", "#3182ce"),
-    ):
-        if c in frame:
-            ax1.plot(h, frame[c], color=col, lw=0.8, alpha=0.8, label=c)
-    if "Tsd" in frame and "Tf" not in frame:
-        ax1.plot(h, frame["Tsd"], color="#3182ce", lw=0.9, label="Tsd")
-    ax1.set_ylabel("°C")
-    ax1.legend(fontsize=7, ncol=6, loc="best")
-    ax1.grid(alpha=0.3)
-    for c, col in (("Ts", "#c53030"), ("To", "#718096")):
-        if c in frame:
-            ax2.plot(h, frame[c], color=col, lw=1.0, label=c)
-    ax2.set_ylabel("°C")
-    ax2.legend(fontsize=7, ncol=2)
-    ax2.grid(alpha=0.3)
-    if "m" in frame:
-        ax3.step(h, frame["m"], where="post", color="#2b6cb0", lw=1.0)
-    ax3.set_ylabel("m (kg/s)")
-    ax3.set_xlabel("hours from start")
-    ax3.grid(alpha=0.3)
-    if title:
-        fig.suptitle(title)
-    fig.tight_layout()
-    return fig
-
-
 def signals_overview(
     frame: pd.DataFrame, panels: Sequence[tuple[str, Sequence[str]]], title: str = ""
 ) -> Figure:
@@ -140,14 +103,16 @@ def signals_overview(
     return fig
 
 
-def fit_overview(t: np.ndarray, measured: np.ndarray, predicted: np.ndarray, title: str = "") -> Figure:
-    """Measured and open-loop predicted room temperature, and the error."""
+def fit_overview(
+    t: np.ndarray, measured: np.ndarray, predicted: np.ndarray, title: str = "", label: str = "Ti"
+) -> Figure:
+    """Measured and open-loop predicted temperature of output ``label``, and the error."""
     fig = Figure(figsize=(8.5, 4.2))
     ax1, ax2 = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2, 1]})
     h = _hours(t)
     ax1.plot(h, measured, color="black", lw=1.0, label="measured")
     ax1.plot(h, predicted, color="#dd6b20", lw=1.4, label="model (open loop)")
-    ax1.set_ylabel("Ti (°C)")
+    ax1.set_ylabel(f"{label} (°C)")
     ax1.legend(fontsize=8)
     ax1.grid(alpha=0.3)
     ax2.plot(h, measured - predicted, color="#c53030", lw=0.9)

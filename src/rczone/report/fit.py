@@ -10,7 +10,7 @@ import pandas as pd
 from rczone.calibrate import Calibration
 from rczone.diagnostics import IdentifiabilityReport
 from rczone.report import figures as figs
-from rczone.report.diagnose import add_verdicts
+from rczone.report.diagnose import add_verdicts, signal_panels
 from rczone.report.html import Report
 
 
@@ -54,15 +54,20 @@ def fit_report(
     if r.flags:
         rep.paragraph("Warnings: " + html.escape("; ".join(r.flags)), "warn")
     rep.heading("Data")
-    rep.figure("data_overview", figs.data_overview(frame), f"{data_name}: temperatures and supply flow")
+    rep.figure(
+        "data_overview",
+        figs.signals_overview(frame, signal_panels(cal.model)),
+        f"{data_name}: the model's signals",
+    )
     rep.heading("Fit")
     ol = cal.open_loop
-    rep.figure(
-        "fit",
-        figs.fit_overview(ol.t, frame["Ti"].to_numpy(float), ol.y_hat[:, 0]),
-        "Open-loop simulation of the fitted model",
-    )
-    rep.paragraph(f"Open-loop RMSE {ol.rmse_K:.3f} K, largest error {ol.max_abs_K:.3f} K.")
+    for j, (o, rmse, worst) in enumerate(cal.output_errors()):
+        rep.figure(
+            "fit" if j == 0 else f"fit_{o}",
+            figs.fit_overview(ol.t, ol.y_hat[:, j] + ol.error[:, j], ol.y_hat[:, j], label=o),
+            f"Open-loop simulation of the fitted model: {o}",
+        )
+        rep.paragraph(f"{html.escape(o)}: open-loop RMSE {rmse:.3f} K, largest error {worst:.3f} K.")
     rep.table(parameter_rows(cal), "Estimates beside their construction (ASHRAE) values", digits=4)
     add_residuals(rep, cal)
     if diag is not None:

@@ -30,14 +30,50 @@ def selection_report(sel: Selection, data_name: str) -> Report:
             f" {inn.ljung_box_p:.2g}): every candidate misses some dynamics or input.",
             "warn",
         )
+    conditional = sel.basis is not None and sel.basis.conditional
+    if conditional:
+        rep.paragraph(
+            "The candidates measure different outputs, so their own likelihoods are of different data."
+            f" They are compared on one quantity both predict: the likelihood {html.escape(sel.basis.describe())},"
+            " one step ahead (for a joint model by Gaussian conditioning of its innovations on the"
+            " neighbours' innovations at the same time; for a model that takes the neighbours'"
+            " measurements as inputs, its own likelihood).",
+            "note",
+        )
     rep.heading("Candidates")
     rep.table(
         sel.table(),
-        "log L: log-likelihood at the estimate; k: free parameters (noise levels included);"
+        ("log L: log-likelihood " + (sel.basis.describe() if conditional else "at the estimate"))
+        + "; k: free parameters (noise levels included);"
         " AIC = 2k - 2 log L; BIC = k log n - 2 log L; Ljung-Box p of the standardized innovations",
         digits=5,
     )
-    rep.heading("Likelihood-ratio tests")
+    if sel.vuong:
+        rep.heading("Vuong tests between non-nested candidates")
+        rep.paragraph(
+            "Vuong's (1989) test: the per-sample log-likelihood differences averaged and divided by"
+            " their long-run (Newey-West) standard deviation; under equal closeness to the truth the"
+            " statistic is standard normal. The Schwarz-corrected statistic charges the extra parameters."
+        )
+        rep.table(
+            [
+                {
+                    "model a": v.a,
+                    "model b": v.b,
+                    "log L ratio": v.loglik_ratio,
+                    "z": v.statistic,
+                    "p": v.p_value,
+                    "z (BIC)": v.statistic_bic,
+                    "p (BIC)": v.p_value_bic,
+                    f"closer at {sel.alpha:g}": v.closer(sel.alpha) or "neither",
+                }
+                for v in sel.vuong
+            ],
+            f"Each pair of non-nested candidates, {sel.basis.describe()}",
+            digits=3,
+        )
+    if sel.tests or not sel.vuong:
+        rep.heading("Likelihood-ratio tests")
     if sel.tests:
         rep.paragraph(
             "Nesting is detected from the networks: the simpler model is the richer one with the"
@@ -61,7 +97,7 @@ def selection_report(sel: Selection, data_name: str) -> Report:
             "Each simpler model against each richer model it is nested in",
             digits=3,
         )
-    else:
+    elif not sel.vuong:
         rep.paragraph("No candidate is nested in another: the models are compared by AIC and BIC only.")
     if sel.steps:
         rep.heading("Forward selection")

@@ -45,6 +45,7 @@ References
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -57,6 +58,14 @@ from rczone.calibrate import Calibration, ModelLike, as_model, calibrate, comple
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.fit import default_free
 from rczone.models import ZoneModel
+from rczone.selection.coupling import (
+    Basis,
+    VuongTest,
+    check_measured,
+    comparison_basis,
+    conditional_logliks,
+    vuong_test,
+)
 from rczone.selection.nesting import Nesting, nesting, realize
 
 #: Ways of choosing among the candidates.
@@ -76,21 +85,30 @@ class Candidate:
     name : str
     calibration : Calibration
     n_obs : int
-        Observed output values the likelihood is over.
+        Observed output values the likelihood is over (with a conditional basis: target values).
     retried : bool
         The first fit ended below the likelihood of a simpler model nested in this one, and the
         fit was repeated from that model's estimates (the better of the two is kept).
+    terms : ndarray, shape (N,), optional
+        With a conditional basis (:mod:`rczone.selection.coupling`): the per-sample log-density
+        of the target outputs given the neighbours' measurements; :attr:`loglik` is their sum.
     """
 
     name: str
     calibration: Calibration
     n_obs: int
     retried: bool = False
+    terms: np.ndarray | None = None
+
+    @property
+    def fit_loglik(self) -> float:
+        """``log L`` of the fit at the estimate (the fit's cost is ``-log L``), of all the model's outputs."""
+        return -float(self.calibration.result.cost)
 
     @property
     def loglik(self) -> float:
-        """``log L`` at the estimate (the fit's cost is ``-log L``)."""
-        return -float(self.calibration.result.cost)
+        """``log L`` the candidates are compared on: the fit's, or the conditional one of the targets."""
+        return self.fit_loglik if self.terms is None else float(self.terms.sum())
 
     @property
     def n_params(self) -> int:
@@ -113,6 +131,7 @@ class Candidate:
         inn = self.calibration.innovations
         return {
             "loglik": self.loglik,
+            "loglik_fit": self.fit_loglik,
             "n_params": self.n_params,
             "aic": self.aic,
             "bic": self.bic,
@@ -187,7 +206,7 @@ def chi_bar_sf(statistic: float, df: int, n_boundary: int) -> float:
 
 def likelihood_ratio_test(simple: Candidate, rich: Candidate, nest: Nesting) -> LikelihoodRatioTest:
     """The test of ``simple`` against ``rich`` (``simple`` nested in ``rich`` by ``nest``)."""
-    stat = 2.0 * (rich.loglik - simple.loglik)
+    stat = 2.0 * (rich.fit_loglik - simple.fit_loglik)
     return LikelihoodRatioTest(
         simple.name,
         rich.name,
@@ -222,6 +241,11 @@ class Selection:
         Candidates a forward selection never reached.
     samples : dict
         The common stretch: ``n`` samples, ``start_s``, ``end_s``, ``n_obs`` observed outputs.
+    basis : Basis, optional
+        What the likelihoods are of: every candidate's outputs (``basis.given`` empty), or the
+        common outputs conditional on the neighbours' measurements (:mod:`rczone.selection.coupling`).
+    vuong : tuple of VuongTest
+        With a conditional basis: Vuong's test of every pair of candidates not nested in each other.
     """
 
     candidates: Mapping[str, Candidate]
@@ -233,6 +257,8 @@ class Selection:
     steps: tuple[dict, ...] = ()
     not_fitted: tuple[str, ...] = ()
     samples: Mapping[str, float] = field(default_factory=dict)
+    basis: Basis | None = None
+    vuong: tuple[VuongTest, ...] = ()
 
     @property
     def best(self) -> Candidate:
@@ -271,8 +297,11 @@ class Selection:
             "rule": self.rule,
             "alpha": self.alpha,
             "samples": dict(self.samples),
+            "basis": self.basis.describe() if self.basis is not None else "joint",
+            "targets": list(self.basis.targets) if self.basis is not None else None,
             "models": {n: c.to_dict() for n, c in self.candidates.items()},
-            "tests": [t.to_dict() for t in self.tests],
+            "tests": [{"kind": "likelihood-ratio", **t.to_dict()} for t in self.tests]
+            + [v.to_dict(self.alpha) for v in self.vuong],
             "forward": {"path": list(self.path), "steps": list(self.steps)}
             if self.rule == "forward"
             else None,
@@ -284,15 +313,13 @@ class Selection:
 
 
 def common_stretch(models: Sequence[ZoneModel], frame: pd.DataFrame, constants) -> pd.DataFrame:
-    """The rows of ``frame`` in the longest stretch where every input of every model is known."""
+    """The rows of ``frame`` in the longest stretch where every input of every model is known.
+
+    Candidates that measure different outputs must be comparable on a conditional basis
+    (:func:`rczone.selection.coupling.comparison_basis`, which raises otherwise).
+    """
+    comparison_basis({zm.label: zm.network for zm in models})
     signals = [zm.signals(frame, constants) for zm in models]
-    outs = {zm.network.outputs for zm in models}
-    if len(outs) > 1:
-        raise DataError(
-            "the candidate models measure different outputs ("
-            + "; ".join(f"{zm.label}: {', '.join(zm.network.outputs)}" for zm in models)
-            + "); a likelihood compares models of the same measurements"
-        )
     u = np.column_stack([s[1] for s in signals])
     m = (
         np.column_stack([s[2] for s in signals])
@@ -372,6 +399,14 @@ def select_models(
     if dup:
         raise ParameterError(f"candidate {dup[0]!r} is given twice")
     by_name = dict(zip(names, zms))
+    basis = comparison_basis({n: zm.network for n, zm in by_name.items()})
+    if basis.conditional:
+        if forward:
+            raise ParameterError(
+                f"the candidates measure different outputs and are compared {basis.describe()};"
+                " forward selection moves between nested models of the same outputs: use a criterion"
+            )
+        check_measured(by_name, frame_from(frame), constants, basis)
     frame = common_stretch(zms, frame_from(frame), constants)
     free = {n: candidate_free(zm.network, noise) for n, zm in by_name.items()}
     nests: dict[tuple[str, str], Nesting] = {}
@@ -403,8 +438,8 @@ def select_models(
         simpler = [fitted[a] for (a, b) in nests if b == name and a in fitted]
         retried = False
         if simpler:
-            best = max(simpler, key=lambda c: c.loglik)
-            if -cal.result.cost < best.loglik - LOGLIK_TOLERANCE:
+            best = max(simpler, key=lambda c: c.fit_loglik)
+            if -cal.result.cost < best.fit_loglik - LOGLIK_TOLERANCE:
                 # below a special case of itself: the search missed the optimum; start where the simpler one is
                 again = run(_warm_start(by_name[name], best, nests[(best.name, name)]))
                 retried = True
@@ -448,6 +483,8 @@ def select_models(
     else:
         for n in order:
             fit_one(n)
+        if basis.conditional:
+            measured = _condition(fitted, frame, basis, constants)
         selected = min(fitted.values(), key=lambda c: c.criterion(rule)).name
         path, rule_used = [selected], rule
     tests = tuple(
@@ -455,6 +492,23 @@ def select_models(
         for (a, b), nest in nests.items()
         if a in fitted and b in fitted
     )
+    vuong = ()
+    if basis.conditional:
+        vuong = tuple(
+            vuong_test(
+                a,
+                b,
+                fitted[a].terms,
+                fitted[b].terms,
+                fitted[a].n_params,
+                fitted[b].n_params,
+                basis.describe(),
+                measured,
+            )
+            for i, a in enumerate(names)
+            for b in names[i + 1 :]
+            if (a, b) not in nests and (b, a) not in nests
+        )
     t = frame["time"].to_numpy(float)
     cands = {n: fitted[n] for n in names if n in fitted}
     return Selection(
@@ -472,7 +526,24 @@ def select_models(
             "end_s": float(t[-1]),
             "n_obs": next(iter(cands.values())).n_obs,
         },
+        basis,
+        vuong,
     )
+
+
+def _condition(fitted: dict[str, Candidate], frame: pd.DataFrame, basis: Basis, constants) -> np.ndarray:
+    """Put on every fitted candidate its per-sample conditional log-densities (in place of the dict).
+
+    Returns the samples with a target value.
+    """
+    terms, measured = conditional_logliks(
+        {n: c.calibration for n, c in fitted.items()}, frame, basis, constants
+    )
+    cols = frame[list(basis.targets)].to_numpy(float)
+    n_obs = int(np.isfinite(cols[measured]).sum())
+    for n, c in fitted.items():
+        fitted[n] = dataclasses.replace(c, terms=terms[n], n_obs=n_obs)
+    return measured
 
 
 def _warm_start(zm: ZoneModel, simpler: Candidate, nest: Nesting) -> ZoneModel:

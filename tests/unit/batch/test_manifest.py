@@ -69,7 +69,10 @@ diagnose = false
             r"unknown season 'autum'; did you mean 'autumn'",
         ),
         ('[[generate]]\nseeds="9..2"', r"seeds must be a list of integers or a range"),
-        ('n_starts = 0\n[[zone]]\nid="a"\ndata="C"', r"n_starts must be an integer from 1 to 1000"),
+        (
+            'n_starts = 0\n[[zone]]\nid="a"\ndata="C"',
+            r"n_starts must be \"auto\" or an integer from 1 to 1000",
+        ),
         ("", r"no zones"),
     ],
 )
@@ -123,7 +126,10 @@ def test_a_folder_in_place_of_the_manifest_is_one_line(tmp_path):
             '[[generate]]\nseeds = "0..99999999999999999999999"',
             r"seeds must be a list of integers or a range",
         ),
-        ('n_starts = 100000000\n[[zone]]\nid="a"\ndata="C"', r"n_starts must be an integer from 1 to 1000"),
+        (
+            'n_starts = 100000000\n[[zone]]\nid="a"\ndata="C"',
+            r"n_starts must be \"auto\" or an integer from 1 to 1000",
+        ),
         ('methods = ["ls", "ls"]\n[[zone]]\nid="a"\ndata="C"', r"methods lists a method twice"),
         ("zone = [1, 2]", r"write zones as \[\[zone\]\] tables"),
         ('zone = "a"', r"write zones as \[\[zone\]\] tables"),

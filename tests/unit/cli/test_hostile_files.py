@@ -101,13 +101,13 @@ def _edit_csv(text: str) -> str:
         ),
         (
             lambda p: zone_frame(4).to_csv(p, index=False),
-            r"only 4 of 4 samples have a measured room temperature",
+            r"only 4 of 4 samples have a measured Ti",
         ),
         (
             lambda p: (
                 zone_frame(1000).assign(Ti=lambda f: f.Ti.where(f.index % 100 == 0)).to_csv(p, index=False)
             ),
-            r"only 10 of 1000 samples have a measured room temperature Ti; at least 30",
+            r"only 10 of 1000 samples have a measured Ti; at least 30",
         ),
     ],
     ids=[
