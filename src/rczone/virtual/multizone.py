@@ -16,6 +16,12 @@ temperatures of all six zones ``Ti``, ``Tn1``, ``Tn2``, ``Thw``, ``Tf``, ``Tc``,
 building's constant night gain, not measured but known): ``Ts``, ``m``, ``Q`` for the target and
 ``Ts_<zone>``, ``m_<zone>``, ``Q_<zone>`` for the others. ``Ts`` and ``m`` of row k are held over
 ``[time[k], time[k] + 60 s)``; temperatures are sensed at ``time[k]``.
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal
+   models of zones in multi-zone buildings", IEEE CDC 2012, section III (the forced-response test
+   of one zone, with its neighbours as measured inputs).
 """
 
 from __future__ import annotations
@@ -79,9 +85,10 @@ def generate_multizone_night(
         check_zone(z)
     if len(set(excited)) != len(excited):
         raise ParameterError(f"excited lists a zone twice: {tuple(excited)!r}")
-    for name, v in (("warmup", warmup), ("duration", duration)):
-        if not v >= (0 if name == "warmup" else SAMPLE) or v % SAMPLE:
-            raise ParameterError(f"{name} must be a positive multiple of 60 s, got {v!r}")
+    if not warmup >= 0 or warmup % SAMPLE:
+        raise ParameterError(f"warmup must be a non-negative multiple of 60 s, got {warmup!r}")
+    if not duration >= SAMPLE or duration % SAMPLE:
+        raise ParameterError(f"duration must be a positive multiple of 60 s, got {duration!r}")
     excited = tuple(z for z in ZONES if z in excited)  # network order: independent of how listed
     bld = build_building()
     g_run, g_meas, g_sched = np.random.default_rng(seed).spawn(3)
