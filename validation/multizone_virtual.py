@@ -13,8 +13,8 @@ Generates the multi-zone forced night ``seed`` (target and n1 forced,
     rczone predict fit-model.json CHECK.csv --out pred-check.csv
 
 (``CHECK`` is another night, ``check-seed``, not used by the fit). Prints the recovery table
-(estimate, truth from :mod:`tests.acceptance.multizone_truth`, ratio; for ``Cp`` also its
-hour-scale truth) as Markdown with the wall
+(estimate, truth from :mod:`tests.acceptance.multizone_truth`, ratio; for ``Cp``, ``Cl``,
+``Rm``, ``Cm`` also their hour-scale truths) as Markdown with the wall
 times of the generation and the fit, and writes ``multizone_fit.png`` (measured vs predicted
 air temperatures of the two excited zones on the fitted night) and ``multizone_check.png`` (on
 the other night) to the figures folder. Run from the repository root.
@@ -64,7 +64,7 @@ def plot(pred: pd.DataFrame, night: pd.DataFrame, title: str, path: Path) -> Non
 
 def run(seed: int, check_seed: int, out: Path, figures: Path) -> int:
     sys.path.insert(0, str(HERE.parent))
-    from tests.acceptance.multizone_truth import hour_scale_partition_capacity, true_values
+    from tests.acceptance.multizone_truth import hour_scale_masses, hour_scale_partition_capacity, true_values
 
     out.mkdir(parents=True, exist_ok=True)
     figures.mkdir(parents=True, exist_ok=True)
@@ -101,6 +101,9 @@ def run(seed: int, check_seed: int, out: Path, figures: Path) -> int:
         preds[name] = pd.read_csv(p)
     res = json.loads(fit_json.read_text())
     truth = true_values()
+    hour = {"Cp": hour_scale_partition_capacity()}
+    for z in ("t", "n1"):
+        hour.update({f"{k}_{z}": v for k, v in hour_scale_masses(z).items() if k != "max_error"})
     print(
         f"\ngeneration {t_gen:.1f} s; rczone fit (default settings, --json) {t_fit:.1f} s; exit code {rc}\n"
     )
@@ -113,9 +116,8 @@ def run(seed: int, check_seed: int, out: Path, figures: Path) -> int:
         start = f"{v['construction']:.4g}" if v.get("construction") is not None else "-"
         tr_s = f"{tr:.4g}" if tr else "-"
         print(f"| {k} | {v['estimate']:.4g} | {se} | {start} | {tr_s} | {ratio} |")
-        if k == "Cp":
-            cp = hour_scale_partition_capacity()
-            print(f"| Cp (hour-scale truth) | | | | {cp:.4g} | {v['estimate'] / cp:.3f} |")
+        if k in hour:
+            print(f"| {k} (hour-scale truth) | | | | {hour[k]:.4g} | {v['estimate'] / hour[k]:.3f} |")
     for name, night_df, s in (("fit", night, seed), ("check", check, check_seed)):
         pr = preds[name]
         rmse = {
