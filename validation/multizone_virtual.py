@@ -116,7 +116,9 @@ def run(seed: int, check_seed: int, out: Path, figures: Path) -> int:
         start = f"{v['construction']:.4g}" if v.get("construction") is not None else "-"
         tr_s = f"{tr:.4g}" if tr else "-"
         print(f"| {k} | {v['estimate']:.4g} | {se} | {start} | {tr_s} | {ratio} |")
-        if k in hour:
+        if k in hour and hour[k] > 100 * tr:  # a sink without end at these periods
+            print(f"| {k} (hour-scale truth) | | | | unbounded | - |")
+        elif k in hour:
             print(f"| {k} (hour-scale truth) | | | | {hour[k]:.4g} | {v['estimate'] / hour[k]:.3f} |")
     for name, night_df, s in (("fit", night, seed), ("check", check, check_seed)):
         pr = preds[name]
