@@ -160,6 +160,10 @@ ZONE_ELEMENTS = {
     "t": ("target_furn", "t_n2", "t_hw", "t_o", "t_c", "t_f"),
     "n1": ("n1_furn", "n1_side", "n1_hw", "n1_o", "n1_fl", "n1_ce"),
 }
+#: The model file's light-branch time constants (``Rl = tau / Cl``), s, and the target slab's
+#: resistance to the room below, K/W (held at nominal).
+LIGHT_TAU = {"t": 2509.0, "n1": 2406.0}
+RMF_T = 32.2e-3
 #: Periods of the admittance match, s (the 1-4 h band the 60-150 min blocks excite).
 MATCH_PERIODS = (3600.0, 5400.0, 7200.0, 10800.0, 14400.0)
 
@@ -218,7 +222,7 @@ def model_storage_admittance(
     target's slab continues to the room below through ``Rmf_t`` (its nominal value), whose DC
     conduction is taken out like the truth's.
     """
-    tau, rmf = (2509.0, 32.2e-3) if zone == "t" else (2406.0, None)
+    tau, rmf = LIGHT_TAU[zone], (RMF_T if zone == "t" else None)
     w = 2 * np.pi / np.asarray(periods_s, dtype=float)
     light = 1.0 / (tau / cl + 1.0 / (1j * w * cl))
     if rmf is None:

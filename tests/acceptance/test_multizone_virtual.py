@@ -25,8 +25,10 @@ from rczone.virtual.building import build_building, true_geometry
 from rczone.virtual.multizone import column_names, generate_multizone_night
 from rczone.virtual.scenarios import FORCED_LEVELS
 from tests.acceptance.multizone_truth import (
+    LIGHT_TAU,
     MATCH_PERIODS,
     RATIO,
+    RMF_T,
     hour_scale_masses,
     hour_scale_partition_capacity,
     model_storage_admittance,
@@ -155,6 +157,10 @@ def test_model_file_starts_from_the_nominal_construction():
     g_n1 = g_furn + 49 / half["board"] + 40 / half["tile"]
     assert v["Rl_t"] * v["Cl_t"] == pytest.approx(v["Cl_t"] / g_t, rel=2e-3)
     assert v["Rl_n1"] * v["Cl_n1"] == pytest.approx(v["Cl_n1"] / g_n1, rel=2e-3)
+    # the truth module's copy of the model's ties (its admittance match uses them)
+    assert v["Rl_t"] * v["Cl_t"] == pytest.approx(LIGHT_TAU["t"])
+    assert v["Rl_n1"] * v["Cl_n1"] == pytest.approx(LIGHT_TAU["n1"])
+    assert v["Rmf_t"] == pytest.approx(RMF_T)
     assert g.air_capacity == pytest.approx(60 * AIR_DENSITY * AIR_CP)
 
 
