@@ -322,10 +322,11 @@ def general_cost(
     f = np.ascontiguousarray
     A, N, B, M = f(ss.A), f(ss.N), f(ss.B), f(ss.M)
     qc = sw**2
+    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     if q:
-        mats, dmats = interval_derivatives(A, N, B, M, dA0, dN, dB0, dM, keys, qc, dqc, foh, not ls)
+        scale = np.empty(0) if scale is None else scale
+        mats, dmats = interval_derivatives(A, N, B, M, dA0, dN, dB0, dM, keys, qc, dqc, scale, foh, not ls)
     else:
-        scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
         if scale is not None and not ls and modal_pays(which, n):
             modal = modal_matrices(A, N, B, M, keys, qc, scale, foh)
             init = (x0, np.diag(sx**2))

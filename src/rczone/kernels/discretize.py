@@ -159,6 +159,17 @@ def rc2_discretize(
 
 
 @njit(cache=True, error_model="numpy")
+def symmetric_eigen(A: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``lam, V`` of ``S = diag(scale) A diag(scale)^-1`` (symmetrized, which removes only rounding) by LAPACK."""
+    n = A.shape[0]
+    S = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            S[i, j] = 0.5 * (scale[i] * A[i, j] / scale[j] + scale[j] * A[j, i] / scale[i])
+    return np.linalg.eigh(S)
+
+
+@njit(cache=True, error_model="numpy")
 def spectral_modal(
     A: np.ndarray, B: np.ndarray, scale: np.ndarray, qc: np.ndarray, h: float, foh: bool
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -183,11 +194,7 @@ def spectral_modal(
     """
     n = A.shape[0]
     p = B.shape[1]
-    S = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            S[i, j] = 0.5 * (scale[i] * A[i, j] / scale[j] + scale[j] * A[j, i] / scale[i])
-    lam, V = np.linalg.eigh(S)
+    lam, V = symmetric_eigen(A, scale)
     Ti = np.empty((n, n))
     for i in range(n):
         for j in range(n):
@@ -526,6 +533,415 @@ def _van_loan_doubling(
                 dQd[k, i, j] = dQ[kk, i, j]
 
 
+#: Taylor terms summed for a divided difference of ``exp`` whose nodes lie within :data:`SERIES_LIMIT`.
+DD_TERMS = 14
+
+
+@njit(cache=True, error_model="numpy")
+def _dd_series(y0: float, y1: float, y2: float, k: int) -> float:
+    """``exp[y0, ..., y_{k-1}, 0]`` (``k`` = 2 or 3; pass ``y2 = 0`` for ``k = 2``) by its Taylor series.
+
+    ``exp[x_0..x_k] = sum_m h_m(x)/(m + k)!`` with ``h_m`` the complete homogeneous symmetric
+    polynomials (one node at 0 contributes nothing to them), built by ``h_m(y_0..y_j) =
+    h_m(y_0..y_{j-1}) + y_j h_{m-1}(y_0..y_j)``. With ``|y| < 0.2`` the truncation is below ``1e-20``.
+    """
+    p0 = 1.0
+    p1 = 1.0
+    p2 = 1.0
+    fact = 2.0 if k == 2 else 6.0
+    acc = 1.0 / fact
+    for m in range(1, DD_TERMS + 1):
+        p0 = p0 * y0
+        p1 = p0 + y1 * p1
+        p2 = p1 + y2 * p2
+        fact *= m + k
+        acc += p2 / fact
+    return acc
+
+
+@njit(cache=True, error_model="numpy")
+def _dd2(x0: float, x1: float, e0: float, e1: float) -> float:
+    """``exp[x0, x1] = (e^{x1} - e^{x0})/(x1 - x0)`` (``e^{x0}`` when equal) from ``e0 = e^{x0}``, ``e1 = e^{x1}``.
+
+    Apart (``|x1 - x0| >= 0.2``) the difference loses at most a factor ``1/(1 - e^{-0.2}) < 6``;
+    closer, ``e^{max} phi1(-|d|)`` has no subtraction at all.
+    """
+    d = x1 - x0
+    if abs(d) >= SERIES_LIMIT:
+        return (e1 - e0) / d
+    if d >= 0.0:
+        return e1 * phi1(-d, math.expm1(-d))
+    return e0 * phi1(d, math.expm1(d))
+
+
+@njit(cache=True, error_model="numpy")
+def _dd3(x0: float, x1: float, x2: float, e0: float, e1: float, e2: float) -> float:
+    """``exp[x0, x1, x2]`` for ascending nodes, with their exponentials.
+
+    Nodes within :data:`SERIES_LIMIT`: the series around the largest; otherwise the recurrence
+    dropping the two extreme nodes, whose subtraction loses at most a factor ``~2/0.2`` because
+    the divided differences of ``exp`` increase in every node [1]_.
+
+    References
+    ----------
+    .. [1] A. McCurdy, K. C. Ng, B. N. Parlett, "Accurate computation of divided differences of
+       the exponential function", Math. Comp. 43(168), 1984.
+    """
+    if x2 - x0 < SERIES_LIMIT:
+        return e2 * _dd_series(x0 - x2, x1 - x2, 0.0, 2)
+    return (_dd2(x1, x2, e1, e2) - _dd2(x0, x1, e0, e1)) / (x2 - x0)
+
+
+@njit(cache=True, error_model="numpy")
+def _dd3_sorted(a: float, b: float, c: float, ea: float, eb: float, ec: float) -> float:
+    """``exp[a, b, c]`` for nodes in any order (divided differences are symmetric)."""
+    if a > b:
+        a, b, ea, eb = b, a, eb, ea
+    if b > c:
+        b, c, eb, ec = c, b, ec, eb
+        if a > b:
+            a, b, ea, eb = b, a, eb, ea
+    return _dd3(a, b, c, ea, eb, ec)
+
+
+@njit(cache=True, error_model="numpy")
+def _dd4(x0: float, x1: float, x2: float, x3: float, e0: float, e1: float, e2: float, e3: float) -> float:
+    """``exp[x0, x1, x2, x3]`` for ascending nodes, as :func:`_dd3` one order higher."""
+    if x3 - x0 < SERIES_LIMIT:
+        return e3 * _dd_series(x0 - x3, x1 - x3, x2 - x3, 3)
+    return (_dd3(x1, x2, x3, e1, e2, e3) - _dd3(x0, x1, x2, e0, e1, e2)) / (x3 - x0)
+
+
+@njit(cache=True, error_model="numpy")
+def _dd4_00(a: float, b: float, ea: float, eb: float) -> float:
+    """``exp[0, 0, a, b]``: the divided difference of ``phi2`` at ``a, b``."""
+    if a > b:
+        a, b, ea, eb = b, a, eb, ea
+    if b <= 0.0:
+        return _dd4(a, b, 0.0, 0.0, ea, eb, 1.0, 1.0)
+    if a <= 0.0:
+        return _dd4(a, 0.0, 0.0, b, ea, 1.0, 1.0, eb)
+    return _dd4(0.0, 0.0, a, b, 1.0, 1.0, ea, eb)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def spectral_derivatives(
+    A: np.ndarray,
+    B: np.ndarray,
+    scale: np.ndarray,
+    qc: np.ndarray,
+    h: float,
+    foh: bool,
+    noise: bool,
+    dA: np.ndarray,
+    dB: np.ndarray,
+    dqc: np.ndarray,
+    Phi: np.ndarray,
+    G0: np.ndarray,
+    G1: np.ndarray,
+    Qd: np.ndarray,
+    dPhi: np.ndarray,
+    dG0: np.ndarray,
+    dG1: np.ndarray,
+    dQd: np.ndarray,
+) -> None:
+    """As :func:`expm_discretize` for an RC model, from one symmetric eigen-decomposition.
+
+    ``S = D A D^-1 = V diag(lam) V'`` with ``D = diag(scale)``, ``T = D^-1 V``, ``T^-1 = V' D``.
+    A direction ``dA`` (any matrix: a capacity's is not symmetrized by ``D``, which is held at the
+    current point, since ``f(A) = D^-1 f(S) D`` for every ``A``) becomes ``E = T^-1 dA T`` and
+    the Daleckii-Krein theorem [1]_ gives ``d f(A)[dA] = T (f[lam_i, lam_j] o E) T^-1`` with the
+    divided differences ``f[l_i, l_j]`` (``f'(l_i)`` when equal). With ``x = lam h``:
+
+    * ``Phi = e^{Ah}``: ``f[l_i, l_j] = h exp[x_i, x_j]``;
+    * ``h phi1(Ah) B`` and ``h phi2(Ah) B`` (``G0`` is their difference, ``G1`` the second, for
+      FOH; ``G0`` the first for ZOH): ``h^2 exp[0, x_i, x_j]``, ``h^2 exp[0, 0, x_i, x_j]``
+      (``phi1(x) = exp[0, x]``, ``phi2(x) = exp[0, 0, x]``), plus ``f(A) dB``;
+    * ``Qd = T (W o Om) T'`` with ``W = T^-1 Qc T^-T``, ``Om_il = h exp[0, x_i + x_l]``: the
+      derivative of ``int_0^h e^{As} Qc e^{A's} ds`` is ``T (X + X' + (T^-1 dQc T^-T) o Om) T'``
+      with ``X_il = sum_j E_ij W_jl Y_ijl`` and ``Y_ijl = int_0^h (e^{l_i s} - e^{l_j s})/(l_i - l_j)
+      e^{l_l s} ds = h^2 exp[0, x_i + x_l, x_j + x_l]`` (three indices).
+
+    Divided differences of ``exp`` come from :func:`_dd2`, :func:`_dd3`, :func:`_dd4`, accurate
+    to a few ulps for equal, close and distant nodes alike [2]_, so repeated eigenvalues need
+    no special case.
+
+    Parameters
+    ----------
+    scale : ndarray, shape (n,)
+        ``sqrt(capacities)``: ``diag(scale) A diag(scale)^-1`` is symmetric (checked by the caller).
+
+    Other parameters and outputs are those of :func:`expm_discretize`.
+
+    References
+    ----------
+    .. [1] N. J. Higham, *Functions of Matrices*, SIAM, 2008, Theorem 3.11 and section 10.6.
+    .. [2] A. McCurdy, K. C. Ng, B. N. Parlett, "Accurate computation of divided differences of
+       the exponential function", Math. Comp. 43(168), 1984.
+    """
+    n = A.shape[0]
+    p = B.shape[1]
+    q = dA.shape[0]
+    lam, V = symmetric_eigen(A, scale)
+    T = np.empty((n, n))
+    Ti = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            T[i, j] = V[i, j] / scale[i]
+            Ti[j, i] = V[i, j] * scale[i]
+    x = np.empty(n)
+    e = np.empty(n)
+    wg0 = np.empty(n)  # f(lam) of the hold matrix G0 (divided by nothing: includes h)
+    wg1 = np.zeros(n)
+    for i in range(n):
+        x[i] = lam[i] * h
+        em = math.expm1(x[i])
+        e[i] = math.exp(x[i])  # not em + 1, which loses e^x below 1e-17 (relative accuracy of dPhi)
+        w1 = phi1(x[i], em) * h
+        if foh:
+            wg1[i] = phi2(x[i], em) * h
+        wg0[i] = w1 - wg1[i]
+    # divided-difference kernels of Phi and of the hold matrices
+    F0 = np.empty((n, n))
+    Fg0 = np.empty((n, n))
+    Fg1 = np.zeros((n, n))
+    h2 = h * h
+    for i in range(n):
+        for j in range(i, n):
+            F0[i, j] = h * _dd2(x[i], x[j], e[i], e[j])
+            f1 = h2 * _dd3_sorted(0.0, x[i], x[j], 1.0, e[i], e[j])
+            if foh:
+                Fg1[i, j] = h2 * _dd4_00(x[i], x[j], e[i], e[j])
+                Fg1[j, i] = Fg1[i, j]
+            Fg0[i, j] = f1 - Fg1[i, j]
+            F0[j, i] = F0[i, j]
+            Fg0[j, i] = Fg0[i, j]
+    TiB = np.empty((n, p))
+    matmul(Ti, B, TiB)
+    M0 = np.empty((n, p))
+    M1 = np.empty((n, p))
+    for i in range(n):
+        for j in range(p):
+            M0[i, j] = wg0[i] * TiB[i, j]
+            M1[i, j] = wg1[i] * TiB[i, j]
+    matmul(T, M0, G0)
+    if foh:
+        matmul(T, M1, G1)
+    TE = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            TE[i, j] = T[i, j] * e[j]
+    matmul(TE, Ti, Phi)
+    # noise: W, Om, Y and Qd
+    W = np.zeros((n, n))
+    Om = np.zeros((n, n))
+    Y = np.zeros((n, n, n))  # W_jl Y_ijl at [i, j, l]
+    if noise:
+        ee = np.empty((n, n))
+        for i in range(n):
+            for j in range(i, n):
+                acc = 0.0
+                for k in range(n):
+                    acc += Ti[i, k] * qc[k] * Ti[j, k]
+                W[i, j] = acc
+                W[j, i] = acc
+                xs = x[i] + x[j]
+                Om[i, j] = phi1(xs, math.expm1(xs)) * h
+                Om[j, i] = Om[i, j]
+                ee[i, j] = e[i] * e[j]
+                ee[j, i] = ee[i, j]
+        for l in range(n):
+            for i in range(n):
+                for j in range(i, n):
+                    lo = min(x[i], x[j]) + x[l]
+                    hi = max(x[i], x[j]) + x[l]
+                    if hi <= 0.0 and lo <= -SERIES_LIMIT:
+                        # _dd3's recurrence from tables: exp[hi, 0] = Om/h, exp[lo, hi] = e_l F0_ij/h
+                        v = h * (Om[i if x[i] >= x[j] else j, l] - e[l] * F0[i, j]) / (-lo)
+                    else:
+                        v = h2 * _dd3_sorted(0.0, x[i] + x[l], x[j] + x[l], 1.0, ee[i, l], ee[j, l])
+                    Y[i, j, l] = v * W[j, l]
+                    Y[j, i, l] = v * W[i, l]
+        for i in range(n):
+            for j in range(n):
+                TE[i, j] = W[i, j] * Om[i, j]
+        _congruence(T, TE, Qd)
+    else:
+        for i in range(n):
+            for j in range(n):
+                Qd[i, j] = 0.0
+    # The directions that move A (E_d = T^-1 dA_d T, dPhi), the hold matrices and Qd, each kind
+    # at once: n-by-n blocks side by side ("h", shape (n, k n)) or on top of each other ("v",
+    # shape (k n, n)), so that each product is one BLAS call; the others have zero derivatives.
+    movA = np.zeros(q, dtype=np.bool_)
+    movG = np.zeros(q, dtype=np.bool_)
+    movQ = np.zeros(q, dtype=np.bool_)
+    for d in range(q):
+        for i in range(n):
+            for j in range(n):
+                movA[d] = movA[d] or dA[d, i, j] != 0.0
+            for j in range(p):
+                movG[d] = movG[d] or dB[d, i, j] != 0.0
+            movQ[d] = movQ[d] or (noise and dqc[d, i] != 0.0)
+        movG[d] = movG[d] or movA[d]
+        movQ[d] = movQ[d] or (noise and movA[d])
+    sA, qa = _slots(movA)
+    sG, qg = _slots(movG)
+    sQ, qq = _slots(movQ)
+    Eh = _sandwich(Ti, dA, T, sA, qa)
+    # dPhi_d = T (F0 o E_d) T^-1
+    Ph = np.empty((n, qa * n))
+    for i in range(n):
+        for a in range(qa):
+            for j in range(n):
+                Ph[i, a * n + j] = F0[i, j] * Eh[i, a * n + j]
+    # (a BLAS product with an empty side is not defined: each kind only when it has directions)
+    Pv = np.dot(_h2v(np.dot(T, Ph), qa), Ti) if qa else np.empty((0, n))
+    _unstack(Pv, sA, dPhi)
+    # dG_d = T ((Fg o E_d) T^-1 B + diag(wg) T^-1 dB_d)
+    TdB = _sandwich(Ti, dB, np.eye(p), sG, qg)
+    for hold in range(2 if foh else 1):
+        Fg = Fg0 if hold == 0 else Fg1
+        wg = wg0 if hold == 0 else wg1
+        Gv = np.zeros((qg * n, n))
+        for d in range(q):
+            if sA[d] >= 0:
+                a = sA[d]
+                g = sG[d]
+                for i in range(n):
+                    for j in range(n):
+                        Gv[g * n + i, j] = Fg[i, j] * Eh[i, a * n + j]
+        Mv = np.dot(Gv, TiB) if qg and p else np.zeros((qg * n, p))
+        Mh = np.empty((n, qg * p))
+        for g in range(qg):
+            for i in range(n):
+                for j in range(p):
+                    Mh[i, g * p + j] = Mv[g * n + i, j] + wg[i] * TdB[i, g * p + j]
+        Gv = _h2v(np.dot(T, Mh), qg) if qg and p else np.zeros((qg * n, p))
+        _unstack(Gv, sG, dG0 if hold == 0 else dG1)
+    # dQd_d = T (X_d + X_d' + (T^-1 diag(dqc_d) T^-T) o Om) T' with X_d[i, l] = sum_j E_d[i, j] W_jl Y_ijl
+    Zh = np.zeros((n, qq * n))
+    for d in range(q):
+        if sQ[d] < 0:
+            continue
+        c0 = sQ[d] * n
+        if sA[d] >= 0:
+            a0 = sA[d] * n
+            for i in range(n):
+                for j in range(n):
+                    c = Eh[i, a0 + j]
+                    if c != 0.0:
+                        for l in range(n):
+                            Zh[i, c0 + l] += c * Y[i, j, l]
+            for i in range(n):
+                for j in range(i + 1, n):
+                    v = Zh[i, c0 + j] + Zh[j, c0 + i]
+                    Zh[i, c0 + j] = v
+                    Zh[j, c0 + i] = v
+                Zh[i, c0 + i] *= 2.0
+        if movQ[d]:
+            for k in range(n):
+                c = dqc[d, k]
+                if c != 0.0:
+                    for i in range(n):
+                        for j in range(n):
+                            Zh[i, c0 + j] += c * Ti[i, k] * Ti[j, k] * Om[i, j]
+    Qv = np.dot(_h2v(np.dot(T, Zh), qq), np.ascontiguousarray(T.T)) if qq else np.empty((0, n))
+    for g in range(qq):
+        for i in range(n):
+            for j in range(i + 1, n):
+                v = 0.5 * (Qv[g * n + i, j] + Qv[g * n + j, i])
+                Qv[g * n + i, j] = v
+                Qv[g * n + j, i] = v
+    _unstack(Qv, sQ, dQd)
+
+
+@njit(cache=True, error_model="numpy")
+def _slots(moved: np.ndarray) -> tuple[np.ndarray, int]:
+    """The place of each moved direction in a stack of the moved ones (-1 for the others), and their number."""
+    slot = np.full(moved.shape[0], -1, dtype=np.int64)
+    k = 0
+    for d in range(moved.shape[0]):
+        if moved[d]:
+            slot[d] = k
+            k += 1
+    return slot, k
+
+
+@njit(cache=True, error_model="numpy")
+def _unstack(Xv: np.ndarray, slot: np.ndarray, out: np.ndarray) -> None:
+    """``out[d]`` = block ``slot[d]`` of the vertical stack ``Xv`` (zero where ``slot[d] < 0``)."""
+    n, m = out.shape[1], out.shape[2]
+    for d in range(out.shape[0]):
+        s = slot[d]
+        for i in range(n):
+            for j in range(m):
+                out[d, i, j] = Xv[s * n + i, j] if s >= 0 else 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _sandwich(L: np.ndarray, D: np.ndarray, R: np.ndarray, slot: np.ndarray, k: int) -> np.ndarray:
+    """``L D_d R`` for the ``D_d`` of a stack (q, n, m) with ``slot[d] >= 0``, side by side in that order (n', k m').
+
+    Only the non-zero rows of each ``D_d`` are visited: a parameter's derivative of ``A`` or
+    ``B`` has one (a capacity) or a few (a resistance) of them, or none (a noise level).
+    """
+    q, n, m = D.shape
+    r = R.shape[1]
+    out = np.zeros((L.shape[0], k * r))
+    row = np.empty(r)
+    for d in range(q):
+        if slot[d] < 0:
+            continue
+        c0 = slot[d] * r
+        for a in range(n):
+            nz = False
+            for b in range(m):
+                nz = nz or D[d, a, b] != 0.0
+            if not nz:
+                continue
+            for j in range(r):
+                row[j] = 0.0
+            for b in range(m):
+                c = D[d, a, b]
+                if c != 0.0:
+                    for j in range(r):
+                        row[j] += c * R[b, j]
+            for i in range(L.shape[0]):
+                c = L[i, a]
+                for j in range(r):
+                    out[i, c0 + j] += c * row[j]
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _h2v(Xh: np.ndarray, k: int) -> np.ndarray:
+    """``k`` blocks side by side ``(n, k m)`` to on top of each other ``(k n, m)``."""
+    n = Xh.shape[0]
+    m = Xh.shape[1] // k if k else 0
+    Xv = np.empty((k * n, m))
+    for d in range(k):
+        for i in range(n):
+            for j in range(m):
+                Xv[d * n + i, j] = Xh[i, d * m + j]
+    return Xv
+
+
+@njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def _congruence(T: np.ndarray, Z: np.ndarray, out: np.ndarray) -> None:
+    """``out = T Z T'`` for symmetric ``Z``, exactly symmetric."""
+    n = T.shape[0]
+    TZ = np.empty((n, n))
+    matmul(T, Z, TZ)
+    for i in range(n):
+        for j in range(i, n):
+            acc = 0.0
+            for k in range(n):
+                acc += TZ[i, k] * T[j, k]
+            out[i, j] = acc
+            out[j, i] = acc
+
+
 @njit(cache=True, error_model="numpy")
 def _symmetrize(X: np.ndarray) -> None:
     for i in range(X.shape[0]):
@@ -627,14 +1043,18 @@ def interval_derivatives(
     keys: np.ndarray,
     qc: np.ndarray,
     dqc: np.ndarray,
+    scale: np.ndarray,
     foh: bool,
     noise: bool,
 ) -> tuple:
-    """As :func:`interval_matrices` by matrix exponentials, with the derivatives along ``q`` directions.
+    """As :func:`interval_matrices`, with the derivatives along ``q`` directions.
 
     Parameters
     ----------
     dA0, dN, dB0, dM, dqc : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p), (q, n)
+    scale : ndarray, shape (n,) or (0,)
+        ``sqrt(capacities)`` when it symmetrizes every ``A`` (an RC network:
+        :func:`spectral_derivatives`); empty for matrix exponentials (:func:`expm_discretize`).
 
     Returns
     -------
@@ -666,8 +1086,14 @@ def interval_derivatives(
                             dA[d, i, j] += mf * dN[d, f, i, j]
                         for j in range(p):
                             dB[d, i, j] += mf * dM[d, f, i, j]
-        expm_discretize(
-            A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k], dG1[k],
-            dQd[k],
-        )  # fmt: skip
+        if scale.shape[0] == n:
+            spectral_derivatives(
+                A, B, scale, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k],
+                dG0[k], dG1[k], dQd[k],
+            )  # fmt: skip
+        else:
+            expm_discretize(
+                A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k],
+                dG1[k], dQd[k],
+            )  # fmt: skip
     return (Phi, G0, G1, Qd), (dPhi, dG0, dG1, dQd)

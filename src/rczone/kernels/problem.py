@@ -381,7 +381,9 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
     else:
         noise = kind != LS
         if q:
-            mats, dmats = interval_derivatives(A0, N, B0, M, dA0, dN, dB0, dM, keys, qc, dqc, foh, noise)
+            mats, dmats = interval_derivatives(
+                A0, N, B0, M, dA0, dN, dB0, dM, keys, qc, dqc, np.sqrt(cap), foh, noise
+            )
         else:
             mats = interval_matrices(A0, N, B0, M, keys, qc, np.sqrt(cap), foh, noise)
             dmats = no_sensitivities(keys.shape[0], n, B0.shape[1])
