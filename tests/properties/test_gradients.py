@@ -140,13 +140,15 @@ def central_difference(obj: Objective, eta: np.ndarray, h: float = 1e-6) -> np.n
     return g
 
 
-def problem(seed: int, n_cap: int, n_massless: int, n_outputs: int, method: str, hold: str) -> tuple:
+def problem(
+    seed: int, n_cap: int, n_massless: int, n_outputs: int, method: str, hold: str, n_flows: int = 1
+) -> tuple:
     rng = np.random.default_rng(seed)
-    net = random_network(rng, n_cap, n_massless, 2, min(n_outputs, n_cap + n_massless))
+    net = random_network(rng, n_cap, n_massless, 2, min(n_outputs, n_cap + n_massless), n_flows)
     ss = net.state_space()
     N = 40
     t = np.cumsum(np.r_[0.0, rng.choice([300.0, 300.0, 900.0], N - 1)])
-    m = np.round(rng.uniform(0, 0.3, (N, 1)), 1)
+    m = np.round(rng.uniform(0, 0.3, (N, n_flows)), 1)
     u = 20 + 3 * rng.standard_normal((N, ss.n_inputs))
     y = simulate(ss, t, u, m).y + 0.05 * rng.standard_normal((N, len(net.outputs)))
     y[rng.integers(1, N, 4), rng.integers(0, len(net.outputs), 4)] = np.nan
@@ -195,3 +197,14 @@ def test_the_complex_step_oracle_is_the_reference_cost():
     values = {k: complex(v) for k, v in obj.spec.values(theta).items()}
     ref = obj.reference_cost(theta)
     assert abs(complex_cost(obj, values).real - ref) <= 1e-10 * abs(ref)
+
+
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.integers(0, 2**32 - 1), st.integers(2, 4), st.integers(0, 1), st.sampled_from(["zoh", "foh"]))
+def test_gradient_with_two_flows_equals_complex_step(seed, n_cap, n_massless, hold):
+    """Two supply-air flows (many distinct ``(dt, m1, m2)``): the spectral derivatives of every interval."""
+    obj, eta = problem(seed, n_cap, n_massless, 2, "ml", hold, n_flows=2)
+    assert obj.data.intervals[0].shape[0] > 10
+    _, grad = obj.value_and_gradient(eta)
+    cs = complex_step_gradient(obj, eta)
+    np.testing.assert_allclose(grad, cs, rtol=0, atol=1e-7 * max(np.abs(cs).max(), 1e-12))
