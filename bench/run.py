@@ -326,6 +326,7 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
             lambda a, b: abs(a - b) / abs(b),
         )
     )
+    out += two_zone_gradient_cases()
     arma = problems.armadillo_data()
     if arma is not None:
         est = {**problems.PEER_TRUTH, "x0_Tw": 26.594539, "sigma_w_Tw": problems.PEER_NOISE["sigma_w_Tw"]}
@@ -371,6 +372,46 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
             )
         )
     return out
+
+
+def two_zone_gradient_cases() -> list[Case]:
+    """Issue 12: value and exact gradient of the joint two-zone virtual building (many distinct intervals)."""
+    from rczone.calibrate import dataset
+    from rczone.estimation import engines
+    from rczone.estimation.costs import Objective
+    from rczone.estimation.fit import default_free
+    from rczone.estimation.parameters import make_spec
+    from rczone.models import load_model
+    from rczone.virtual import generate_multizone_night
+
+    zm = load_model(HERE.parent / "validation" / "models" / "virtual_two_zones.toml")
+    net, data = zm.network, dataset(zm, generate_multizone_night(seed=1))
+    spec = make_spec(net, list(default_free(net, "ml")))
+    obj = Objective(net, data, spec, "ml")
+    eta = spec.to_eta(spec.start)
+    spectral = engines.interval_derivatives
+
+    def expm_route():
+        # the same engine with the matrix-exponential (Fréchet) derivatives of every interval
+        engines.interval_derivatives = lambda *a: spectral(*a[:11], np.empty(0), *a[12:])
+        try:
+            return obj.value_and_gradient(eta)
+        finally:
+            engines.interval_derivatives = spectral
+
+    return [
+        Case(
+            "grad_2zone_virtual",
+            f"-log L and its exact gradient (Objective.value_and_gradient, engine {obj.gradient_engine!r}) of the"
+            f" joint two-zone virtual building: {net.n_states} states, 2 outputs, 2 flows, {spec.n_free} free,"
+            f" {data.n_samples} samples, {data.intervals[0].shape[0]} distinct (dt, m1, m2); derivatives of the"
+            " discretization by the symmetric eigen-decomposition; plain = the same with the matrix-exponential"
+            " Fréchet derivatives",
+            lambda: obj.value_and_gradient(eta),
+            expm_route,
+            lambda a, b: max(abs(a[0] - b[0]) / abs(b[0]), rel(a[1], b[1])),
+        )
+    ]
 
 
 def plain_problem(net, data, values: dict) -> tuple:

@@ -155,6 +155,15 @@ def process_noise_covariance(A: np.ndarray, Qc: np.ndarray, dt: float) -> np.nda
 # ``expm1`` and a short series where ``l dt`` is tiny, so they are accurate to rounding for
 # slow and for stiff modes alike (unlike Van Loan's block exponential, which contains
 # ``e^{-A dt}`` and loses everything for stiff models over long steps).
+#
+# Derivatives (compiled only, :func:`rczone.kernels.discretize.spectral_derivatives`). Since
+# ``f(A) = Cap^{-1/2} f(S) Cap^{1/2}`` for any ``A`` with the scale held fixed, a direction ``dA``
+# (symmetrizable or not: a capacity's is not) enters as ``E = T^{-1} dA T``, and the
+# Daleckii-Krein theorem gives ``d f(A) = T (f[l_i, l_j] o E) T^{-1}`` with the divided
+# differences of ``f``. With ``x = l dt``: ``e^{l dt}[l_i, l_j] = dt exp[x_i, x_j]``,
+# ``phi1[.] = dt^2 exp[0, x_i, x_j]``, ``phi2[.] = dt^2 exp[0, 0, x_i, x_j]`` (``phi1(x) = exp[0, x]``,
+# ``phi2(x) = exp[0, 0, x]``), and ``dQd = T (X + X' + (T^{-1} dQc T^{-T}) o Om) T'`` with
+# ``X_il = sum_j E_ij W_jl dt^2 exp[0, x_i + x_l, x_j + x_l]`` and ``Om_ij = dt exp[0, x_i + x_j]``.
 
 #: Relative asymmetry of ``Cap A`` (and of every ``Cap N_k``) tolerated by :func:`symmetrizing_scale`.
 SYMMETRY_RTOL = 1e-12
