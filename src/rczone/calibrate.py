@@ -136,8 +136,10 @@ class Calibration:
     model : ZoneModel
         The fitted model (structure and conventions of the input model, the estimates as values).
     open_loop : OpenLoopError
-        Open-loop simulation of the fitted model on the calibration data (from the estimated
-        initial state where the fit estimated one).
+        Open-loop simulation of the fitted model on the calibration data. The unmeasured nodes
+        start where the data say: at the initial state an LS fit estimates with the parameters, and
+        for ML and MAP at :func:`~rczone.estimation.validation.estimate_initial_state` (the
+        filter itself needs no estimate).
     residuals : ResidualTest
         Whiteness of the open-loop error (not expected to be white; see the innovations for ML).
     innovations : ResidualAnalysis or None
@@ -258,6 +260,8 @@ def calibrate(
         covariance=parameter_covariance(res),
         **dict(provenance or {}),
     )
+    if method != "ls":  # as LS estimates them: the unmeasured nodes start where the data say
+        initial = _estimated_start(fitted, values, data, has_noise=True).values
     ol = open_loop_error(net, {**theta, **initial}, data)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = None

@@ -104,7 +104,10 @@ def estimate_initial_state(
     conditional steady state of :func:`~rczone.estimation.engines.auto_initial_state` and
     measurement errors of ``noise_sd`` per output, neglecting process noise: regularized linear
     least squares. The prior keeps directions the data do not determine (two boards of one wall
-    moving in opposite directions) at the steady state. Estimating the initial condition of an
+    moving in opposite directions) at the steady state. The open-loop error is mostly model error
+    and accumulated process noise, not measurement noise, so a second pass weighs each output by
+    the larger of ``noise_sd`` and the RMS error the first estimate leaves (the standard deviations
+    stay optimistic where that error is autocorrelated). Estimating the initial condition of an
     open-loop simulation on validation data is the usual practice of model validation
     (Ljung 1999, section 16.6): a slow node's unknown starting temperature otherwise shows as a
     bias that lasts its time constant.
@@ -138,14 +141,17 @@ def estimate_initial_state(
         return InitialStateEstimate(dict(zip(names, map(float, x_ss), strict=True)), steady, {})
     eye = np.eye(ss.n_states)
     psi = np.stack([simulate(x_ss + eye[i]) - y0 for i in free], axis=-1)  # (N, ny, k)
-    w = 1.0 / np.asarray(noise_sd, dtype=float)
-    e = (data.y - y0) * w
-    ok = np.isfinite(e)
-    a = (psi * w[None, :, None])[ok]
     p = np.array([1.0 / prior_sd[ss.state_names[i]] for i in free])
-    lhs = np.vstack([a, np.diag(p)])
-    rhs = np.concatenate([e[ok], np.zeros(len(free))])
-    delta = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+    level = np.asarray(noise_sd, dtype=float)
+    for _ in range(2):  # the second pass weighs the outputs by what the start leaves unexplained
+        w = 1.0 / level
+        e = (data.y - y0) * w
+        ok = np.isfinite(e)
+        lhs = np.vstack([(psi * w[None, :, None])[ok], np.diag(p)])
+        rhs = np.concatenate([e[ok], np.zeros(len(free))])
+        delta = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+        rest = data.y - y0 - psi @ delta
+        level = np.maximum(level, np.sqrt(np.nanmean(rest**2, axis=0)))
     cov = np.linalg.pinv(lhs.T @ lhs)
     x = x_ss.copy()
     x[free] += delta
