@@ -27,8 +27,11 @@ from rczone.estimation.innovations import (
     open_loop_analysis,
 )
 from rczone.estimation.validation import (
+    INITIAL_STATE_PRIOR_K,
+    InitialStateEstimate,
     OpenLoopError,
     ResidualTest,
+    estimate_initial_state,
     ljung_box,
     open_loop_error,
 )
@@ -133,8 +136,10 @@ class Calibration:
     model : ZoneModel
         The fitted model (structure and conventions of the input model, the estimates as values).
     open_loop : OpenLoopError
-        Open-loop simulation of the fitted model on the calibration data (from the estimated
-        initial state where the fit estimated one).
+        Open-loop simulation of the fitted model on the calibration data. The unmeasured nodes
+        start where the data say: at the initial state an LS fit estimates with the parameters, and
+        for ML and MAP at :func:`~rczone.estimation.validation.estimate_initial_state` (the
+        filter itself needs no estimate).
     residuals : ResidualTest
         Whiteness of the open-loop error (not expected to be white; see the innovations for ML).
     innovations : ResidualAnalysis or None
@@ -255,6 +260,8 @@ def calibrate(
         covariance=parameter_covariance(res),
         **dict(provenance or {}),
     )
+    if method != "ls":  # as LS estimates them: the unmeasured nodes start where the data say
+        initial = _estimated_start(fitted, values, data, has_noise=True).values
     ol = open_loop_error(net, {**theta, **initial}, data)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = None
@@ -305,6 +312,9 @@ class Prediction:
         The parts from the noise (or the fit's RMSE) and from the estimates' covariance (NaN: none).
     steps : int, optional
         Steps ahead; None for open loop.
+    initial_state : InitialStateEstimate, optional
+        Open loop: the unmeasured nodes' initial temperatures estimated from the data (None when
+        they start at the steady state).
     """
 
     t: np.ndarray
@@ -316,6 +326,7 @@ class Prediction:
     sd_noise: np.ndarray | None = None
     sd_parameters: np.ndarray | None = None
     steps: int | None = None
+    initial_state: InitialStateEstimate | None = None
 
     @property
     def horizon(self) -> str:
@@ -386,6 +397,7 @@ def prediction(
     constants: Mapping[str, float] | None = None,
     steps: int | None = None,
     parameters: bool = True,
+    initial_state: str = "estimated",
 ) -> Prediction:
     """Open-loop (or ``steps``-ahead) prediction of ``model`` on data with a two-sigma band.
 
@@ -402,6 +414,13 @@ def prediction(
     steps : int, optional
         Predict ``y[j]`` from the measurements up to ``j - steps`` (Kalman filter; needs the
         model's noise levels). Default: open loop from the first measurement.
+    initial_state : {"estimated", "steady"}
+        Open loop: where the unmeasured nodes start. ``"estimated"`` (default): their initial
+        temperatures estimated from these data around the conditional steady state
+        (:func:`~rczone.estimation.validation.estimate_initial_state`, prior standard deviation
+        the model's ``sigma_x0`` or 1 K), and the band starts from the estimate's uncertainty;
+        ``"steady"``: at the steady state for the first sample's inputs, which shows a slow node's
+        unknown start as a bias lasting its time constant.
     """
     from rczone.estimation.forecast import noise_band, parameter_sd
 
@@ -415,12 +434,20 @@ def prediction(
             f"a {steps}-step prediction needs the model's noise levels; fit the model by ML"
             " (rczone fit --method ml --save-model ...) or predict open loop"
         )
+    if initial_state not in INITIAL_STATES:
+        raise DataError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
+    start = None
+    if steps is None and initial_state == "estimated":
+        start = _estimated_start(zm, values, data, has_noise)
+        values.update(start.values)
+        if has_noise:
+            values.update({f"sigma_x0_{k.removeprefix('x0_')}": v for k, v in start.sd.items()})
     sources = []
     if has_noise:
         y_hat, sd = noise_band(net, values, data, steps)
         sources.append("the model's noise levels")
     else:
-        y_hat = open_loop_error(net, dict(zm.theta), data).y_hat
+        y_hat = open_loop_error(net, {**zm.theta, **values}, data).y_hat
         rmse = zm.provenance.get("rmse_K") if zm.provenance.get("method") == "ls" else None
         if isinstance(rmse, (int, float)) and np.isfinite(rmse):
             sd = np.full_like(y_hat, float(rmse))
@@ -448,7 +475,30 @@ def prediction(
     source = (
         " and ".join(sources) if sources else "none: the model has no noise levels (fit it by ML for a band)"
     )
-    return Prediction(data.t, data.y, y_hat, total, net.outputs, source, sd, sd_par, steps)
+    return Prediction(data.t, data.y, y_hat, total, net.outputs, source, sd, sd_par, steps, start)
+
+
+#: Where an open-loop prediction starts its unmeasured nodes (:func:`prediction`).
+INITIAL_STATES = ("estimated", "steady")
+
+
+def _estimated_start(zm: ZoneModel, values: Mapping[str, float], data: Dataset, has_noise: bool):
+    """The unmeasured nodes' initial temperatures for an open-loop prediction on ``data``."""
+    from rczone.estimation.parameters import measurement_noise_names
+
+    net = zm.network
+    if has_noise:
+        noise = [values[n] for n in measurement_noise_names(net.outputs)]
+    else:
+        rmse = zm.provenance.get("rmse_K")
+        level = float(rmse) if isinstance(rmse, (int, float)) and math.isfinite(rmse) and rmse > 0 else 0.1
+        noise = [level] * len(net.outputs)
+    noise = [max(float(v), 1e-3) for v in noise]
+    prior = {
+        s: float(values.get(f"sigma_x0_{s}", INITIAL_STATE_PRIOR_K)) or INITIAL_STATE_PRIOR_K
+        for s in net.state_names
+    }
+    return estimate_initial_state(net, values, data, noise, prior)
 
 
 def noise_values(zm: ZoneModel) -> dict[str, float]:

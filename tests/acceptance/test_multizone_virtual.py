@@ -39,7 +39,7 @@ from tests.acceptance.multizone_truth import (
 
 MODEL = Path(__file__).resolve().parents[2] / "validation" / "models" / "virtual_two_zones.toml"
 SEED = 1
-#: Parameters whose recovery within 15 % is claimed (see docs/multizone-draft-virtual.md).
+#: Parameters whose recovery within 15 % is claimed (see docs/multizone.md).
 TOLERANCE = 0.15
 
 

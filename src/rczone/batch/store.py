@@ -47,7 +47,7 @@ _HELD_GUARD = threading.Lock()
 
 #: Columns of a row and the JSON types they hold (others hold numbers or null).
 TEXT = ("key", "zone", "method", "model", "source", "status", "error", "fingerprint", "flags")
-FLAGS = ("converged",)
+FLAGS = ("converged", "trustworthy")
 COUNTS = ("n_evals",)
 STATUSES = ("ok", "failed")
 

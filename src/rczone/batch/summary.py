@@ -27,6 +27,8 @@ def summarize(df: pd.DataFrame) -> dict:
         "zones": int(df["zone"].nunique()) if len(df) else 0,
         "ok": int((df["status"] == "ok").sum()) if len(df) else 0,
         "failed": int((df["status"] != "ok").sum()) if len(df) else 0,
+        # finished, but flagged (an estimate at a bound, no standard error, starts that disagree)
+        "flagged": int((ok["trustworthy"] == False).sum()) if "trustworthy" in ok else 0,  # noqa: E712
         "failures": [
             {"zone": r.zone, "method": r.method, "error": r.error}
             for r in df[df["status"] != "ok"].itertuples()

@@ -86,6 +86,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
             fit_rmse_K=r.rmse_K,
             cost=r.cost,
             converged=bool(r.converged),
+            trustworthy=bool(r.trustworthy),
             n_evals=int(r.n_evals),
             flags="; ".join(r.flags),
         )

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from rczone.cli.common import EXIT_INFRASTRUCTURE as EXIT_TASKS_LOST
-from rczone.cli.common import EXIT_ZONES_FAILED
+from rczone.cli.common import EXIT_UNTRUSTED, EXIT_ZONES_FAILED
 from rczone.cli.main import app
 
 
@@ -94,3 +94,9 @@ def fit_many(
         raise typer.Exit(EXIT_TASKS_LOST)
     if summary["failed"]:
         raise typer.Exit(EXIT_ZONES_FAILED)
+    if summary["flagged"]:
+        say.print(
+            f"[yellow]{summary['flagged']} calibration(s) finished but are flagged untrustworthy[/]"
+            " (column 'flags' of the results: an estimate at a bound, no standard error, or starts that disagree)"
+        )
+        raise typer.Exit(EXIT_UNTRUSTED)

@@ -390,6 +390,14 @@ def predict(
             " by ML); default open loop.",
         ),
     ] = None,
+    initial_state: Annotated[
+        str,
+        typer.Option(
+            "--initial-state",
+            help="Open loop: start the unmeasured nodes (walls, furniture) at temperatures estimated from"
+            " DATA ('estimated') or at the steady state for the first sample ('steady').",
+        ),
+    ] = "estimated",
 ) -> None:
     """Predict DATA with a model, open loop or k steps ahead: the error, the series and a 2-sigma band.
 
@@ -406,8 +414,18 @@ def predict(
     zm = model(model_file)
     frame = read_frame(data, column_map, zm)
     label = data_label(data)
-    pred = prediction(zm, frame, constants(const), steps=steps)
+    pred = prediction(zm, frame, constants(const), steps=steps, initial_state=initial_state)
     console = out_console(json_out)
+    start = pred.initial_state
+    if start is not None and start.sd:
+        console.print(
+            "initial temperatures of the unmeasured nodes, estimated from the data (steady state for the"
+            " first sample in brackets): "
+            + ", ".join(
+                f"{esc(k.removeprefix('x0_'))} {start.values[k]:.2f} ({start.steady[k]:.2f}) ± {sd:.2f} K"
+                for k, sd in start.sd.items()
+            )
+        )
     for j, o in enumerate(zm.network.outputs):
         console.print(
             f"{esc(label)}: {esc(o)} {pred.horizon} RMSE {pred.rmse_K[j]:.3f} K, max error {pred.max_abs_K[j]:.3f} K;"
@@ -436,6 +454,17 @@ def predict(
                 "band": pred.band_source,
                 "horizon": pred.horizon,
                 "steps": pred.steps,
+                "initial_state": {
+                    k.removeprefix("x0_"): {
+                        "estimate_degC": v,
+                        "steady_degC": start.steady[k],
+                        "sd_K": start.sd[k],
+                    }
+                    for k, v in start.values.items()
+                    if k in start.sd
+                }
+                if start is not None
+                else None,
                 "coverage_2sigma": dict(zip(pred.outputs, map(float, pred.coverage))),
                 "mean_sd_K": {
                     part: {o: float(np.nanmean(a[:, j])) for j, o in enumerate(pred.outputs)}

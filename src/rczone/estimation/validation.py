@@ -12,14 +12,15 @@ References
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.special import chdtrc
 
 from rczone.errors import InputShapeError, ParameterError
-from rczone.estimation.costs import filter_arrays, run_filter, simulate_output
+from rczone.estimation.costs import filter_arrays, initial_state, measured_states, run_filter, simulate_output
 from rczone.estimation.data import Dataset
 from rczone.estimation.innovations import acf, ljung_box_q
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
@@ -60,6 +61,102 @@ def open_loop_error(
         )
     e = data.y - yhat
     return OpenLoopError(data.t, yhat, e, float(np.sqrt(np.nanmean(e**2))), float(np.nanmax(np.abs(e))))
+
+
+#: Prior standard deviation (K) of an unmeasured node's initial temperature around its conditional
+#: steady state, for a model without its own ``sigma_x0_<state>``.
+INITIAL_STATE_PRIOR_K = 1.0
+
+
+@dataclass(frozen=True)
+class InitialStateEstimate:
+    """Initial temperatures of a model's nodes estimated from the data it is to predict.
+
+    Attributes
+    ----------
+    values : dict
+        ``x0_<state>`` of every state: measured states at their first measurement, the others
+        estimated.
+    steady : dict
+        The conditional steady state the unmeasured ones would otherwise start at (``x0_<state>``).
+    sd : dict
+        Posterior standard deviation of each estimated one (``x0_<state>``), K.
+    """
+
+    values: dict[str, float]
+    steady: dict[str, float]
+    sd: dict[str, float]
+
+
+def estimate_initial_state(
+    network: RCNetwork,
+    values: Mapping[str, float],
+    data: Dataset,
+    noise_sd: Sequence[float],
+    prior_sd: Mapping[str, float],
+    hold: str = "zoh",
+) -> InitialStateEstimate:
+    """The unmeasured nodes' initial temperatures that best explain the open-loop error.
+
+    The open-loop output is affine in the initial state, so its response to each unmeasured
+    node's initial temperature is exact from one simulation per node. The estimate is the
+    maximum a posteriori one under the Gaussian prior ``N(x_ss, prior_sd^2)`` around the
+    conditional steady state of :func:`~rczone.estimation.engines.auto_initial_state` and
+    measurement errors of ``noise_sd`` per output, neglecting process noise: regularized linear
+    least squares. The prior keeps directions the data do not determine (two boards of one wall
+    moving in opposite directions) at the steady state. The open-loop error is mostly model error
+    and accumulated process noise, not measurement noise, so a second pass weighs each output by
+    the larger of ``noise_sd`` and the RMS error the first estimate leaves (the standard deviations
+    stay optimistic where that error is autocorrelated). Estimating the initial condition of an
+    open-loop simulation on validation data is the usual practice of model validation
+    (Ljung 1999, section 16.6): a slow node's unknown starting temperature otherwise shows as a
+    bias that lasts its time constant.
+
+    Parameters
+    ----------
+    network : RCNetwork
+    values : mapping
+        Base parameter values (``x0_*`` entries are ignored).
+    data : Dataset
+    noise_sd : sequence of float
+        Standard deviation of each output's error around the simulation, K.
+    prior_sd : mapping
+        State name to the prior standard deviation of its initial temperature, K.
+    """
+    ss = network.state_space({k: v for k, v in values.items() if k in network.free_parameter_names})
+    x_ss = initial_state(ss, {}, data)
+    names = [f"x0_{s}" for s in ss.state_names]
+    measured = measured_states(ss)
+    free = [i for i in range(ss.n_states) if i not in measured]
+    base = {k: v for k, v in values.items() if not k.startswith("x0_")}
+
+    def simulate(x: np.ndarray) -> np.ndarray:
+        return simulate_output(network, {**base, **dict(zip(names, map(float, x), strict=True))}, data, hold)[
+            1
+        ]
+
+    y0 = simulate(x_ss)
+    steady = {names[i]: float(x_ss[i]) for i in free}
+    if not free:
+        return InitialStateEstimate(dict(zip(names, map(float, x_ss), strict=True)), steady, {})
+    eye = np.eye(ss.n_states)
+    psi = np.stack([simulate(x_ss + eye[i]) - y0 for i in free], axis=-1)  # (N, ny, k)
+    p = np.array([1.0 / prior_sd[ss.state_names[i]] for i in free])
+    level = np.asarray(noise_sd, dtype=float)
+    for _ in range(2):  # the second pass weighs the outputs by what the start leaves unexplained
+        w = 1.0 / level
+        e = (data.y - y0) * w
+        ok = np.isfinite(e)
+        lhs = np.vstack([(psi * w[None, :, None])[ok], np.diag(p)])
+        rhs = np.concatenate([e[ok], np.zeros(len(free))])
+        delta = np.linalg.lstsq(lhs, rhs, rcond=None)[0]
+        rest = data.y - y0 - psi @ delta
+        level = np.maximum(level, np.sqrt(np.nanmean(rest**2, axis=0)))
+    cov = np.linalg.pinv(lhs.T @ lhs)
+    x = x_ss.copy()
+    x[free] += delta
+    sd = {names[i]: float(math.sqrt(max(cov[j, j], 0.0))) for j, i in enumerate(free)}
+    return InitialStateEstimate(dict(zip(names, map(float, x), strict=True)), steady, sd)
 
 
 def open_loop_band(

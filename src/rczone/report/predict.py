@@ -65,6 +65,22 @@ def prediction_report(pred: Prediction, data_name: str, model_name: str) -> Repo
         else f"Each sample predicted {pred.horizon} from the Kalman filter's estimate of the state"
     )
     rep.paragraph(f"{what}; band: {html.escape(pred.band_source)}.")
+    start = pred.initial_state
+    if start is not None and start.sd:
+        rep.table(
+            [
+                {
+                    "node": k.removeprefix("x0_"),
+                    "initial temperature (°C)": start.values[k],
+                    "steady state (°C)": start.steady[k],
+                    "std. error (K)": sd,
+                }
+                for k, sd in start.sd.items()
+            ],
+            "Initial temperatures of the unmeasured nodes, estimated from these data (the measured ones"
+            " start at their first measurement)",
+            digits=3,
+        )
     rows = []
     for j, o in enumerate(pred.outputs):
         row = {

@@ -70,7 +70,12 @@ def quick_tasks(tasks: list) -> list[dict]:
 
 
 def write_manifest(folder: Path, zones: list[str], **settings: str) -> Path:
-    text = 'methods = ["ls"]\ndiagnose = false\n' + "".join(f"{k} = {v}\n" for k, v in settings.items())
+    # one local search per zone: the faults are tested, not the search
+    text = (
+        'methods = ["ls"]\ndiagnose = false\n'
+        + ("" if "n_starts" in settings else "n_starts = 1\n")
+        + "".join(f"{k} = {v}\n" for k, v in settings.items())
+    )
     text += "".join(
         f'[[zone]]\nid = "{z}"\nvirtual = {{ season = "autumn", seed = {i} }}\n' for i, z in enumerate(zones)
     )

@@ -131,3 +131,25 @@ def test_starts_that_reach_the_same_cost_but_disagree_are_flagged_and_exit_3(zon
     # the sum is still what the data determine
     est = d["parameters"]
     assert est["Ra"]["estimate"] + est["Rb"]["estimate"] == pytest.approx(1e-2, rel=0.1)
+
+
+def test_fit_many_exits_3_when_a_finished_fit_is_flagged(zone, capsys) -> None:
+    """A batch whose fits all finish, one of them at a bound: the results are written, exit code 3."""
+    (zone / "bounded.toml").write_text(
+        MODEL.replace(
+            'Rie = { value = 2.0, unit = "K/kW" }', 'Rie = { value = 4.0, unit = "K/kW", bounds = [3, 10] }'
+        )
+    )
+    manifest = zone / "batch.toml"
+    manifest.write_text(
+        'methods = ["ls"]\ndiagnose = false\n'
+        '[[zone]]\nid = "right"\ndata = "zone.csv"\nmodel = "zone.toml"\n'
+        '[[zone]]\nid = "bounded"\ndata = "zone.csv"\nmodel = "bounded.toml"\n'
+    )
+    rc = main(["fit-many", str(manifest), "--out", str(zone / "batch"), "--workers", "1"])
+    out = capsys.readouterr().out
+    assert rc == 3 and "1 calibration(s) finished but are flagged untrustworthy" in out
+    rows = pd.read_parquet(zone / "batch" / "results.parquet").set_index("zone")
+    assert rows.loc["right", "trustworthy"] and not rows.loc["bounded", "trustworthy"]
+    assert "at a bound" in rows.loc["bounded", "flags"]
+    assert json.loads((zone / "batch" / "summary.json").read_text())["flagged"] == 1
