@@ -403,7 +403,7 @@ def two_zone_gradient_cases() -> list[Case]:
         Case(
             "grad_2zone_virtual",
             f"-log L and its exact gradient (Objective.value_and_gradient, engine {obj.gradient_engine!r}) of the"
-            f" joint two-zone virtual building: {net.n_states} states, 2 outputs, 2 flows, {spec.n_free} free,"
+            f" joint two-zone virtual building: {len(net.state_names)} states, 2 outputs, 2 flows, {spec.n_free} free,"
             f" {data.n_samples} samples, {data.intervals[0].shape[0]} distinct (dt, m1, m2); derivatives of the"
             " discretization by the symmetric eigen-decomposition; plain = the same with the matrix-exponential"
             " Fréchet derivatives",

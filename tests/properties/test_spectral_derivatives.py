@@ -153,7 +153,9 @@ def test_spectral_derivatives_without_noise_or_directions():
     for q in (0, 2):
         dA = rng.standard_normal((q, 3, 3))
         dB, dqc = rng.standard_normal((q, 3, 2)), rng.uniform(0, 1, (q, 3))
-        (mats, dmats), (mats_x, dmats_x) = both_routes(A, B, scale, np.ones(3), keys, "foh", dA, dB, dqc, False)
+        (mats, dmats), (mats_x, dmats_x) = both_routes(
+            A, B, scale, np.ones(3), keys, "foh", dA, dB, dqc, False
+        )
         for X, Y in zip(mats + dmats, mats_x + dmats_x):
             assert X.shape == Y.shape
             assert relerr(X, Y) <= RTOL or np.abs(Y).max() == 0.0 == np.abs(X).max()

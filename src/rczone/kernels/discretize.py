@@ -732,7 +732,7 @@ def spectral_derivatives(
     # noise: W, Om, Y and Qd
     W = np.zeros((n, n))
     Om = np.zeros((n, n))
-    Y = np.zeros((n, n, n))  # W_jl Y_ijl at [i, j, l]
+    Y = np.zeros((n, n, n))  # W_jm Y_ijm at [i, j, m] (the docstring's l)
     if noise:
         ee = np.empty((n, n))
         for i in range(n):
@@ -747,18 +747,18 @@ def spectral_derivatives(
                 Om[j, i] = Om[i, j]
                 ee[i, j] = e[i] * e[j]
                 ee[j, i] = ee[i, j]
-        for l in range(n):
+        for m in range(n):
             for i in range(n):
                 for j in range(i, n):
-                    lo = min(x[i], x[j]) + x[l]
-                    hi = max(x[i], x[j]) + x[l]
+                    lo = min(x[i], x[j]) + x[m]
+                    hi = max(x[i], x[j]) + x[m]
                     if hi <= 0.0 and lo <= -SERIES_LIMIT:
-                        # _dd3's recurrence from tables: exp[hi, 0] = Om/h, exp[lo, hi] = e_l F0_ij/h
-                        v = h * (Om[i if x[i] >= x[j] else j, l] - e[l] * F0[i, j]) / (-lo)
+                        # _dd3's recurrence from tables: exp[hi, 0] = Om/h, exp[lo, hi] = e_m F0_ij/h
+                        v = h * (Om[i if x[i] >= x[j] else j, m] - e[m] * F0[i, j]) / (-lo)
                     else:
-                        v = h2 * _dd3_sorted(0.0, x[i] + x[l], x[j] + x[l], 1.0, ee[i, l], ee[j, l])
-                    Y[i, j, l] = v * W[j, l]
-                    Y[j, i, l] = v * W[i, l]
+                        v = h2 * _dd3_sorted(0.0, x[i] + x[m], x[j] + x[m], 1.0, ee[i, m], ee[j, m])
+                    Y[i, j, m] = v * W[j, m]
+                    Y[j, i, m] = v * W[i, m]
         for i in range(n):
             for j in range(n):
                 TE[i, j] = W[i, j] * Om[i, j]
@@ -828,8 +828,8 @@ def spectral_derivatives(
                 for j in range(n):
                     c = Eh[i, a0 + j]
                     if c != 0.0:
-                        for l in range(n):
-                            Zh[i, c0 + l] += c * Y[i, j, l]
+                        for m in range(n):
+                            Zh[i, c0 + m] += c * Y[i, j, m]
             for i in range(n):
                 for j in range(i + 1, n):
                     v = Zh[i, c0 + j] + Zh[j, c0 + i]
