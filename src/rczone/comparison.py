@@ -1,4 +1,4 @@
-"""Compare model orders in the time and frequency domain (paper section III, SPEC section 4).
+"""Compare model orders in the time and frequency domain (Lin et al. 2012, section III).
 
 Time domain (the paper's Fig. 4): every model is simulated open loop on the measured inputs of
 a data set and compared with the measured room temperature. Frequency domain (Figs. 5, 6): the
@@ -117,7 +117,7 @@ def compare_time(
 
 @dataclass(frozen=True, eq=False)
 class FrequencyComparison:
-    """Gains and weighted gain errors of models against a reference (SPEC eqs. 6-7).
+    """Gains and weighted gain errors of models against a reference (Lin et al. 2012, eqs. (6)-(7)).
 
     Attributes
     ----------

@@ -32,7 +32,7 @@ class FrequencyResponse:
         return self.H[:, output, self.input_names.index(name)]
 
     def summed(self, groups: Mapping[str, Sequence[str]]) -> FrequencyResponse:
-        """Responses with groups of inputs summed into one (SPEC eq. 6, ``H_sd``).
+        """Responses with groups of inputs summed into one (Lin et al. 2012, eq. (6), ``H_sd``).
 
         ``groups={"Tsd": ["Tf", "Tc", "Tn1", "Tn2", "Thw"]}`` replaces the five surrounding
         temperatures by their common-mode input ``Tsd``; other inputs are kept.
@@ -84,7 +84,7 @@ def frequency_response(ss: LinearStateSpace, freq_hz: np.ndarray) -> FrequencyRe
 def gain_error(
     reference: FrequencyResponse, other: FrequencyResponse, du: Mapping[str, float], output: int = 0
 ) -> dict[str, np.ndarray]:
-    """Weighted gain error ``e_i(w) = | |H_ref,i| - |H_i| | * du_i`` (SPEC eq. 7).
+    """Weighted gain error ``e_i(w) = | |H_ref,i| - |H_i| | * du_i`` (Lin et al. 2012, eq. (7)).
 
     Parameters
     ----------

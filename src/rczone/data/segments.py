@@ -16,8 +16,14 @@ Constant-flow stretches
     A greedy left-to-right scan: a stretch grows while ``max(m) - min(m) <= tolerance``
     over its samples and no sample is NaN; when the next sample breaks it, the stretch
     is kept if it lasts at least ``min_duration`` seconds (first to last sample) and a
-    new one starts at the breaking sample. On such a stretch the model is LTI (SPEC
-    section 2, case (5)).
+    new one starts at the breaking sample. On such a stretch the model is LTI (Lin et al. 2012,
+    eq. (5)).
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from __future__ import annotations

@@ -1,9 +1,15 @@
-"""Identification of R, C and noise parameters from data (SPEC section 5).
+"""Identification of R, C and noise parameters from data (Lin et al. 2012, section IV).
 
 ``fit(network, data, free=[...], method="ls"|"ml"|"map")`` is the entry point; the
 modules hold the pieces: :mod:`parameters` (free set, bounds, theta/eta), :mod:`kalman`
 (filter likelihood), :mod:`costs`, :mod:`optimize`, :mod:`uncertainty`, :mod:`result`,
 :mod:`validation` and a minimal :mod:`data` set.
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from rczone.estimation.costs import Objective, ls_cost, ml_cost

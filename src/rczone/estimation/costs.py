@@ -1,11 +1,11 @@
 """Identification costs: output-error least squares, Kalman likelihood, and MAP.
 
-* ``J_LS`` (SPEC eq. 8): the integral over time of the squared open-loop output error,
+* ``J_LS`` (Lin et al. 2012, eq. (8)): the integral over time of the squared open-loop output error,
   ``int (y - y_hat)^2 dt``, evaluated by the trapezoid rule over the sample times, so
   irregular sampling is weighted correctly. An interval enters only when both of its
   end samples are measured: a gap (NaN in ``y``) removes the intervals touching it, i.e.
   the integral is split at the gap. Units K^2 s.
-* ``J_ML`` (SPEC eq. 9): ``-log L`` of the continuous-discrete stochastic model, by the
+* ``J_ML`` (Lin et al. 2012, eq. (9)): ``-log L`` of the continuous-discrete stochastic model, by the
   Kalman filter (:mod:`rczone.estimation.kalman`); one measurement-noise level per output.
 * ``J_MAP = J_ML + sum_i 0.5 ((log theta_i - log theta_i,construction) / s)^2`` over the
   free resistances and capacitances: a log-normal prior centred on the construction
@@ -26,6 +26,12 @@ compiled filter, or plain NumPy) is decided by the declared rules of
 :mod:`rczone.estimation.engines`; :attr:`Objective.engine` names the one used. Gradients
 (:meth:`Objective.value_and_gradient`) are exact: forward sensitivities through the
 discretization and the filter (or the simulation, for ``J_LS``).
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from __future__ import annotations

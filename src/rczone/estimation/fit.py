@@ -3,6 +3,12 @@
 The top-level function ties the pieces together: default free set, parameter spec, cost, global
 search, uncertainty, the flags that say when a result should not be trusted, and the frozen
 :class:`~rczone.estimation.result.FitResult`. The network is never modified.
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from __future__ import annotations
@@ -139,7 +145,7 @@ def fit(
         several outputs), ``sigma_w_<state>``, ``x0_<state>``, ``sigma_x0_<state>``). Default
         :func:`default_free`.
     method : {"ls", "ml", "map"}
-        Output-error least squares (SPEC eq. 8), Kalman-filter maximum likelihood
+        Output-error least squares (Lin et al. 2012, eq. (8)), Kalman-filter maximum likelihood
         (eq. 9), or ML with a log-normal prior on the free R and C.
     optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
         The local method. ``"auto"``: the compiled Nelder-Mead for a two-state single-output problem

@@ -1,6 +1,6 @@
 """Parallel aggregation of the full-scale construction values into the low-order parameters.
 
-SPEC section 3 / the paper (section III): "the surfaces that are aggregated to form the
+Lin et al. 2012, section III: "the surfaces that are aggregated to form the
 integrated wall are parallel components, so that the total capacitance is the sum of the
 capacitances of each surface and the total conductance the sum of their conductances". The
 paper does not say more; rczone's exact rule is below. ``R*`` is a surface element's series
@@ -25,7 +25,7 @@ The external wall
     ``"all"`` (all of ``C*`` joins ``Cw``, the paper's "sum of the capacitances of each surface"
     read literally) exist for comparison. All three keep every steady-state gain (capacities do
     not enter the DC gain). ``"none"`` has the smallest frequency-domain error; for
-    ``office_241`` the largest weighted error over the band (SPEC eq. 7: ``du`` = 45 F = 25 K for
+    ``office_241`` the largest weighted error over the band (Lin et al. 2012, eq. (7): ``du`` = 45 F = 25 K for
     ``Ts`` and ``To``, 10 F = 5.6 K for ``Tsd``; 1e-5..1e-3 Hz; m = 0.12 kg/s; matched split) of
     the 2nd-order model is, in K:
 
@@ -40,7 +40,7 @@ The external wall
     (sums with the symmetric split: 1.857, 1.881 and 1.913; ``tests/properties/test_models_paper.py``
     checks that ``none`` is smallest).
 
-Second-order model (M(2,5,5), SPEC eq. 4)
+Second-order model (M(2,5,5), Lin et al. 2012, eq. (4))
     ``Cr`` = the full model's ``Cr``; ``Cw`` as above; ``Rwin`` = ``Rwin_low``;
     ``Rw = 1 / sum_wall 1/R*`` (parallel conductances), split into ``R1`` (room side) and
     ``R2`` (far side) with ``R1 + R2 = Rw`` exactly (so the DC gain is kept) in the ratio of the
@@ -57,7 +57,7 @@ Second-order model (M(2,5,5), SPEC eq. 4)
 Reduced second-order model (the paper's section IV)
     ``R1 = R2 = Rw/2`` by definition, ``Rw``, ``Cw``, ``Rwin`` and ``Cr`` as above.
 
-First-order model (M(1,5,3), SPEC eq. 3)
+First-order model (M(1,5,3), Lin et al. 2012, eq. (3))
     ``Rwin`` = ``Rwin_low``, ``Rw`` as above. Its one capacity ``Cr``: the paper says "all the
     capacitive elements of a zone (walls, air, furniture) are aggregated into a single
     capacitor", so ``capacity="all"`` (the default) is ``Cr + sum of every C*`` (external wall
@@ -71,7 +71,7 @@ The Tsd caveat
     (:func:`rczone.models.paper.surroundings_to_tsd`), while in the full model each surrounding
     acts through its own surface's conductance. The low-order models therefore reproduce the
     full model exactly at DC only when the surroundings are equal; what is preserved in general
-    is the DC gain of the *sum* ``H_sd = sum_i H_sd,i`` (SPEC eq. 6), i.e. the response to a
+    is the DC gain of the *sum* ``H_sd = sum_i H_sd,i`` (Lin et al. 2012, eq. (6)), i.e. the response to a
     common change of all five surroundings. For unequal surroundings the low-order steady
     state weights them equally instead of by conductance.
 
@@ -79,6 +79,12 @@ The DC gains kept (from ``To``, from the surroundings summed, from ``Ts`` and fr
 any constant flow ``m``): with ``G_o = 1/Rwin + sum_ext 1/R*``, ``G_w = sum_wall 1/R*`` and
 ``G = G_o + G_w + m cp``, the gains are ``G_o/G``, ``G_w/G``, ``m cp/G`` and ``1/G`` in every
 model.
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from __future__ import annotations

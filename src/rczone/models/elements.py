@@ -1,6 +1,6 @@
 """Construction values of the full-scale model: one 3R2C element per surface, the window, Cr.
 
-The paper's full-scale model (SPEC section 2, MRC(13, 8, 32)) has one 3R2C element per opaque
+The paper's full-scale model (Lin et al. 2012, section II, MRC(13, 8, 32)) has one 3R2C element per opaque
 surface, a window resistor ``Rwin`` between ``Ti`` and ``To`` and the room capacity ``Cr``. Each
 element comes from the surface's construction by a 3R2C split
 (:func:`rczone.models.split.split_construction`), scaled by the surface's area.
@@ -19,6 +19,12 @@ is the door's instantaneous (massless) path: at high frequency the folded elemen
 like its room-side resistance ``k R1`` rather than ``R1`` in parallel with the door.
 ``door="omit"`` leaves the door out (the literal paper model; DC gains then differ from a zone
 with a door).
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from __future__ import annotations

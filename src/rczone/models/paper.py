@@ -1,6 +1,6 @@
 """The paper's zone models as declared RC networks, with construction (ASHRAE) values.
 
-SPEC section 2 (Lin, Middelkoop & Barooah [1]_, section II):
+Lin, Middelkoop & Barooah [1]_, section II:
 
 * :func:`full_scale` - MRC(13, 8, 32): room node ``Ti`` (``Cr``), one 3R2C element per surface
   (nodes ``T{s}w1`` room side, ``T{s}w2``; parameters ``R{s}w1, R{s}w2, R{s}w3, C{s}w1, C{s}w2``),
@@ -135,7 +135,7 @@ def second_order(
     door: str = "fold",
     external_capacity: str = "none",
 ) -> RCNetwork:
-    """The 2nd-order model M(2, 5, 5) (SPEC eq. 4) with aggregated construction values.
+    """The 2nd-order model M(2, 5, 5) (Lin et al. 2012, eq. (4)) with aggregated construction values.
 
     Parameters
     ----------
@@ -210,7 +210,7 @@ def second_order_reduced(
 def first_order(
     geometry: ZoneGeometry | None = None, split: str = "matched", door: str = "fold", capacity: str = "all"
 ) -> RCNetwork:
-    """The 1st-order model M(1, 5, 3) (SPEC eq. 3) with aggregated construction values.
+    """The 1st-order model M(1, 5, 3) (Lin et al. 2012, eq. (3)) with aggregated construction values.
 
     Parameters
     ----------

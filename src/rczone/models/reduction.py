@@ -9,7 +9,7 @@ full model's responses over the band, from the construction data alone (no measu
 
 What is matched
     The room temperature's complex responses ``H_i(jw)`` to the supply temperature ``Ts``, the
-    common-mode surroundings ``Tsd`` (the sum over the five surroundings, SPEC eq. 6) and the
+    common-mode surroundings ``Tsd`` (the sum over the five surroundings, Lin et al. 2012, eq. (6)) and the
     outdoor temperature ``To``, at the flow(s) ``flows`` (default the paper's largest,
     0.12 kg/s), on ``n_freq`` log-spaced frequencies over ``band_hz``. Each error is weighted by
     the input's amplitude ``du_i`` (default the paper's 45 F, 10 F and 45 F, :data:`PAPER_DU_K`),
@@ -128,7 +128,7 @@ def full_response(
 def low_order_response(
     structure: str, values: Mapping[str, float], freq_hz: np.ndarray, m: float
 ) -> dict[str, np.ndarray]:
-    """Closed-form responses of a low-order model (SPEC eqs. 3-4) to ``Ts``, ``Tsd``, ``To``.
+    """Closed-form responses of a low-order model (Lin et al. 2012, eqs. (3)-(4)) to ``Ts``, ``Tsd``, ``To``.
 
     The 2R1C wall ``Ti -R1- Tw -R2- Tsd`` (``Cw`` at ``Tw``) has the room admittance
     ``1 / (R1 + 1/(j w Cw + 1/R2))`` and the transfer admittance

@@ -1,6 +1,6 @@
 """The 3R2C lumping of a layered construction, and the wall's exact frequency response.
 
-A surface of the paper's full-scale model (SPEC section 2) is a 3R-2C element between the room
+A surface of the paper's full-scale model (Lin et al. 2012, section II) is a 3R-2C element between the room
 air and the far-side temperature::
 
     Ti --R1-- T1 --R2-- T2 --R3-- T_far
@@ -47,6 +47,9 @@ References
    nonlinear constrained optimization", Building and Environment 37 (2002) 1255-1265.
 .. [2] H. S. Carslaw, J. C. Jaeger, *Conduction of Heat in Solids*, 2nd ed., Oxford 1959,
    section 1.15 (the quadrupole / transmission-matrix form of a slab).
+.. [3] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from __future__ import annotations

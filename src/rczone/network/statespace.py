@@ -5,8 +5,14 @@
     \\dot x = (A + \\textstyle\\sum_k m_k N_k)\\,x + (B + \\textstyle\\sum_k m_k M_k)\\,u,
     \\qquad y = C x + D u
 
-For a constant flow vector ``m`` the model is LTI (SPEC eq. 5), see
+For a constant flow vector ``m`` the model is LTI (Lin et al. 2012, eq. (5)), see
 :meth:`BilinearStateSpace.lti`.
+
+References
+----------
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal models
+   of zones in multi-zone buildings", Proc. 51st IEEE Conference on Decision and Control, 2012
+   ("Lin et al. 2012").
 """
 
 from __future__ import annotations
@@ -136,6 +142,6 @@ class BilinearStateSpace:
         )
 
     def lti(self, m: float | Sequence[float] | np.ndarray = 0.0) -> LinearStateSpace:
-        """The LTI model at constant flow ``m`` (kg/s), SPEC eq. (5)."""
+        """The LTI model at constant flow ``m`` (kg/s), Lin et al. 2012, eq. (5)."""
         A, B = self.matrices(m)
         return LinearStateSpace(A, B, self.C, self.D, self.state_names, self.input_names, self.output_names)
