@@ -34,6 +34,7 @@ from rczone.estimation.validation import (
     estimate_initial_state,
     ljung_box,
     open_loop_error,
+    per_output_errors,
 )
 from rczone.models import ZoneModel, load_model
 from rczone.network import RCNetwork
@@ -161,13 +162,10 @@ class Calibration:
 
     def output_errors(self) -> list[tuple[str, float, float]]:
         """``(output, open-loop RMSE, largest error)`` of every measured output, K (missing samples skipped)."""
-        out = []
-        for j, o in enumerate(self.model.network.outputs):
-            e = self.open_loop.error[:, j]
-            e = e[np.isfinite(e)]
-            rmse = float(np.sqrt(np.mean(e**2))) if e.size else math.nan
-            out.append((o, rmse, float(np.max(np.abs(e))) if e.size else math.nan))
-        return out
+        rmse, worst = per_output_errors(self.open_loop.error)
+        return [
+            (o, float(r), float(w)) for o, r, w in zip(self.model.network.outputs, rmse, worst, strict=True)
+        ]
 
 
 def calibrate(
@@ -340,14 +338,12 @@ class Prediction:
     @property
     def rmse_K(self) -> np.ndarray:
         """Per output, K (NaN where nothing is measured)."""
-        e = self.error
-        n = np.isfinite(e).sum(axis=0)
-        return np.where(n > 0, np.sqrt(np.nansum(e**2, axis=0) / np.maximum(n, 1)), np.nan)
+        return per_output_errors(self.error)[0]
 
     @property
     def max_abs_K(self) -> np.ndarray:
-        e = np.abs(self.error)
-        return np.array([np.max(c[np.isfinite(c)]) if np.isfinite(c).any() else np.nan for c in e.T])
+        """Per output, K (NaN where nothing is measured)."""
+        return per_output_errors(self.error)[1]
 
     @property
     def coverage(self) -> np.ndarray:

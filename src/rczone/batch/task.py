@@ -20,19 +20,18 @@ from rczone.batch.manifest import Task
 from rczone.errors import RczoneError
 
 
-def load_task_data(task: Task, zm=None) -> pd.DataFrame:
-    """The zone's data frame: the columns the model ``zm`` reads (default: rczone's default columns)."""
+def load_task_data(task: Task, zm) -> pd.DataFrame:
+    """The zone's data frame: the signals the model ``zm`` (a ZoneModel) reads, every output checked."""
     kind = task.source[0]
     if kind == "virtual":
         from rczone.virtual.scenarios import generate_night
 
         _, season, mode, seed = task.source
         return generate_night(season, mode, seed)
-    from rczone.sources import read_frame, read_model_frame
+    from rczone.sources import read_model_frame
 
     _, path, columns = task.source
-    columns = Path(columns) if columns else None
-    return read_frame(Path(path), columns) if zm is None else read_model_frame(Path(path), columns, zm)
+    return read_model_frame(Path(path), Path(columns) if columns else None, zm)
 
 
 def task_model(task: Task):

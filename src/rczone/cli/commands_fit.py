@@ -168,6 +168,7 @@ def fit(
     from rich.console import Console
 
     from rczone.calibrate import calibrate
+    from rczone.estimation.parameters import measurement_noise_names
 
     zm = model(model_name)
     n_starts = _starts(starts)
@@ -244,8 +245,14 @@ def fit(
             open_loop_rmse_K=cal.open_loop.rmse_K,
             open_loop_max_error_K=cal.open_loop.max_abs_K,
             outputs={
-                o: {"open_loop_rmse_K": rmse, "open_loop_max_error_K": worst, "sigma_v_K": _sigma_v(r, o)}
-                for o, rmse, worst in per_output
+                o: {
+                    "open_loop_rmse_K": rmse,
+                    "open_loop_max_error_K": worst,
+                    "sigma_v_K": r.estimates.get(noise),
+                }
+                for (o, rmse, worst), noise in zip(
+                    per_output, measurement_noise_names(zm.network.outputs), strict=True
+                )
             },
             ljung_box_p=cal.residuals.p_value,
             innovations=cal.innovations.to_dict() if cal.innovations is not None else None,
@@ -299,14 +306,6 @@ def _residual_lines(cal) -> list[str]:
             text += f"; largest input cross-correlation {esc(name)} {value:.2f} at {k * an.dt_s / 3600:.2g} h"
         lines.append(text)
     return lines
-
-
-def _sigma_v(r, output: str) -> float | None:
-    """The estimated measurement-noise level of ``output``, K (None when the fit did not estimate it)."""
-    for name in (f"sigma_v_{output}", "sigma_v"):
-        if name in r.estimates:
-            return r.estimates[name]
-    return None
 
 
 def _save(zm, path: Path) -> None:

@@ -31,7 +31,8 @@ def _read(data: Path, column_map: Path | None, zms: list, required: list[str] | 
     for zm in zms:
         signals.update(zm.signal_quantities())
         needed += [s for s in zm.required_signals() if s not in needed]
-    return read_frame(data, column_map, signals, needed if required is None else required)
+    outputs = list(dict.fromkeys(o for zm in zms for o in zm.network.outputs))
+    return read_frame(data, column_map, signals, needed if required is None else required, outputs)
 
 
 def _table(sel, title: str):

@@ -20,11 +20,19 @@ import numpy as np
 from scipy.special import chdtrc
 
 from rczone.errors import InputShapeError, ParameterError
-from rczone.estimation.costs import filter_arrays, initial_state, measured_states, run_filter, simulate_output
+from rczone.estimation.costs import (
+    filter_arrays,
+    initial_state,
+    measured_states,
+    network_theta,
+    run_filter,
+    simulate_output,
+)
 from rczone.estimation.data import Dataset
 from rczone.estimation.innovations import acf, ljung_box_q
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
 from rczone.network import RCNetwork
+from rczone.simulation.simulate import propagate, transition_matrices
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,6 +53,20 @@ class OpenLoopError:
     error: np.ndarray
     rmse_K: float
     max_abs_K: float
+
+
+def per_output_errors(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """RMSE and largest absolute error of each column of ``e`` (NaN entries skipped), K.
+
+    A column without any finite entry gets NaN for both.
+    """
+    e = np.asarray(e, dtype=float)
+    ok = np.isfinite(e)
+    n = ok.sum(axis=0)
+    sq = np.where(ok, e * e, 0.0)
+    rmse = np.where(n > 0, np.sqrt(sq.sum(axis=0) / np.maximum(n, 1)), np.nan)
+    worst = np.where(n > 0, np.where(ok, np.abs(e), -np.inf).max(axis=0), np.nan)
+    return rmse, worst
 
 
 def open_loop_error(
@@ -123,24 +145,23 @@ def estimate_initial_state(
     prior_sd : mapping
         State name to the prior standard deviation of its initial temperature, K.
     """
-    ss = network.state_space({k: v for k, v in values.items() if k in network.free_parameter_names})
+    ss = network.state_space(network_theta(network, values))
     x_ss = initial_state(ss, {}, data)
     names = [f"x0_{s}" for s in ss.state_names]
     measured = measured_states(ss)
     free = [i for i in range(ss.n_states) if i not in measured]
-    base = {k: v for k, v in values.items() if not k.startswith("x0_")}
-
-    def simulate(x: np.ndarray) -> np.ndarray:
-        return simulate_output(network, {**base, **dict(zip(names, map(float, x), strict=True))}, data, hold)[
-            1
-        ]
-
-    y0 = simulate(x_ss)
     steady = {names[i]: float(x_ss[i]) for i in free}
     if not free:
         return InitialStateEstimate(dict(zip(names, map(float, x_ss), strict=True)), steady, {})
+    # discretized once: the output from x_ss, and the response to each unit initial temperature
+    # (inputs zero; the flows still set the matrices)
+    Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
+    y0 = propagate(Phi, G0, G1, which, data.u, x_ss) @ ss.C.T + data.u @ ss.D.T
+    zero = np.zeros_like(data.u)
     eye = np.eye(ss.n_states)
-    psi = np.stack([simulate(x_ss + eye[i]) - y0 for i in free], axis=-1)  # (N, ny, k)
+    psi = np.stack(
+        [propagate(Phi, G0, G1, which, zero, eye[i]) @ ss.C.T for i in free], axis=-1
+    )  # (N, ny, k)
     p = np.array([1.0 / prior_sd[ss.state_names[i]] for i in free])
     level = np.asarray(noise_sd, dtype=float)
     for _ in range(2):  # the second pass weighs the outputs by what the start leaves unexplained

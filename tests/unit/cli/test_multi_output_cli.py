@@ -1,8 +1,8 @@
 """Two coupled rooms from a model file, through every command: fit, predict, diagnose, fit-many.
 
-The data come from the two-room heat balance written out by hand here (not rczone's network
-assembly), discretized exactly by ``scipy.linalg.expm`` with a zero-order hold, with process
-and measurement noise; the fits must recover the known R, C and per-output noise levels.
+The data come from the two-room heat balance written out by hand (``tests.unit.selection.coupled``,
+not rczone's network assembly), discretized exactly by ``scipy.linalg.expm`` with a zero-order
+hold, with process and measurement noise; the fits must recover the known R, C and per-output noise levels.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
-from scipy.linalg import expm
 
 from rczone.cli.main import main
+from tests.unit.selection.coupled import joint_matrices, zoh
 
 #: Starting values deliberately away from the truth (R12 5x, C1 2x off).
 MODEL = """
@@ -54,13 +54,10 @@ def _prbs(rng: np.random.Generator, n: int, lo: int, hi: int) -> np.ndarray:
 def _simulate(n: int = 1440, dt: float = 60.0, seed: int = 1) -> pd.DataFrame:
     """One day at 1 min: C1 dT1/dt = (To-T1)/R1o + (T2-T1)/R12 + Q1, and the same for room 2."""
     rng = np.random.default_rng(seed)
-    c1, c2, r1, r2, r12 = (TRUTH[k] for k in ("C1", "C2", "R1o", "R2o", "R12"))
-    a = np.array([[-(1 / r1 + 1 / r12) / c1, 1 / (r12 * c1)], [1 / (r12 * c2), -(1 / r2 + 1 / r12) / c2]])
-    b = np.array([[1 / (r1 * c1), 1 / c1, 0.0], [1 / (r2 * c2), 0.0, 1 / c2]])  # inputs To, Q1, Q2
-    aug = np.zeros((5, 5))
-    aug[:2, :2], aug[:2, 2:] = a, b
-    e = expm(aug * dt)
-    phi, gam = e[:2, :2], e[:2, 2:]
+    a, b = joint_matrices(
+        {"C1": TRUTH["C1"], "C2": TRUTH["C2"], "R1": TRUTH["R1o"], "R2": TRUTH["R2o"], "R12": TRUTH["R12"]}
+    )
+    phi, gam, _ = zoh(a, b, np.zeros((2, 2)), dt)  # inputs To, Q1, Q2
     t = np.arange(n) * dt
     to = 5 + 3 * np.sin(2 * np.pi * t / 86400)
     q1, q2 = 1500 * _prbs(rng, n, 30, 150), 1200 * _prbs(rng, n, 20, 120)

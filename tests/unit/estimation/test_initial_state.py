@@ -1,7 +1,8 @@
 """Open-loop predictions start their unmeasured nodes where the data say (estimate_initial_state).
 
-Truth by construction: data simulated from a known initial state far from the steady state; the
-estimate must find it, and the prediction started there must reproduce the data.
+Truth by construction: data simulated (by the heat balance written out here and scipy's ``expm``)
+from a known initial state far from the steady state; the estimate must find it, and the
+prediction started there must reproduce the data.
 """
 
 from __future__ import annotations
@@ -11,12 +12,12 @@ import json
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.linalg import expm
 
 from rczone.calibrate import dataset, prediction
 from rczone.cli.main import main
 from rczone.estimation.validation import estimate_initial_state
 from rczone.models import read_model_file
-from rczone.simulation import simulate
 
 MODEL = """
 name = "room and envelope"
@@ -40,6 +41,27 @@ Rea = { value = 10.0, unit = "K/kW" }
 OFFSET_K = 4.0
 
 
+def _simulate(t: np.ndarray, to: np.ndarray, ph: np.ndarray, offset: float) -> tuple[np.ndarray, np.ndarray]:
+    """The two-node heat balance written out here, discretized by ``scipy.linalg.expm`` (ZOH).
+
+    ``Ci dTi/dt = (Te - Ti)/Rie + Ph``, ``Ce dTe/dt = (Ti - Te)/Rie + (To - Te)/Rea``; both nodes at
+    rest for the first sample, then the envelope raised by ``offset``. Returns ``Ti`` and that start.
+    """
+    ci, ce, rie, rea = 2.0e6, 40.0e6, 2.0e-3, 10.0e-3  # the model file's values in SI
+    a = np.array([[-1 / (rie * ci), 1 / (rie * ci)], [1 / (rie * ce), -(1 / rie + 1 / rea) / ce]])
+    b = np.array([[0.0, 1 / ci], [1 / (rea * ce), 0.0]])  # inputs To, Ph
+    aug = np.zeros((4, 4))
+    aug[:2, :2], aug[:2, 2:] = a, b
+    e = expm(aug * (t[1] - t[0]))
+    u = np.column_stack([to, ph])
+    x0 = np.linalg.solve(a, -b @ u[0]) + np.array([0.0, offset])
+    x = np.empty((t.size, 2))
+    x[0] = x0
+    for k in range(t.size - 1):
+        x[k + 1] = e[:2, :2] @ x[k] + e[:2, 2:] @ u[k]
+    return x[:, 0], x0
+
+
 @pytest.fixture(scope="module")
 def zone(tmp_path_factory):
     d = tmp_path_factory.mktemp("x0")
@@ -49,11 +71,7 @@ def zone(tmp_path_factory):
     t = np.arange(0.0, 86400.0, 300.0)
     to = 5 + 3 * np.sin(2 * np.pi * t / 86400.0)
     ph = np.repeat(rng.choice([0.0, 1500.0], t.size // 12 + 1), 12)[: t.size]
-    u = np.column_stack([to, ph])
-    ss = zm.state_space()
-    x_ss = np.linalg.solve(ss.A, -ss.B @ u[0])  # both nodes at rest for the first sample
-    x0 = np.array([x_ss[0], x_ss[1] + OFFSET_K])
-    y = simulate(ss, t, u, x0=x0).y[:, 0]
+    y, x0 = _simulate(t, to, ph, OFFSET_K)
     frame = pd.DataFrame({"time": t, "Ti": y + rng.normal(0, 0.01, t.size), "To": to, "Ph": ph})
     frame.to_csv(d / "zone.csv", index=False)
     return d, zm, frame, x0

@@ -6,7 +6,12 @@ import pytest
 from rczone.errors import ParameterError
 from rczone.estimation import Dataset
 from rczone.estimation.costs import run_filter
-from rczone.estimation.validation import k_step_prediction_error, ljung_box, open_loop_error
+from rczone.estimation.validation import (
+    k_step_prediction_error,
+    ljung_box,
+    open_loop_error,
+    per_output_errors,
+)
 
 from .nets import NET2, data2
 
@@ -88,3 +93,11 @@ def test_a_non_finite_prediction_is_an_error_not_a_perfect_fit(monkeypatch) -> N
     monkeypatch.setattr(validation, "simulate_output", broken)
     with pytest.raises(InputShapeError, match="not finite from sample 0"):
         validation.open_loop_error(NET1, {}, data)
+
+
+def test_per_output_errors_skip_missing_samples_column_by_column():
+    e = np.array([[1.0, np.nan, np.nan], [-3.0, 2.0, np.nan], [np.nan, -0.5, np.nan]])
+    rmse, worst = per_output_errors(e)
+    np.testing.assert_allclose(rmse[:2], [np.sqrt((1 + 9) / 2), np.sqrt((4 + 0.25) / 2)])
+    np.testing.assert_allclose(worst[:2], [3.0, 2.0])
+    assert np.isnan(rmse[2]) and np.isnan(worst[2])  # a column without measurements
