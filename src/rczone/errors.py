@@ -40,6 +40,14 @@ class ModelFileError(DataError):
     """A model file (TOML written by a person, or JSON saved by rczone) cannot be used as given."""
 
 
+def printable(text: str) -> str:
+    """``text`` with control and other unprintable characters escaped, so a message stays one line.
+
+    Names come from user files (a CSV header can hold a newline); ``"a\\nb"`` is shown as ``a\\nb``.
+    """
+    return "".join(ch if ch.isprintable() else repr(ch)[1:-1] for ch in text)
+
+
 def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
     """Return a hint naming the candidates closest to ``name``, or listing them all.
 
@@ -63,6 +71,6 @@ def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
         lowered = {c.lower(): c for c in pool}
         close = [lowered[c] for c in difflib.get_close_matches(name.lower(), lowered, n=n, cutoff=0.5)]
     if close:
-        return "did you mean " + " or ".join(f"'{c}'" for c in close) + "?"
-    shown = ", ".join(pool[:20]) + (" ..." if len(pool) > 20 else "")
+        return "did you mean " + " or ".join(f"'{printable(c)}'" for c in close) + "?"
+    shown = ", ".join(printable(c) for c in pool[:20]) + (" ..." if len(pool) > 20 else "")
     return f"known names: {shown}" if pool else "none are declared"

@@ -42,6 +42,7 @@ References
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -77,6 +78,11 @@ SE_NOT_IDENTIFIABLE = 1.0
 BIAS_IDENTIFIABLE = 0.5
 #: ... and above which it is not identifiable.
 BIAS_NOT_IDENTIFIABLE = 1.0
+#: Relative margin around every threshold. A verdict whose deciding quantity lies within it of a
+#: threshold is *borderline*: another data set of the same kind, or another machine's rounding in the
+#: operating point, could tip it. "Identifiable" is never given on a borderline: each of ``se``, ``b``
+#: and the two changes must clear its threshold by this factor, otherwise the verdict is "weak".
+VERDICT_MARGIN = 0.1
 #: A zone whose difference to a surrounding temperature is typically below this (or varies by less)
 #: sends a heat flow through the resistance between them that an unknown gain can mimic, K.
 STEADY_DIFFERENCE_K = 1.0
@@ -96,7 +102,8 @@ class ParameterVerdict:
     """The verdict on one free parameter, with the evidence and a plain-words reason.
 
     ``value`` is the parameter at the operating point, ``construction`` the model's declared
-    (construction) value.
+    (construction) value. ``borderline`` is true when moving any of the deciding quantities by
+    :data:`VERDICT_MARGIN` could change the verdict; "identifiable" is never borderline.
     """
 
     name: str
@@ -111,6 +118,7 @@ class ParameterVerdict:
     rms_change_tenfold_K: float
     worst_case_bias: float = 0.0
     value: float = math.nan
+    borderline: bool = False
 
     def to_dict(self) -> dict:
         return {k: v for k, v in vars(self).items() if k != "name"}
@@ -605,24 +613,30 @@ def _verdict(
 ) -> ParameterVerdict:
     network = words.network
     tenth, tenfold = changes
-    indistinct = min(tenth, tenfold) < sigma
-    if se < SE_IDENTIFIABLE and bias < BIAS_IDENTIFIABLE and not indistinct:
-        verdict = IDENTIFIABLE
-    elif (
-        se >= SE_NOT_IDENTIFIABLE
-        or bias >= BIAS_NOT_IDENTIFIABLE
-        or (indistinct and se >= SE_IDENTIFIABLE)
-        or max(tenth, tenfold) < sigma
-    ):
-        verdict = NOT_IDENTIFIABLE
-    else:
+    verdict = _rule(se, bias, tenth, tenfold, sigma)
+    # the verdicts of every combination of the quantities moved by the margin either way
+    m = 1.0 + VERDICT_MARGIN
+    nearby = {
+        _rule(se * a, bias * b, tenth * c, tenfold * d, sigma)
+        for a, b, c, d in itertools.product((1 / m, m), repeat=4)
+    }
+    borderline = nearby != {verdict}
+    demoted = verdict == IDENTIFIABLE and borderline
+    if demoted:
         verdict = WEAK
     kind = network.parameters[name].kind
     reasons, advice = [], []
     bounds = parameter_boundaries(network, name)
     sur = [s for s in ind.surroundings if s.name in bounds]
     measured = words.measured
-    if verdict != IDENTIFIABLE:
+    if demoted:
+        reasons.append(
+            f"it meets the rules for identifiable by less than the {VERDICT_MARGIN:.0%} margin"
+            f" (±{_percent(se)}, worst-case shift {_factor(bias)}), so another data set of the same"
+            " kind could fail them"
+        )
+        advice.append("a longer or more strongly forced test would make it clear")
+    elif verdict != IDENTIFIABLE:
         if kind == "resistance" and sur:
             s = max(sur, key=lambda s: s.max_abs_diff_K)
             moved = f" and moved with it (correlation {s.correlation:.2f})" if s.correlation > 0.7 else ""
@@ -693,7 +707,23 @@ def _verdict(
         rms_change_tenfold_K=float(tenfold),
         worst_case_bias=float(bias),
         value=float(words.value[name]),
+        borderline=borderline,
     )
+
+
+def _rule(se: float, bias: float, tenth: float, tenfold: float, sigma: float) -> str:
+    """The verdict from the four quantities (table in the module notes and docs/identifiability.md)."""
+    indistinct = min(tenth, tenfold) < sigma
+    if se < SE_IDENTIFIABLE and bias < BIAS_IDENTIFIABLE and not indistinct:
+        return IDENTIFIABLE
+    if (
+        se >= SE_NOT_IDENTIFIABLE
+        or bias >= BIAS_NOT_IDENTIFIABLE
+        or (indistinct and se >= SE_IDENTIFIABLE)
+        or max(tenth, tenfold) < sigma
+    ):
+        return NOT_IDENTIFIABLE
+    return WEAK
 
 
 def _factor(log_shift: float) -> str:
