@@ -18,6 +18,7 @@ from scipy.stats import multivariate_normal
 
 from rczone.errors import InputShapeError
 from rczone.estimation.kalman import (
+    FilterProblem,
     kalman_filter_arrays,
     kalman_filter_reference,
     kalman_nll,
@@ -113,10 +114,10 @@ def test_scalar_output_nll_equals_dense_mvn(hold: str) -> None:
     R = np.array([[0.05**2]])
     ref = -brute_force_logpdf(y, ss.C, R, hold)
     Phi, G0, G1, Qd, which = stochastic_matrices(ss, T, MFLOW, np.diag(SIG_W**2), hold)
-    out = kalman_filter_arrays(Phi, G0, G1, Qd, which, U, y, X0, P0, ss.C, ss.D, R)
+    out = kalman_filter_arrays(FilterProblem(Phi, G0, G1, Qd, which, U, y, X0, P0, ss.C, ss.D, R))
     assert out.n_obs == 5
     assert out.nll == pytest.approx(ref, abs=1e-10)
-    fast = kalman_nll(Phi, G0, G1, Qd, which, U, y, X0, P0, ss.C, ss.D, R)
+    fast = kalman_nll(FilterProblem(Phi, G0, G1, Qd, which, U, y, X0, P0, ss.C, ss.D, R))
     assert fast == pytest.approx(ref, abs=1e-10)
 
 
@@ -139,12 +140,14 @@ def test_three_outputs_each_missing_on_its_own_equal_dense_mvn(hold: str) -> Non
     R = np.diag([0.05**2, 0.08**2, 0.2**2])
     ref = -brute_force_logpdf(y, C, R, hold, D)
     Phi, G0, G1, Qd, which = stochastic_matrices(ss, T, MFLOW, np.diag(SIG_W**2), hold)
-    twin = kalman_filter_reference(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R)
-    compiled = kalman_filter_arrays(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R)
+    twin = kalman_filter_reference(FilterProblem(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R))
+    compiled = kalman_filter_arrays(FilterProblem(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R))
     assert twin.n_obs == compiled.n_obs == 12
     assert twin.nll == pytest.approx(ref, abs=1e-10)
     assert compiled.nll == pytest.approx(ref, abs=1e-10)
-    assert kalman_nll(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R) == pytest.approx(ref, abs=1e-10)
+    assert kalman_nll(FilterProblem(Phi, G0, G1, Qd, which, U, y, X0, P0, C, D, R)) == pytest.approx(
+        ref, abs=1e-10
+    )
     for a, b in (
         (twin.innovations, compiled.innovations),
         (twin.S, compiled.S),
@@ -161,7 +164,7 @@ def test_correlated_measurement_noise_is_refused() -> None:
     y = np.full((T.size, 2), 20.0)
     for f in (kalman_filter_reference, kalman_filter_arrays):
         with pytest.raises(InputShapeError, match="R must be diagonal"):
-            f(Phi, G0, G1, Qd, which, U, y, X0, P0, np.eye(2), np.zeros((2, 3)), R)
+            f(FilterProblem(Phi, G0, G1, Qd, which, U, y, X0, P0, np.eye(2), np.zeros((2, 3)), R))
 
 
 @pytest.mark.parametrize("dt", [1.0, 600.0, 3600.0])

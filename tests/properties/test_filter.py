@@ -16,11 +16,13 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from rczone.estimation.kalman import (
+    FilterProblem,
     kalman_filter_arrays,
     kalman_filter_reference,
     kalman_nll_rc2,
     stochastic_matrices,
 )
+from rczone.kernels.arrays import Dynamics, FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import modal_matrices
 from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, no_sensitivities, outputs
 from rczone.simulation.discretize import symmetrizing_scale
@@ -72,8 +74,8 @@ def test_compiled_filter_equals_its_numpy_twin(seed, n_cap, n_massless, n_output
     net = random_network(rng, n_cap, n_massless, 2, min(n_outputs, n_cap + n_massless), n_flows)
     ss, t, m, u, y, x0, P0, Qc, R = problem(rng, net, 60)
     args = (*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R)
-    ref = kalman_filter_reference(*args)
-    got = kalman_filter_arrays(*args)
+    ref = kalman_filter_reference(FilterProblem(*args))
+    got = kalman_filter_arrays(FilterProblem(*args))
     assert got.n_obs == ref.n_obs == np.isfinite(y).sum()
     assert got.nll == pytest.approx(ref.nll, rel=RTOL, abs=RTOL)
     for a, b in ((got.innovations, ref.innovations), (got.x_filt, ref.x_filt), (got.x_pred, ref.x_pred)):
@@ -86,16 +88,16 @@ def test_compiled_filter_equals_its_numpy_twin(seed, n_cap, n_massless, n_output
 def _compiled_nll(args: tuple, steady_rtol: float) -> float:
     Phi, G0, G1, Qd, which, u, y, x0, P0, C, D, R = args
     n, p, ny = x0.size, u.shape[1], y.shape[1]
-    nll, _, _, _ = kalman_filter(
-        (Phi, G0, G1, Qd, which.astype(np.int64)),
+    value = kalman_filter(
+        Dynamics(Phi, G0, G1, Qd),
         no_sensitivities(Phi.shape[0], n, p),
-        (C, D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))),
-        (x0, P0, np.empty((0, n)), np.empty((0, n, n))),
-        (u, y),
-        (bool(np.any(G1)), False, steady_rtol),
+        Observation(C, D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))),
+        Prior(x0, P0, np.empty((0, n)), np.empty((0, n, n))),
+        Series(u, y, which.astype(np.int64)),
+        FilterOptions(bool(np.any(G1)), False, steady_rtol),
         outputs(y.shape[0], n, ny, 0, False, False),
     )
-    return nll
+    return value.nll
 
 
 @settings(max_examples=10, deadline=None)
@@ -110,7 +112,7 @@ def test_steady_state_shortcut_changes_nothing_but_rounding(seed, n_cap, n_outpu
     m[300:] = 0.2  # and a new flow from here on
     y[:, 0][rng.integers(0, 400, 10)] = np.nan
     args = (*stochastic_matrices(ss, t, m, Qc, "zoh"), u, y, x0, P0, ss.C, ss.D, R)
-    twin = kalman_filter_reference(*args)
+    twin = kalman_filter_reference(FilterProblem(*args))
     P = twin.P_pred[:250]
     # the case exercises the shortcut: the predicted covariance repeats before the step change
     assume(any(np.abs(P[k + 1] - P[k]).max() <= 1e-14 * np.abs(P[k + 1]).max() for k in range(1, 249)))
@@ -129,7 +131,9 @@ def test_fused_two_state_kernel_equals_the_general_filter(seed, n_massless, hold
     net = random_network(rng, 2, n_massless, 2)
     ss, t, m, u, y, x0, P0, Qc, R = problem(rng, net, 80)
     groups = interval_groups(t, m) if grouped else None
-    general = kalman_filter_arrays(*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R)
+    general = kalman_filter_arrays(
+        FilterProblem(*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R)
+    )
     e = np.full(t.size, np.nan)
     fused = kalman_nll_rc2(ss, t, m, u, y, x0, P0, Qc, R, hold, e, groups)
     assert fused == pytest.approx(general.nll, rel=RTOL, abs=RTOL)
@@ -151,13 +155,16 @@ def test_modal_filter_equals_the_numpy_twin(seed, n_cap, n_massless, n_outputs, 
     ss, t, m, u, y, x0, P0, Qc, R = problem(rng, net, 90)
     m = np.repeat(m[::15], 15, axis=0)[: t.size]  # a damper held for 15 samples at a time
     args = (*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R)
-    ref = kalman_filter_reference(*args)
+    ref = kalman_filter_reference(FilterProblem(*args))
     keys = np.column_stack([np.diff(t), m[:-1]])
     uniq, _, which = unique_rows(keys)
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     modal = modal_matrices(ss.A, ss.N, ss.B, ss.M, uniq, np.diag(Qc).copy(), scale, hold == "foh")
-    nll, n_obs = kalman_filter_modal(
-        modal, scale, which, (ss.C, ss.D, np.diag(R).copy()), (x0, P0), (u, y), hold == "foh"
+    n, p, ny = x0.size, u.shape[1], y.shape[1]
+    obs = Observation(
+        ss.C, ss.D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))
     )
+    prior = Prior(x0, P0, np.empty((0, n)), np.empty((0, n, n)))
+    nll, n_obs = kalman_filter_modal(modal, scale, obs, prior, Series(u, y, which), hold == "foh")
     assert n_obs == ref.n_obs
     assert nll + 0.5 * n_obs * np.log(2 * np.pi) == pytest.approx(ref.nll, rel=RTOL, abs=RTOL)

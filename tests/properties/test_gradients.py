@@ -32,7 +32,7 @@ from hypothesis import strategies as st
 
 from rczone.estimation import Dataset, Objective, make_spec, noise_parameter_names
 from rczone.estimation.engines import measured_states
-from rczone.estimation.kalman import kalman_filter_reference, stochastic_matrices
+from rczone.estimation.kalman import FilterProblem, kalman_filter_reference, stochastic_matrices
 from rczone.network import BilinearStateSpace
 from rczone.network.parameters import evaluate_ties
 from rczone.simulation import simulate
@@ -105,7 +105,7 @@ def complex_cost(obj: Objective, values: dict) -> complex:
     sv = np.array([values[n] for n in noise_parameter_names(net)[: len(net.outputs)]])
     Phi, G0, G1, Qd, which = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2), obj.hold)
     nll = kalman_filter_reference(
-        Phi, G0, G1, Qd, which, data.u, data.y, x0, np.diag(sx**2), ss.C, ss.D, np.diag(sv**2)
+        FilterProblem(Phi, G0, G1, Qd, which, data.u, data.y, x0, np.diag(sx**2), ss.C, ss.D, np.diag(sv**2))
     ).nll
     if obj.method == "map":
         spec = obj.spec

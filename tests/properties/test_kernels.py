@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
-from rczone.estimation.kalman import kalman_filter_reference, kalman_nll_rc2
+from rczone.estimation.kalman import FilterProblem, kalman_filter_reference, kalman_nll_rc2
 from rczone.kernels.propagate import propagate_kernel
 from rczone.kernels.rankone import simulate_rank_one
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
@@ -161,7 +161,9 @@ def reference_nll(ss, t, m, u, y, x0, P0, Qc, R, hold):
         else:
             Phi[k], G0[k], G1[k] = foh(A, B, dt)
         Qd[k] = van_loan_doubling(A, Qc, dt)
-    return kalman_filter_reference(Phi, G0, G1, Qd, np.arange(K), u, y, x0, P0, ss.C, ss.D, R).nll
+    return kalman_filter_reference(
+        FilterProblem(Phi, G0, G1, Qd, np.arange(K), u, y, x0, P0, ss.C, ss.D, R)
+    ).nll
 
 
 def filter_problem(rng: np.random.Generator, p: int, N: int) -> tuple[np.ndarray, ...]:

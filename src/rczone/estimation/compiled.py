@@ -20,6 +20,15 @@ from __future__ import annotations
 import numpy as np
 
 from rczone.estimation.parameters import measurement_noise_names
+from rczone.kernels.arrays import (
+    ConductanceArrays,
+    Penalty,
+    Problem,
+    ProblemConstants,
+    ProblemData,
+    SearchBox,
+    Slots,
+)
 from rczone.kernels.kalman import STEADY_RTOL
 from rczone.kernels.problem import cost_z
 from rczone.network.parameters import proportional_base
@@ -85,8 +94,8 @@ def _slots(objective, names) -> tuple[np.ndarray, np.ndarray] | None:
     return np.array([g[0] for g in got], dtype=np.int64), np.array([g[1] for g in got])
 
 
-def compiled_problem(objective) -> tuple | None:
-    """The problem tuple of an :class:`~rczone.estimation.costs.Objective` for :mod:`rczone.kernels.problem`, or None."""
+def compiled_problem(objective) -> Problem | None:
+    """The packed problem of an :class:`~rczone.estimation.costs.Objective` for :mod:`rczone.kernels.problem`, or None."""
     net, data, spec = objective.network, objective.data, objective.spec
     form = net.conductance_form
     if objective.method not in _KIND or form is None or not _always_valid(objective):
@@ -127,26 +136,28 @@ def compiled_problem(objective) -> tuple | None:
     def c(a, dtype=None):  # writable contiguous copies: one compiled specialization for every caller
         return np.array(a, dtype=dtype, order="C", copy=True)
 
-    return (
+    return Problem(
         _KIND[objective.method],
-        (form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, np.array(form.output_state, dtype=np.int64)),
-        (c(data.t), c(data.m), c(data.u), c(data.y), c(keys), c(which), c(groups)),
-        (*elements[0], *elements[1], *noise[0], *noise[1], *noise[2], x0_idx, x0_k, given),
-        (c(spec.eta_lower), c(spec.eta_upper), c(spec.log, dtype=bool)),
-        (
+        ConductanceArrays(
+            form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, np.array(form.output_state, dtype=np.int64)
+        ),
+        ProblemData(c(data.t), c(data.m), c(data.u), c(data.y), c(keys), c(which), c(groups)),
+        Slots(*elements[0], *elements[1], *noise[0], *noise[1], *noise[2], x0_idx, x0_k, given),
+        SearchBox(c(spec.eta_lower), c(spec.eta_upper), c(spec.log, dtype=bool)),
+        Penalty(
             prior.astype(np.int64),
             np.log(spec.construction[prior]) if prior.size else np.empty(0),
             float(objective.prior_spread),
             float(objective.likelihood_weight),
         ),
-        (objective.hold == "foh", float(SYMMETRY_RTOL), float(STEADY_RTOL), fused),
+        ProblemConstants(objective.hold == "foh", float(SYMMETRY_RTOL), float(STEADY_RTOL), fused),
         np.empty(data.t.shape[0]),
     )
 
 
-def compiled_cost(problem: tuple, eta: np.ndarray) -> float:
+def compiled_cost(problem: Problem, eta: np.ndarray) -> float:
     """The compiled cost at optimizer values ``eta`` (for tests and checks)."""
-    lo, hi, _ = problem[4]
+    lo, hi, _ = problem.box
     f = (np.asarray(eta, dtype=float) - lo) / (hi - lo)
     with np.errstate(divide="ignore"):
         z = np.log(f) - np.log1p(-f)

@@ -62,6 +62,7 @@ from rczone.estimation.engines import (
     trapezoid_sse,
 )
 from rczone.estimation.parameters import ParameterSpec
+from rczone.kernels.arrays import Problem
 from rczone.kernels.problem import cost_theta, evaluate
 from rczone.network import RCNetwork
 
@@ -201,12 +202,14 @@ class Objective:
                 " see rczone.estimation.engines"
             )
         if packed is not None and engine != "rc2-fused":
-            packed = (*packed[:6], (*packed[6][:3], False), packed[7])  # values from the general kernel
+            packed = packed._replace(
+                consts=packed.consts._replace(fused=False)
+            )  # values from the general kernel
         object.__setattr__(self, "engine", engine)
         object.__setattr__(self, "_packed", packed if engine in ("rc2-fused", "compiled") else None)
 
     @property
-    def compiled(self) -> tuple | None:
+    def compiled(self) -> Problem | None:
         """The packed problem of the compiled engines (:mod:`rczone.kernels.problem`), or None."""
         return self._packed
 

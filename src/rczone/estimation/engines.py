@@ -36,11 +36,13 @@ from rczone.errors import ParameterError
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import (
     FilterOutput,
+    FilterProblem,
     kalman_filter_arrays,
     kalman_filter_reference,
     stochastic_matrices,
 )
 from rczone.estimation.parameters import measurement_noise_names
+from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.kalman import (
     STEADY_RTOL,
@@ -182,20 +184,22 @@ def simulate_output(
     return x, x @ ss.C.T + data.u @ ss.D.T
 
 
-def filter_arrays(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> tuple:
-    """The argument tuple of :func:`~rczone.estimation.kalman.kalman_filter_arrays` for ``values`` (NumPy discretization)."""
+def filter_arrays(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+) -> FilterProblem:
+    """The filter problem of ``values`` on ``data`` (NumPy discretization), for :mod:`rczone.estimation.kalman`."""
     ss = network.state_space(network_theta(network, values))
     sw, sx, sv = noise_values(ss, values)
     x0 = initial_state(ss, values, data)
-    Phi, G0, G1, Qd, which = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2), hold)
-    return (Phi, G0, G1, Qd, which, data.u, data.y, x0, np.diag(sx**2), ss.C, ss.D, np.diag(sv**2))
+    dynamics = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2), hold)
+    return FilterProblem(*dynamics, data.u, data.y, x0, np.diag(sx**2), ss.C, ss.D, np.diag(sv**2))
 
 
 def run_filter(
     network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
 ) -> FilterOutput:
     """Kalman filter of the stochastic model with the noise in ``values``, every intermediate result kept."""
-    return kalman_filter_arrays(*filter_arrays(network, values, data, hold))
+    return kalman_filter_arrays(filter_arrays(network, values, data, hold))
 
 
 # ----------------------------------------------------------------------------- the reference engine
@@ -211,7 +215,7 @@ def reference_cost(
         Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
         x = propagate_reference(Phi, G0, G1, which, data.u, x0)
         return trapezoid_sse(data.t, data.y - (x @ ss.C.T + data.u @ ss.D.T))
-    return kalman_filter_reference(*filter_arrays(network, values, data, hold)).nll
+    return kalman_filter_reference(filter_arrays(network, values, data, hold)).nll
 
 
 # ----------------------------------------------------------------------------- the general engine
@@ -329,9 +333,13 @@ def general_cost(
     else:
         if scale is not None and not ls and modal_pays(which, n):
             modal = modal_matrices(A, N, B, M, keys, qc, scale, foh)
-            init = (x0, np.diag(sx**2))
             nll, n_obs = kalman_filter_modal(
-                modal, scale, which, (f(ss.C), f(ss.D), f(r)), init, (f(data.u), f(data.y)), foh
+                modal,
+                scale,
+                Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
+                Prior(x0, np.diag(sx**2), dx0, dP0),
+                Series(f(data.u), f(data.y), which),
+                foh,
             )
             if n_obs < 0:
                 raise np.linalg.LinAlgError(
@@ -344,12 +352,12 @@ def general_cost(
     y = f(data.y, dtype=float)
     outs = outputs(data.n_samples, n, ny, q, ls, False)
     nll, n_obs, g, fim = kalman_filter(
-        (*mats, which),
+        mats,
         dmats,
-        (f(ss.C), f(ss.D), f(r), dC, dD, dr),
-        (x0, np.diag(sx**2), dx0, dP0),
-        (f(data.u, dtype=float), y),
-        (foh, ls, STEADY_RTOL),
+        Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
+        Prior(x0, np.diag(sx**2), dx0, dP0),
+        Series(f(data.u, dtype=float), y, which),
+        FilterOptions(foh, ls, STEADY_RTOL),
         outs,
     )
     if n_obs < 0:
@@ -357,5 +365,5 @@ def general_cost(
     if not ls:
         return float(nll + 0.5 * n_obs * _LOG_2PI), g, fim
     grad, curv = np.zeros(q), np.zeros(q)
-    sse = trapezoid(data.t, outs[0], outs[1], grad, curv)
+    sse = trapezoid(data.t, outs.e, outs.de, grad, curv)
     return float(sse), grad, curv

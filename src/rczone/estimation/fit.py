@@ -46,7 +46,7 @@ def rmse_of(network: RCNetwork, values: Mapping[str, float], data: Dataset, meth
     if method == "ls":
         e = data.y - simulate_output(network, values, data, hold)[1]
     else:
-        e = kalman_innovations_fast(*filter_arrays(network, values, data, hold))
+        e = kalman_innovations_fast(filter_arrays(network, values, data, hold))
     return float(np.sqrt(np.nanmean(e**2)))
 
 

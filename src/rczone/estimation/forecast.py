@@ -76,14 +76,14 @@ def k_step_band(
         raise ParameterError(f"k must be a positive integer (steps ahead), got {k!r}")
     data.check_against(network)
     args = filter_arrays(network, values, data, hold)
-    Phi, G0, G1, Qd, which, u, y, _, _, C, D, R = args
-    out = kalman_filter_arrays(*args)
+    Phi, Qd, which, u, y, C, R = args.Phi, args.Qd, args.which, args.u, args.y, args.C, args.R
+    out = kalman_filter_arrays(args)
     N = y.shape[0]
     y_hat = np.full(y.shape, np.nan)
     sd = np.full(y.shape, np.nan)
     if k >= N:
         return y_hat, sd
-    drive = input_drive(G0, G1, which, u)
+    drive = input_drive(args.G0, args.G1, which, u)
     origin = np.arange(N - k)
     x = out.x_filt[origin].copy()
     P = filtered_covariances(out.P_pred, out.S, C, y)[origin]
@@ -92,7 +92,7 @@ def k_step_band(
         x = np.einsum("kij,kj->ki", Phi[w], x) + drive[origin + i]
         P = np.einsum("kij,kjl,kml->kim", Phi[w], P, Phi[w]) + Qd[w]
     target = origin + k
-    y_hat[target] = x @ C.T + u[target] @ D.T
+    y_hat[target] = x @ C.T + u[target] @ args.D.T
     S = np.einsum("ij,kjl,ml->kim", C, P, C) + R
     sd[target] = np.sqrt(np.einsum("kii->ki", S))
     return y_hat, sd

@@ -36,10 +36,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
 from rczone.errors import InputShapeError
+from rczone.kernels.arrays import Dynamics, FilterOptions, FilterTrace, Observation, Prior, Series
 from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
 from rczone.network.statespace import BilinearStateSpace
@@ -51,9 +53,39 @@ _LOG_2PI = float(np.log(2.0 * np.pi))
 _NO_GROUPS = np.empty(0, dtype=np.int64)
 
 
+class SampledDynamics(NamedTuple):
+    """The discrete matrices of each distinct interval of a time grid, and which one each step uses."""
+
+    Phi: np.ndarray  #: (K, n, n)
+    G0: np.ndarray  #: (K, n, p)
+    G1: np.ndarray  #: (K, n, p)
+    Qd: np.ndarray  #: (K, n, n)
+    which: np.ndarray  #: (N - 1,) int
+
+
+class FilterProblem(NamedTuple):
+    """Everything a Kalman filter over a sampled linear Gaussian model takes, by name.
+
+    ``FilterProblem(*stochastic_matrices(...), u, y, x0, P0, C, D, R)`` builds one.
+    """
+
+    Phi: np.ndarray  #: (K, n, n)
+    G0: np.ndarray  #: (K, n, p)
+    G1: np.ndarray  #: (K, n, p)
+    Qd: np.ndarray  #: (K, n, n)
+    which: np.ndarray  #: (N - 1,) int, interval ``k`` uses the matrices ``which[k]``
+    u: np.ndarray  #: (N, p)
+    y: np.ndarray  #: (N, ny), NaN where missing
+    x0: np.ndarray  #: (n,) prior mean at the first sample
+    P0: np.ndarray  #: (n, n) prior covariance
+    C: np.ndarray  #: (ny, n)
+    D: np.ndarray  #: (ny, p)
+    R: np.ndarray  #: (ny, ny) measurement-noise covariance, K^2; diagonal
+
+
 def stochastic_matrices(
     ss: BilinearStateSpace, t: np.ndarray, m: np.ndarray, Qc: np.ndarray, hold: str = "zoh"
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> SampledDynamics:
     """Exact per-interval discretization of the stochastic model (plain NumPy).
 
     Parameters
@@ -69,17 +101,13 @@ def stochastic_matrices(
 
     Returns
     -------
-    Phi : ndarray, shape (K, n, n)
-    G0, G1 : ndarray, shape (K, n, p)
-    Qd : ndarray, shape (K, n, n)
-    which : ndarray of int, shape (N-1,)
-        Index of the discretization used on each interval.
+    SampledDynamics
     """
     if hold not in HOLDS:
         raise InputShapeError(f"hold must be one of {HOLDS}, got {hold!r}")
     uniq, _, which = unique_rows(interval_keys(t, m))
     Phi, G0, G1, Qd = interval_discretization(ss.A, ss.N, ss.B, ss.M, ss.capacities, uniq, hold, Qc)
-    return Phi, G0, G1, Qd, which.reshape(-1)
+    return SampledDynamics(Phi, G0, G1, Qd, which.reshape(-1))
 
 
 def input_drive(G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -154,20 +182,7 @@ def predict_step(x: np.ndarray, P: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, 
     return Phi @ x + drive, 0.5 * (P + P.T)
 
 
-def kalman_filter_reference(
-    Phi: np.ndarray,
-    Gamma0: np.ndarray,
-    Gamma1: np.ndarray,
-    Qd: np.ndarray,
-    which: np.ndarray,
-    u: np.ndarray,
-    y: np.ndarray,
-    x0: np.ndarray,
-    P0: np.ndarray,
-    C: np.ndarray,
-    D: np.ndarray,
-    R: np.ndarray,
-) -> FilterOutput:
+def kalman_filter_reference(problem: FilterProblem) -> FilterOutput:
     """Run the filter over all samples in plain NumPy: the reference the compiled filter is tested against.
 
     ``x0, P0`` are the prior of the state at the first sample (the first measurement is used
@@ -177,21 +192,13 @@ def kalman_filter_reference(
 
     Parameters
     ----------
-    Phi, Gamma0, Gamma1, Qd, which
-        From :func:`stochastic_matrices`.
-    u : ndarray, shape (N, p)
-    y : ndarray, shape (N, ny)
-    x0 : ndarray, shape (n,)
-    P0 : ndarray, shape (n, n)
-    C : ndarray, shape (ny, n)
-    D : ndarray, shape (ny, p)
-    R : ndarray, shape (ny, ny)
-        Measurement-noise covariance, K^2; diagonal.
+    problem : FilterProblem
 
     Returns
     -------
     FilterOutput
     """
+    Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R = problem
     r = measurement_variances(R)
     N, n, ny = y.shape[0], x0.shape[0], y.shape[1]
     dtype = np.result_type(Phi, Qd, x0, P0, C, D, r, float)
@@ -227,20 +234,21 @@ def kalman_filter_reference(
 # --------------------------------------------------------------------------- the compiled filter
 
 
-def _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, keep: bool) -> tuple[float, int, tuple]:
-    """Run :func:`rczone.kernels.kalman.kalman_filter` on the arrays of :func:`stochastic_matrices`.
+def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, FilterTrace]:
+    """Run :func:`rczone.kernels.kalman.kalman_filter` on ``problem``.
 
-    With ``keep`` the intermediate results are returned too (the ``outs`` of the kernel).
+    With ``keep`` the intermediate results are returned too (the trace of the kernel).
     """
+    Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R = problem
     f = np.ascontiguousarray
     r = measurement_variances(R).astype(float)
     N, ny = y.shape
     n, p = x0.shape[0], u.shape[1]
     outs = outputs(N, n, ny, 0, False, keep)
     nll, n_obs, _, _ = kalman_filter(
-        (*(f(a, dtype=float) for a in (Phi, Gamma0, Gamma1, Qd)), f(which, dtype=np.int64)),
+        Dynamics(*(f(a, dtype=float) for a in (Phi, Gamma0, Gamma1, Qd))),
         no_sensitivities(Phi.shape[0], n, p),
-        (
+        Observation(
             f(C, dtype=float),
             f(D, dtype=float),
             r,
@@ -248,9 +256,9 @@ def _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, keep: bool)
             np.empty((ny, 0, p)),
             np.empty((ny, 0)),
         ),
-        (f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
-        (f(u, dtype=float), f(y, dtype=float)),
-        (bool(np.any(Gamma1)), False, STEADY_RTOL),
+        Prior(f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
+        Series(f(u, dtype=float), f(y, dtype=float), f(which, dtype=np.int64)),
+        FilterOptions(bool(np.any(Gamma1)), False, STEADY_RTOL),
         outs,
     )
     if n_obs < 0:
@@ -258,59 +266,20 @@ def _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, keep: bool)
     return float(nll + 0.5 * n_obs * _LOG_2PI), n_obs, outs
 
 
-def kalman_filter_arrays(
-    Phi: np.ndarray,
-    Gamma0: np.ndarray,
-    Gamma1: np.ndarray,
-    Qd: np.ndarray,
-    which: np.ndarray,
-    u: np.ndarray,
-    y: np.ndarray,
-    x0: np.ndarray,
-    P0: np.ndarray,
-    C: np.ndarray,
-    D: np.ndarray,
-    R: np.ndarray,
-) -> FilterOutput:
-    """The compiled filter with every intermediate result; arguments and result as :func:`kalman_filter_reference`."""
-    nll, n_obs, (e, _, xp, xf, Pp, S) = _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, True)
+def kalman_filter_arrays(problem: FilterProblem) -> FilterOutput:
+    """The compiled filter with every intermediate result; argument and result as :func:`kalman_filter_reference`."""
+    nll, n_obs, (e, _, xp, xf, Pp, S) = _compiled(problem, keep=True)
     return FilterOutput(nll, e, S, xp, xf, Pp, n_obs)
 
 
-def kalman_nll(
-    Phi: np.ndarray,
-    Gamma0: np.ndarray,
-    Gamma1: np.ndarray,
-    Qd: np.ndarray,
-    which: np.ndarray,
-    u: np.ndarray,
-    y: np.ndarray,
-    x0: np.ndarray,
-    P0: np.ndarray,
-    C: np.ndarray,
-    D: np.ndarray,
-    R: np.ndarray,
-) -> float:
-    """``-log L`` (including ``0.5 n log 2 pi``) by the compiled filter; arguments as :func:`kalman_filter_reference`."""
-    return _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, False)[0]
+def kalman_nll(problem: FilterProblem) -> float:
+    """``-log L`` (including ``0.5 n log 2 pi``) by the compiled filter; argument as :func:`kalman_filter_reference`."""
+    return _compiled(problem, keep=False)[0]
 
 
-def kalman_innovations_fast(
-    Phi: np.ndarray,
-    Gamma0: np.ndarray,
-    Gamma1: np.ndarray,
-    Qd: np.ndarray,
-    which: np.ndarray,
-    u: np.ndarray,
-    y: np.ndarray,
-    x0: np.ndarray,
-    P0: np.ndarray,
-    C: np.ndarray,
-    D: np.ndarray,
-    R: np.ndarray,
-) -> np.ndarray:
+def kalman_innovations_fast(problem: FilterProblem) -> np.ndarray:
     """One-step-ahead prediction errors, shape (N, ny), NaN where missing (compiled filter)."""
-    return kalman_filter_arrays(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R).innovations
+    return kalman_filter_arrays(problem).innovations
 
 
 # --------------------------------------------------------------------------- the fused 2-state kernel
@@ -349,7 +318,7 @@ def kalman_nll_rc2(
 ) -> float:
     """``-log L`` (including ``0.5 n log 2 pi``) of a 2-state RC model with one output, fused.
 
-    Equal to ``kalman_nll(*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R)``,
+    Equal to ``kalman_nll(FilterProblem(*stochastic_matrices(ss, t, m, Qc, hold), u, y, x0, P0, ss.C, ss.D, R))``,
     computed in one compiled pass (:func:`rczone.kernels.rc2.nll_rc2`).
 
     Parameters

@@ -25,7 +25,6 @@ from rczone.estimation.costs import (
     initial_state,
     measured_states,
     network_theta,
-    run_filter,
     simulate_output,
 )
 from rczone.estimation.data import Dataset
@@ -199,9 +198,9 @@ def open_loop_band(
     y = np.full_like(data.y, np.nan)
     y[0] = data.y[0]
     masked = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
-    out = run_filter(network, values, masked, hold)
-    _, _, _, _, _, u, _, _, _, C, D, _ = filter_arrays(network, values, masked, hold)
-    y_hat = out.x_pred @ C.T + u @ D.T
+    arrays = filter_arrays(network, values, masked, hold)
+    out = kalman_filter_arrays(arrays)
+    y_hat = out.x_pred @ arrays.C.T + arrays.u @ arrays.D.T
     sd = np.sqrt(np.einsum("kii->ki", out.S))
     return y_hat, sd
 
@@ -235,8 +234,8 @@ def k_step_prediction_error(
         raise ParameterError(f"k must be >= 1 (steps ahead), got {k}")
     data.check_against(network)
     args = filter_arrays(network, values, data, hold)
-    Phi, G0, G1, _, which, u, y, _, _, C, D, _ = args
-    out = kalman_filter_arrays(*args)
+    Phi, G0, G1, which, u, y, C, D = args.Phi, args.G0, args.G1, args.which, args.u, args.y, args.C, args.D
+    out = kalman_filter_arrays(args)
     N = data.n_samples
     drive = input_drive(G0, G1, which, u)
     err = np.full(y.shape, np.nan)

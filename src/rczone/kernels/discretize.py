@@ -40,6 +40,7 @@ import math
 import numpy as np
 from numba import njit
 
+from rczone.kernels.arrays import Dynamics, DynamicsDerivatives, ModalDynamics, Rc2Matrices
 from rczone.kernels.expm import expm_frechet, matmul, norm1
 
 #: Below this ``|x|`` the series of ``(e^x - 1 - x)/x^2`` is used.
@@ -82,8 +83,8 @@ def rc2_discretize(
     q0: float,
     q1: float,
     foh: bool,
-) -> tuple:
-    """Exact discrete matrices of a 2-state RC model over ``h`` s, as 15 numbers.
+) -> Rc2Matrices:
+    """Exact discrete matrices of a 2-state RC model over ``h`` s, as 15 named numbers.
 
     ``A = [[a, a01], [a10, d]]`` with ``diag(s)^2 A`` symmetric (``s = sqrt(capacities)``), so
     ``S = diag(s) A diag(s)^{-1}`` is symmetric; its eigen-decomposition is one Jacobi
@@ -101,9 +102,9 @@ def rc2_discretize(
 
     Returns
     -------
-    tuple of 15 floats
-        ``Phi`` (00, 01, 10, 11), ``H0`` and ``H1`` (each 00, 01, 10, 11) with ``G0 = H0 B`` and
-        ``G1 = H1 B`` (``H1 = 0`` for ZOH), ``Qd`` (00, 01, 11).
+    Rc2Matrices
+        ``Phi``, ``H0`` and ``H1`` with ``G0 = H0 B`` and ``G1 = H1 B`` (``H1 = 0`` for ZOH), and
+        the upper triangle of ``Qd``.
     """
     # symmetric S and its rotation [[cs, sn], [-sn, cs]]
     b = 0.5 * (a01 * s0 * is1 + a10 * s1 * is0)
@@ -144,7 +145,7 @@ def rc2_discretize(
     v01 = T00 * W01 + T01 * W11
     v10 = T10 * W00 + T11 * W01
     v11 = T10 * W01 + T11 * W11
-    return (
+    return Rc2Matrices(
         T00 * e0 * U00 + T01 * e1 * U10,
         T00 * e0 * U01 + T01 * e1 * U11,
         T10 * e0 * U00 + T11 * e1 * U10,
@@ -284,8 +285,8 @@ def modal_matrices(
     qc: np.ndarray,
     scale: np.ndarray,
     foh: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`spectral_modal` of each distinct interval: ``V, e, H0, H1, Qm`` stacked on a first axis of length K."""
+) -> ModalDynamics:
+    """:func:`spectral_modal` of each distinct interval, stacked on a first axis of length K."""
     n = A0.shape[0]
     p = B0.shape[1]
     K = keys.shape[0]
@@ -297,7 +298,7 @@ def modal_matrices(
     for k in range(K):
         A, B = _key_matrices(A0, N, B0, M, keys[k])
         V[k], e[k], H0[k], H1[k], Qm[k] = spectral_modal(A, B, scale, qc, keys[k, 0], foh)
-    return V, e, H0, H1, Qm
+    return ModalDynamics(V, e, H0, H1, Qm)
 
 
 @njit(cache=True, error_model="numpy")
@@ -977,8 +978,8 @@ def interval_matrices(
     scale: np.ndarray,
     foh: bool,
     noise: bool,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``Phi, G0, G1, Qd`` (shapes (K, n, n), (K, n, p), (K, n, p), (K, n, n)) of each distinct interval.
+) -> Dynamics:
+    """The discrete matrices of each distinct interval.
 
     Parameters
     ----------
@@ -1010,13 +1011,13 @@ def interval_matrices(
                 A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1], h,
                 qc[0], qc[1], foh,
             )  # fmt: skip
-            Phi[k, 0, 0], Phi[k, 0, 1], Phi[k, 1, 0], Phi[k, 1, 1] = m[0], m[1], m[2], m[3]
-            Qd[k, 0, 0], Qd[k, 0, 1], Qd[k, 1, 0], Qd[k, 1, 1] = m[12], m[13], m[13], m[14]
+            Phi[k, 0, 0], Phi[k, 0, 1], Phi[k, 1, 0], Phi[k, 1, 1] = m.phi00, m.phi01, m.phi10, m.phi11
+            Qd[k, 0, 0], Qd[k, 0, 1], Qd[k, 1, 0], Qd[k, 1, 1] = m.qd00, m.qd01, m.qd01, m.qd11
             for j in range(p):
-                G0[k, 0, j] = m[4] * B[0, j] + m[5] * B[1, j]
-                G0[k, 1, j] = m[6] * B[0, j] + m[7] * B[1, j]
-                G1[k, 0, j] = m[8] * B[0, j] + m[9] * B[1, j]
-                G1[k, 1, j] = m[10] * B[0, j] + m[11] * B[1, j]
+                G0[k, 0, j] = m.h0_00 * B[0, j] + m.h0_01 * B[1, j]
+                G0[k, 1, j] = m.h0_10 * B[0, j] + m.h0_11 * B[1, j]
+                G1[k, 0, j] = m.h1_00 * B[0, j] + m.h1_01 * B[1, j]
+                G1[k, 1, j] = m.h1_10 * B[0, j] + m.h1_11 * B[1, j]
         elif scale.shape[0] == n:
             spectral_discretize(A, B, scale, qc if noise else zero, h, foh, Phi[k], G0[k], G1[k], Qd[k])
         else:
@@ -1024,7 +1025,7 @@ def interval_matrices(
                 A, B, qc, h, foh, noise, none, np.empty((0, n, p)), np.empty((0, n)),
                 Phi[k], G0[k], G1[k], Qd[k], none, np.empty((0, n, p)), np.empty((0, n, p)), none,
             )  # fmt: skip
-    return Phi, G0, G1, Qd
+    return Dynamics(Phi, G0, G1, Qd)
 
 
 @njit(cache=True, error_model="numpy")
@@ -1043,7 +1044,7 @@ def interval_derivatives(
     scale: np.ndarray,
     foh: bool,
     noise: bool,
-) -> tuple:
+) -> tuple[Dynamics, DynamicsDerivatives]:
     """As :func:`interval_matrices`, with the derivatives along ``q`` directions.
 
     Parameters
@@ -1055,8 +1056,10 @@ def interval_derivatives(
 
     Returns
     -------
-    (Phi, G0, G1, Qd) : as :func:`interval_matrices`
-    (dPhi, dG0, dG1, dQd) : ndarray, shapes (K, q, n, n), (K, q, n, p), (K, q, n, p), (K, q, n, n)
+    Dynamics
+        As :func:`interval_matrices`.
+    DynamicsDerivatives
+        Their derivatives along the ``q`` directions.
     """
     n = A0.shape[0]
     p = B0.shape[1]
@@ -1093,4 +1096,4 @@ def interval_derivatives(
                 A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k],
                 dG1[k], dQd[k],
             )  # fmt: skip
-    return (Phi, G0, G1, Qd), (dPhi, dG0, dG1, dQd)
+    return Dynamics(Phi, G0, G1, Qd), DynamicsDerivatives(dPhi, dG0, dG1, dQd)

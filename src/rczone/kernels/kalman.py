@@ -53,6 +53,18 @@ import math
 import numpy as np
 from numba import njit
 
+from rczone.kernels.arrays import (
+    Dynamics,
+    DynamicsDerivatives,
+    FilterOptions,
+    FilterTrace,
+    FilterValue,
+    ModalDynamics,
+    Observation,
+    Prior,
+    Series,
+)
+
 #: Default relative tolerance at which the predicted covariance counts as stationary.
 STEADY_RTOL = 1e-14
 
@@ -65,14 +77,16 @@ FAST = {"reassoc", "contract"}
 
 
 @njit(cache=True, error_model="numpy")
-def no_sensitivities(K: int, n: int, p: int) -> tuple:
-    """The ``sens`` argument of :func:`kalman_filter` for the likelihood alone (``q = 0``)."""
-    return (np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n)))
+def no_sensitivities(K: int, n: int, p: int) -> DynamicsDerivatives:
+    """The ``ddyn`` argument of :func:`kalman_filter` for the likelihood alone (``q = 0``)."""
+    return DynamicsDerivatives(
+        np.empty((K, 0, n, n)), np.empty((K, 0, n, p)), np.empty((K, 0, n, p)), np.empty((K, 0, n, n))
+    )
 
 
 @njit(cache=True, error_model="numpy")
-def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> tuple:
-    """The ``outs`` argument of :func:`kalman_filter`, empty where not wanted.
+def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> FilterTrace:
+    """The ``trace`` argument of :func:`kalman_filter`, empty where not wanted.
 
     ``errors``: the innovations or output errors (NaN where missing) and their derivatives;
     ``states``: the innovations, predicted and filtered states, covariances, ``S``.
@@ -80,7 +94,7 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> tupl
     ne = N if errors or states else 0
     nd = N if errors else 0
     ns = N if states else 0
-    return (
+    return FilterTrace(
         np.full((ne, ny), np.nan),
         np.zeros((nd, ny, q)),
         np.empty((ns, n)),
@@ -91,45 +105,45 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> tupl
 
 
 @njit(cache=True, error_model="numpy", fastmath=FAST)
-def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int, np.ndarray, np.ndarray]:
+def kalman_filter(
+    dyn: Dynamics,
+    ddyn: DynamicsDerivatives,
+    obs: Observation,
+    prior: Prior,
+    series: Series,
+    opts: FilterOptions,
+    trace: FilterTrace,
+) -> FilterValue:
     """Run the filter over all samples; ``-log L`` without ``0.5 n log 2 pi``, and its gradient.
 
     Parameters
     ----------
-    model : tuple
-        ``(Phi, G0, G1, Qd, which)``: shapes (K, n, n), (K, n, p), (K, n, p), (K, n, n) and
-        (N - 1,) int64; interval ``k`` uses the matrices ``which[k]``.
-    sens : tuple
-        ``(dPhi, dG0, dG1, dQd)``: shapes (K, q, n, n), (K, q, n, p), (K, q, n, p), (K, q, n, n);
-        ``q = 0`` computes the likelihood only.
-    obs : tuple
-        ``(C, D, r, dC, dD, dr)``: shapes (ny, n), (ny, p), (ny,), (ny, q, n), (ny, q, p), (ny, q);
-        ``R = diag(r)``.
-    init : tuple
-        ``(x0, P0, dx0, dP0)``: prior at the first sample, shapes (n,), (n, n), (q, n), (q, n, n).
-    data : tuple
-        ``(u, y)``: shapes (N, p), (N, ny); NaN in ``y`` marks a missing output.
-    opts : tuple
-        ``(foh, open_loop, steady_rtol)``.
-    outs : tuple
-        ``(e_out, de_out, xp_out, xf_out, Pp_out, S_out)``, each filled when its first axis has
-        N entries (pass empty arrays to skip): innovations ``y - C x_pred - D u`` (N, ny) (the
-        output errors in open loop), their derivatives (N, ny, q) (open loop only), predicted
-        and filtered states (N, n), predicted covariances (N, n, n), innovation covariances
-        ``C P C' + R`` (N, ny, ny). Entries of missing outputs are left as they are.
+    dyn : Dynamics
+        Discrete matrices of each distinct interval.
+    ddyn : DynamicsDerivatives
+        Their derivatives along ``q`` directions; ``q = 0`` (:func:`no_sensitivities`) computes the
+        likelihood only.
+    obs : Observation
+        Output matrices and measurement variances (``R = diag(r)``), with derivatives.
+    prior : Prior
+        Mean and covariance at the first sample, with derivatives.
+    series : Series
+        Inputs, outputs (NaN marks a missing output) and the interval of each step.
+    opts : FilterOptions
+    trace : FilterTrace
+        Each array is filled when its first axis has N entries (:func:`outputs` makes them):
+        innovations ``y - C x_pred - D u`` (the output errors in open loop), their derivatives
+        (open loop only), predicted and filtered states, predicted covariances, innovation
+        covariances. Entries of missing outputs are left as they are.
 
     Returns
     -------
-    nll : float
-        ``sum 0.5 (log s + e^2/s)`` over the observed outputs (0 in open loop); NaN for an
-        invalid model (a non-positive innovation variance).
-    n_obs : int
-        Observed scalars; -1 for an invalid model.
-    grad : ndarray, shape (q,)
-        Derivatives of ``nll``.
-    fim : ndarray, shape (q,)
-        Diagonal of the Fisher information of the parameters, ``sum de^2/s + 0.5 (ds/s)^2``
-        over the observed outputs [3]_: the curvature optimizers scale their variables with.
+    FilterValue
+        ``nll = sum 0.5 (log s + e^2/s)`` over the observed outputs (0 in open loop), NaN for an
+        invalid model (a non-positive innovation variance); ``n_obs`` observed scalars (-1 for an
+        invalid model); ``grad`` the derivatives of ``nll``; ``fim`` the diagonal of the Fisher
+        information, ``sum de^2/s + 0.5 (ds/s)^2`` over the observed outputs [3]_: the curvature
+        optimizers scale their variables with.
 
     Notes
     -----
@@ -144,13 +158,13 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
     ``dP_j = dPhi_j P Phi' + Phi P dPhi_j' + Phi dP_j Phi' + dQd_j`` (the ``dPhi`` terms skipped
     for directions that leave the dynamics unchanged).
     """
-    Phi, G0, G1, Qd, which = model
-    dPhi, dG0, dG1, dQd = sens
+    Phi, G0, G1, Qd = dyn
+    dPhi, dG0, dG1, dQd = ddyn
     C, D, r, dC, dD, dr = obs
-    x0, P0, dx0, dP0 = init
-    u, y = data
+    x0, P0, dx0, dP0 = prior
+    u, y, which = series
     foh, open_loop, steady_rtol = opts
-    e_out, de_out, xp_out, xf_out, Pp_out, S_out = outs
+    e_out, de_out, xp_out, xf_out, Pp_out, S_out = trace
     N, ny = y.shape
     n = x0.shape[0]
     p = u.shape[1]
@@ -294,7 +308,7 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
                         pc[i] = acc
                         s += C[o, i] * acc
                     if not s > 0.0:
-                        return math.nan, -1, grad, fim
+                        return FilterValue(math.nan, -1, grad, fim)
                     inv = 1.0 / s
                     for i in range(n):
                         kg[o, i] = pc[i] * inv
@@ -462,11 +476,13 @@ def kalman_filter(model, sens, obs, init, data, opts, outs) -> tuple[float, int,
                 steady_mask = mask
         prev_key = w
         prev_mask = mask
-    return nll, n_obs, grad, fim
+    return FilterValue(nll, n_obs, grad, fim)
 
 
 @njit(cache=True, error_model="numpy", fastmath=FAST)
-def kalman_filter_modal(modal, scale, which, obs, init, data, foh: bool) -> tuple[float, int]:
+def kalman_filter_modal(
+    modal: ModalDynamics, scale: np.ndarray, obs: Observation, prior: Prior, series: Series, foh: bool
+) -> tuple[float, int]:
     """``-log L`` (without ``0.5 n log 2 pi``) and the observation count, in modal coordinates.
 
     The filter of :func:`kalman_filter` for an RC model (no sensitivities, no intermediate
@@ -481,13 +497,12 @@ def kalman_filter_modal(modal, scale, which, obs, init, data, foh: bool) -> tupl
 
     Parameters
     ----------
-    modal : tuple
-        ``(V, e, H0, H1, Qm)`` of :func:`rczone.kernels.discretize.modal_matrices`.
+    modal : ModalDynamics
+        Of :func:`rczone.kernels.discretize.modal_matrices`.
     scale : ndarray, shape (n,)
         ``sqrt(capacities)``.
-    which : ndarray of int64, shape (N - 1,)
-    obs, init, data
-        ``(C, D, r)``, ``(x0, P0)``, ``(u, y)`` as in :func:`kalman_filter`.
+    obs, prior, series
+        As in :func:`kalman_filter`; their derivatives are not used.
     foh : bool
 
     Returns
@@ -498,9 +513,9 @@ def kalman_filter_modal(modal, scale, which, obs, init, data, foh: bool) -> tupl
         -1 for an invalid model.
     """
     V, e, H0, H1, Qm = modal
-    C, D, r = obs
-    x0, P0 = init
-    u, y = data
+    C, D, r = obs.C, obs.D, obs.r
+    x0, P0 = prior.x0, prior.P0
+    u, y, which = series
     N, ny = y.shape
     n = x0.shape[0]
     p = u.shape[1]

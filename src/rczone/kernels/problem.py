@@ -21,18 +21,10 @@ proportional to one free parameter (the packing is
 * returns ``J_LS`` (trapezoid rule on the open-loop errors, K^2 s), ``J_ML`` (``-log L``) or
   ``J_MAP`` (tempered likelihood plus log-normal prior) and its gradient in ``theta``.
 
-Layout of the problem tuple (contiguous float64 / int64 / bool arrays)::
-
-    (kind,                                      # LS, ML or MAP
-     (L, P, E, Gb0, Nf, Mf, output_state),      # conductance form; output j reads state output_state[j]
-     (t, m, u, y, keys, which, groups),         # data; distinct intervals; interval groups or empty
-     (res_idx, res_k, cap_idx, cap_k,           # element slots
-      sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, # sigma_v per output, sigma_w and sigma_x0 per state
-      x0_idx, x0_k, x0_given),                  # x0 per state (given or derived from the data)
-     (eta_lower, eta_upper, log),               # direct-search transform
-     (prior_idx, prior_log_construction, prior_spread, likelihood_weight),
-     (foh, symmetry_rtol, steady_rtol, fused),  # fused: the 2-state kernel serves values
-     scratch)                                   # (N,) buffer for the fused open-loop errors
+The problem is a :class:`rczone.kernels.arrays.Problem` of contiguous float64 / int64 / bool
+arrays: the kind (LS, ML or MAP), the conductance form, the data with its distinct intervals, the
+slots of every element, noise level and initial state, the direct search's box, the MAP prior, the
+settings, and a scratch buffer for the fused open-loop errors.
 
 A slot ``(idx, k)`` has the value ``k * theta[idx]``, or ``k`` when ``idx < 0``.
 
@@ -49,6 +41,7 @@ import math
 import numpy as np
 from numba import njit
 
+from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
 from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
@@ -280,11 +273,11 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
     where the model is invalid (a non-positive element value, a singular steady state, a
     non-positive innovation variance).
     """
-    kind, form, data, slots, _transform, prior, consts, scratch = prob
+    kind, form, data, slots, _box, penalty, consts, scratch = prob
     L, P, E, Gb0, Nf, Mf, out_state = form
     t, m, u, y, keys, which, groups = data
     res_idx, res_k, cap_idx, cap_k, sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, x0_idx, x0_k, x0_given = slots
-    prior_idx, prior_logc, spread, weight = prior
+    prior_idx, prior_logc, spread, weight = penalty
     foh, sym_rtol, steady_rtol, fused = consts
     d = theta.shape[0]
     grad = np.zeros(d)
@@ -372,9 +365,12 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
         # values of larger models with flows constant over stretches: the modal filter
         scale = np.sqrt(cap)
         modal = modal_matrices(A0, N, B0, M, keys, qc, scale, foh)
-        nll, n_obs = kalman_filter_modal(
-            modal, scale, which, (C, np.zeros((ny, B0.shape[1])), r), (x0, P0), (u, y), foh
+        p = B0.shape[1]
+        obs = Observation(
+            C, np.zeros((ny, p)), r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
         )
+        prior0 = Prior(x0, P0, np.zeros((0, n)), np.zeros((0, n, n)))
+        nll, n_obs = kalman_filter_modal(modal, scale, obs, prior0, Series(u, y, which), foh)
         if n_obs < 0:
             return math.inf, grad, curv
         j = nll + 0.5 * n_obs * _LOG_2PI
@@ -388,22 +384,21 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
             mats = interval_matrices(A0, N, B0, M, keys, qc, np.sqrt(cap), foh, noise)
             dmats = no_sensitivities(keys.shape[0], n, B0.shape[1])
         p = B0.shape[1]
-        obs = (C, np.zeros((ny, p)), r, np.zeros((ny, q, n)), np.zeros((ny, q, p)), dr)
-        Phi, G0, G1, Qd = mats
+        obs = Observation(C, np.zeros((ny, p)), r, np.zeros((ny, q, n)), np.zeros((ny, q, p)), dr)
         outs = outputs(N_t, n, ny, q, kind == LS, False)
         nll, n_obs, g, fim = kalman_filter(
-            (Phi, G0, G1, Qd, which),
+            mats,
             dmats,
             obs,
-            (x0, P0, dx0, dP0),
-            (u, y),
-            (foh, kind == LS, steady_rtol),
+            Prior(x0, P0, dx0, dP0),
+            Series(u, y, which),
+            FilterOptions(foh, kind == LS, steady_rtol),
             outs,
         )
         if n_obs < 0:
             return math.inf, grad, curv
         if kind == LS:
-            return trapezoid(t, outs[0], outs[1], grad, curv), grad, curv
+            return trapezoid(t, outs.e, outs.de, grad, curv), grad, curv
         j = nll + 0.5 * n_obs * _LOG_2PI
         for i in range(q):
             grad[i] = g[i]
@@ -433,5 +428,5 @@ def cost_theta(theta: np.ndarray, prob) -> float:
 @njit(cache=True, error_model="numpy")
 def cost_z(z: np.ndarray, prob) -> float:
     """The cost at direct-search variables ``z`` (:func:`theta_of_z`, then :func:`cost_theta`)."""
-    lo, hi, logp = prob[4]
+    lo, hi, logp = prob.box
     return cost_theta(theta_of_z(z, lo, hi, logp), prob)

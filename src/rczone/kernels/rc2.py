@@ -152,8 +152,8 @@ def nll_rc2(
             a10 += mf * N[f, 1, 0]
             d += mf * N[f, 1, 1]
         mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], qc[0], qc[1], foh)
-        Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3] = mt[0], mt[1], mt[2], mt[3]
-        Qd[g, 0], Qd[g, 1], Qd[g, 2] = mt[12], mt[13], mt[14]
+        Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3] = mt.phi00, mt.phi01, mt.phi10, mt.phi11
+        Qd[g, 0], Qd[g, 1], Qd[g, 2] = mt.qd00, mt.qd01, mt.qd11
         for j in range(p):
             # B(m) = B0 + sum m_f M_f, column j
             b0 = B0[0, j]
@@ -161,11 +161,11 @@ def nll_rc2(
             for f in range(nf):
                 b0 += m[k, f] * M[f, 0, j]
                 b1 += m[k, f] * M[f, 1, j]
-            G0[g, 0, j] = mt[4] * b0 + mt[5] * b1
-            G0[g, 1, j] = mt[6] * b0 + mt[7] * b1
+            G0[g, 0, j] = mt.h0_00 * b0 + mt.h0_01 * b1
+            G0[g, 1, j] = mt.h0_10 * b0 + mt.h0_11 * b1
             if foh:
-                G1[g, 0, j] = mt[8] * b0 + mt[9] * b1
-                G1[g, 1, j] = mt[10] * b0 + mt[11] * b1
+                G1[g, 0, j] = mt.h1_00 * b0 + mt.h1_01 * b1
+                G1[g, 1, j] = mt.h1_10 * b0 + mt.h1_11 * b1
     has_dd = False
     for j in range(p):
         has_dd = has_dd or dd[j] != 0.0

@@ -92,7 +92,7 @@ def test_compiled_innovations_equal_the_reference_filter() -> None:
     values = {**NET2.values(), "sigma_v": 0.05, "sigma_w_Ti": 1e-3, "sigma_w_Tw": 1e-4}
     values |= {"sigma_x0_Ti": 0.1, "sigma_x0_Tw": 1.0}
     ref = run_filter(NET2, values, data).innovations
-    got = kalman_innovations_fast(*filter_arrays(NET2, values, data))
+    got = kalman_innovations_fast(filter_arrays(NET2, values, data))
     np.testing.assert_allclose(got, ref, rtol=1e-10, atol=1e-12)
     assert np.isnan(got[[5, 40, 41]]).all() and np.isfinite(got[:5]).all()
 

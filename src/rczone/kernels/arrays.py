@@ -1,0 +1,223 @@
+"""The named arrays that cross the boundaries of the compiled kernels.
+
+Every kernel of :mod:`rczone.kernels` takes and returns its arrays grouped and named by these
+tuples, never as long positional tuples. numba compiles a ``NamedTuple`` as the plain tuple it is
+[1]_, so the names cost nothing at run time; on the Python side ``_replace`` edits one field
+without counting slots.
+
+Shapes use ``N`` samples, ``K`` distinct sampling intervals, ``n`` states, ``p`` inputs, ``ny``
+outputs and ``q`` parameter directions (``q = 0``: no derivatives).
+
+References
+----------
+.. [1] numba documentation, "Supported Python features: tuple, namedtuple" (named tuples are
+   compiled as heterogeneous or homogeneous tuples with attribute access).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+
+class Dynamics(NamedTuple):
+    """Exact discrete matrices of each distinct sampling interval.
+
+    ``x[k+1] = Phi x[k] + G0 u[k] + G1 (u[k+1] - u[k]) + w``, ``cov(w) = Qd`` (``G1 = 0`` for a
+    zero-order hold).
+    """
+
+    Phi: np.ndarray  #: (K, n, n)
+    G0: np.ndarray  #: (K, n, p)
+    G1: np.ndarray  #: (K, n, p)
+    Qd: np.ndarray  #: (K, n, n)
+
+
+class DynamicsDerivatives(NamedTuple):
+    """Derivatives of :class:`Dynamics` along ``q`` parameter directions."""
+
+    dPhi: np.ndarray  #: (K, q, n, n)
+    dG0: np.ndarray  #: (K, q, n, p)
+    dG1: np.ndarray  #: (K, q, n, p)
+    dQd: np.ndarray  #: (K, q, n, n)
+
+
+class ModalDynamics(NamedTuple):
+    """:class:`Dynamics` of an RC model in the modal coordinates of each interval.
+
+    ``Phi = T diag(e) T^-1`` with ``T = diag(scale)^-1 V``; ``G0 = T H0``, ``G1 = T H1``,
+    ``Qd = T Qm T'``.
+    """
+
+    V: np.ndarray  #: (K, n, n) orthogonal eigenvectors of the symmetrized state matrix
+    e: np.ndarray  #: (K, n) ``exp(lambda h)``
+    H0: np.ndarray  #: (K, n, p)
+    H1: np.ndarray  #: (K, n, p)
+    Qm: np.ndarray  #: (K, n, n)
+
+
+class Observation(NamedTuple):
+    """``y = C x + D u + v``, ``cov(v) = diag(r)``, and the derivatives along ``q`` directions."""
+
+    C: np.ndarray  #: (ny, n)
+    D: np.ndarray  #: (ny, p)
+    r: np.ndarray  #: (ny,) measurement variances, K^2
+    dC: np.ndarray  #: (ny, q, n)
+    dD: np.ndarray  #: (ny, q, p)
+    dr: np.ndarray  #: (ny, q)
+
+
+class Prior(NamedTuple):
+    """The state's mean and covariance at the first sample, and their derivatives."""
+
+    x0: np.ndarray  #: (n,)
+    P0: np.ndarray  #: (n, n)
+    dx0: np.ndarray  #: (q, n)
+    dP0: np.ndarray  #: (q, n, n)
+
+
+class Series(NamedTuple):
+    """The data a filter runs over: inputs, outputs (NaN where missing), and the interval of each step."""
+
+    u: np.ndarray  #: (N, p)
+    y: np.ndarray  #: (N, ny)
+    which: np.ndarray  #: (N - 1,) int64, interval ``k`` uses the matrices ``which[k]``
+
+
+class FilterOptions(NamedTuple):
+    """How the filter runs."""
+
+    foh: bool  #: first-order hold of the inputs between samples (else zero-order)
+    open_loop: bool  #: no measurement updates: output errors of a simulation (least squares)
+    steady_rtol: float  #: relative tolerance at which the covariance counts as stationary (0: never)
+
+
+class FilterTrace(NamedTuple):
+    """What a filter run may keep per sample; an array whose first axis is not ``N`` is not filled."""
+
+    e: np.ndarray  #: (N, ny) innovations (output errors in open loop)
+    de: np.ndarray  #: (N, ny, q) their derivatives (open loop only)
+    xp: np.ndarray  #: (N, n) predicted states
+    xf: np.ndarray  #: (N, n) filtered states
+    Pp: np.ndarray  #: (N, n, n) predicted covariances
+    S: np.ndarray  #: (N, ny, ny) innovation covariances ``C P C' + R``
+
+
+class FilterValue(NamedTuple):
+    """What a filter run returns."""
+
+    nll: float  #: ``sum 0.5 (log s + e^2/s)`` over the observed outputs; NaN for an invalid model
+    n_obs: int  #: observed scalars; -1 for an invalid model
+    grad: np.ndarray  #: (q,) derivatives of ``nll``
+    fim: np.ndarray  #: (q,) diagonal of the Fisher information
+
+
+class Rc2Matrices(NamedTuple):
+    """The exact discrete matrices of a 2-state RC model over one interval, as named scalars.
+
+    ``G0 = H0 B``, ``G1 = H1 B``; ``Qd`` is symmetric (``qd10 = qd01``).
+    """
+
+    phi00: float
+    phi01: float
+    phi10: float
+    phi11: float
+    h0_00: float
+    h0_01: float
+    h0_10: float
+    h0_11: float
+    h1_00: float
+    h1_01: float
+    h1_10: float
+    h1_11: float
+    qd00: float
+    qd01: float
+    qd11: float
+
+
+# ----------------------------------------------------------------- a packed estimation problem
+
+
+class ConductanceArrays(NamedTuple):
+    """An RC network in conductance form (:attr:`rczone.network.RCNetwork.conductance_form`)."""
+
+    L: np.ndarray  #: (nr, n) incidence of the resistors on the states
+    P: np.ndarray  #: (nr, nb) incidence of the resistors on the boundary inputs
+    E: np.ndarray  #: (nb, p) selection of the boundary inputs among the inputs
+    Gb0: np.ndarray  #: (n, p) heat inputs, W per unit input
+    Nf: np.ndarray  #: (nf, n, n) supply-air terms of each flow
+    Mf: np.ndarray  #: (nf, n, p)
+    output_state: np.ndarray  #: (ny,) int64, output j reads state output_state[j]
+
+
+class ProblemData(NamedTuple):
+    """The data of a packed problem, with its distinct sampling intervals."""
+
+    t: np.ndarray  #: (N,) s
+    m: np.ndarray  #: (N, nf) kg/s
+    u: np.ndarray  #: (N, p)
+    y: np.ndarray  #: (N, ny)
+    keys: np.ndarray  #: (K, 1 + nf) ``(dt, m_1, ...)`` of each distinct interval
+    which: np.ndarray  #: (N - 1,) int64
+    groups: np.ndarray  #: interval groups of the fused kernel, or empty
+
+
+class Slots(NamedTuple):
+    """Where each element, noise level and initial state takes its value.
+
+    A slot ``(idx, k)`` has the value ``k * theta[idx]``, or ``k`` when ``idx < 0``.
+    """
+
+    res_idx: np.ndarray
+    res_k: np.ndarray
+    cap_idx: np.ndarray
+    cap_k: np.ndarray
+    sv_idx: np.ndarray  #: measurement noise, per output
+    sv_k: np.ndarray
+    sw_idx: np.ndarray  #: process noise, per state
+    sw_k: np.ndarray
+    sx_idx: np.ndarray  #: initial-state spread, per state
+    sx_k: np.ndarray
+    x0_idx: np.ndarray  #: initial state, per state
+    x0_k: np.ndarray
+    x0_given: np.ndarray  #: bool, given (else derived from the data)
+
+
+class SearchBox(NamedTuple):
+    """The direct search's transform of the optimizer variables (``eta`` within its bounds)."""
+
+    eta_lower: np.ndarray
+    eta_upper: np.ndarray
+    log: np.ndarray  #: bool, the parameter is searched in log space
+
+
+class Penalty(NamedTuple):
+    """The log-normal prior of a MAP problem."""
+
+    prior_idx: np.ndarray  #: int64, parameters with a prior
+    prior_log_construction: np.ndarray  #: their log construction values
+    prior_spread: float  #: standard deviation in log space
+    likelihood_weight: float
+
+
+class ProblemConstants(NamedTuple):
+    """Settings of a packed problem."""
+
+    foh: bool
+    symmetry_rtol: float
+    steady_rtol: float
+    fused: bool  #: the fused 2-state kernel serves values
+
+
+class Problem(NamedTuple):
+    """A packed estimation problem (:func:`rczone.estimation.compiled.compiled_problem`)."""
+
+    kind: int  #: LS, ML or MAP of :mod:`rczone.kernels.problem`
+    form: ConductanceArrays
+    data: ProblemData
+    slots: Slots
+    box: SearchBox
+    penalty: Penalty
+    consts: ProblemConstants
+    scratch: np.ndarray  #: (N,) buffer for the fused open-loop errors
