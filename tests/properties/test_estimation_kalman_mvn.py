@@ -20,11 +20,11 @@ from rczone.errors import InputShapeError
 from rczone.estimation.kalman import (
     FilterProblem,
     kalman_filter_arrays,
-    kalman_filter_reference,
     kalman_nll,
     stochastic_matrices,
 )
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
+from tests.oracles import kalman_filter_reference
 
 NET = RCNetwork(
     "tiny",

@@ -1,6 +1,6 @@
 """The compiled Kalman filters against their NumPy twin: the general one, the modal one, the fused 2-state kernel.
 
-References: :func:`rczone.estimation.kalman.kalman_filter_reference` (plain NumPy, same step
+References: ``tests/oracles.py`` (plain NumPy, same step
 functions, no steady-state shortcut) fed with the NumPy discretization of
 :mod:`rczone.simulation.discretize`; the brute-force joint Gaussian density is the oracle of
 the twin itself (``test_estimation_kalman_mvn.py``). Models are random RC networks (random
@@ -18,7 +18,6 @@ from hypothesis import strategies as st
 from rczone.estimation.kalman import (
     FilterProblem,
     kalman_filter_arrays,
-    kalman_filter_reference,
     kalman_nll_rc2,
     stochastic_matrices,
 )
@@ -28,6 +27,7 @@ from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, no_sensiti
 from rczone.simulation.discretize import symmetrizing_scale
 from rczone.simulation.intervals import interval_groups, unique_rows
 from tests.netfactory import random_network
+from tests.oracles import kalman_filter_reference
 
 RTOL = 1e-10
 SETTINGS = settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])

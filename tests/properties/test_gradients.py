@@ -7,7 +7,7 @@ the compiled discretization and filter, or simulation for least squares) is comp
 * the complex step [1]_ through an independent computation written here: the network's
   matrices assembled in complex arithmetic, the matrix-exponential discretization of
   :mod:`rczone.simulation.discretize`, and the NumPy twin of the filter
-  (:func:`rczone.estimation.kalman.kalman_filter_reference`) or the NumPy simulation loop.
+  (``tests/oracles.py``) or the NumPy simulation loop.
   The complex step has no subtraction, so it is exact to rounding.
 
 Models are random RC networks: with no massless node the problem packs into arrays (the
@@ -32,12 +32,13 @@ from hypothesis import strategies as st
 
 from rczone.estimation import Dataset, Objective, make_spec, noise_parameter_names
 from rczone.estimation.engines import measured_states
-from rczone.estimation.kalman import FilterProblem, kalman_filter_reference, stochastic_matrices
+from rczone.estimation.kalman import FilterProblem, stochastic_matrices
 from rczone.network import BilinearStateSpace
 from rczone.network.parameters import evaluate_ties
 from rczone.simulation import simulate
-from rczone.simulation.simulate import propagate_reference, transition_matrices
+from rczone.simulation.simulate import transition_matrices
 from tests.netfactory import random_network
+from tests.oracles import kalman_filter_reference, objective_reference_cost, propagate_reference
 
 H_CS = 1e-30
 SETTINGS = settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -198,7 +199,7 @@ def test_the_complex_step_oracle_is_the_reference_cost():
     obj, eta = problem(3, 3, 1, 2, "ml", "foh")
     theta = obj.spec.to_theta(eta)
     values = {k: complex(v) for k, v in obj.spec.values(theta).items()}
-    ref = obj.reference_cost(theta)
+    ref = objective_reference_cost(obj, theta)
     assert abs(complex_cost(obj, values).real - ref) <= 1e-10 * abs(ref)
 
 

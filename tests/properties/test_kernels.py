@@ -15,7 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from scipy.linalg import expm
 
-from rczone.estimation.kalman import FilterProblem, kalman_filter_reference, kalman_nll_rc2
+from rczone.estimation.kalman import FilterProblem, kalman_nll_rc2
 from rczone.kernels.propagate import propagate_kernel
 from rczone.kernels.rankone import simulate_rank_one
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
@@ -29,8 +29,9 @@ from rczone.simulation.discretize import (
     symmetrizing_scale,
 )
 from rczone.simulation.intervals import interval_groups
-from rczone.simulation.simulate import propagate_reference, transition_matrices, transition_matrices_expm
+from rczone.simulation.simulate import transition_matrices, transition_matrices_expm
 from tests.netfactory import random_network
+from tests.oracles import kalman_filter_reference, propagate_reference
 
 RTOL = 1e-10
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -56,7 +56,6 @@ from rczone.estimation.engines import (
     measured_states,
     network_theta,
     noise_values,
-    reference_cost,
     run_filter,
     simulate_output,
     trapezoid_sse,
@@ -145,7 +144,7 @@ class Objective:
     pack into arrays (:func:`rczone.estimation.compiled.compiled_problem`: networks in
     conductance form whose element values are proportional to the free parameters, such as
     the paper's) are evaluated by one compiled call, several times faster than the general
-    engine. :meth:`reference_cost` is the plain NumPy computation the tests compare with.
+    engine.
 
     Attributes
     ----------
@@ -222,8 +221,6 @@ class Objective:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
         if self._packed is not None:
             return float(cost_theta(np.asarray(theta, dtype=np.float64), self._packed))
-        if self.engine == "reference":
-            return self.reference_cost(theta)
         return self._general(np.asarray(theta, dtype=float), False)[0]
 
     def theta_value_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -264,21 +261,6 @@ class Objective:
         if not math.isfinite(j):
             return math.inf, zero, zero
         return j, np.asarray(g, dtype=float), np.asarray(c, dtype=float)
-
-    def reference_cost(self, theta: np.ndarray) -> float:
-        """Cost at physical values ``theta`` by the reference engine (plain NumPy)."""
-        values = self.spec.values(theta)
-        try:
-            j = reference_cost(
-                self.network, values, self.data, self.hold, "ls" if self.method == "ls" else "ml"
-            )
-        except (ParameterError, np.linalg.LinAlgError):
-            return math.inf
-        if self.method == "map":
-            j = self.likelihood_weight * j + log_prior_penalty(
-                self.spec, np.asarray(theta, dtype=float), self.prior_spread
-            )
-        return j if math.isfinite(j) else math.inf
 
     def __call__(self, eta: np.ndarray) -> float:
         """Cost at optimizer values ``eta``."""

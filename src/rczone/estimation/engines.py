@@ -1,6 +1,6 @@
 """How an identification cost is computed: the engines, and what they share.
 
-Every cost (:mod:`rczone.estimation.costs`) is computed by one of four engines, chosen by
+Every cost (:mod:`rczone.estimation.costs`) is computed by one of three engines, chosen by
 declared rules (:func:`choose_engine`), never by trying one and catching its failure:
 
 ``"rc2-fused"``
@@ -16,10 +16,9 @@ declared rules (:func:`choose_engine`), never by trying one and catching its fai
     its exact parameter derivatives are built in Python (:meth:`RCNetwork.state_space`,
     :meth:`RCNetwork.state_space_derivatives`), then the compiled discretization and filter run
     on them (:func:`general_cost`).
-``"reference"``
-    Plain NumPy throughout (:func:`reference_cost`): the NumPy discretization, the NumPy twin
-    of the filter, a Python loop for the simulation. The tests compare the others with it.
-    Never chosen automatically; it has no gradient.
+The tests compare every engine with a plain NumPy computation of the same cost
+(``tests/oracles.py``: the NumPy discretization, the NumPy twin of the filter, a Python loop for
+the simulation).
 
 All engines use the same model: the initial state of :func:`initial_state`, the noise of
 :func:`noise_values`, the trapezoid rule of :func:`trapezoid_sse`.
@@ -38,7 +37,6 @@ from rczone.estimation.kalman import (
     FilterOutput,
     FilterProblem,
     kalman_filter_arrays,
-    kalman_filter_reference,
     stochastic_matrices,
 )
 from rczone.estimation.parameters import measurement_noise_names
@@ -55,9 +53,9 @@ from rczone.kernels.kalman import (
 from rczone.kernels.problem import trapezoid
 from rczone.network import BilinearStateSpace, RCNetwork
 from rczone.simulation.discretize import symmetrizing_scale
-from rczone.simulation.simulate import propagate, propagate_reference, transition_matrices
+from rczone.simulation.simulate import propagate, transition_matrices
 
-ENGINES = ("rc2-fused", "compiled", "general", "reference")
+ENGINES = ("rc2-fused", "compiled", "general")
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -78,8 +76,6 @@ def choose_engine(n_states: int, n_outputs: int, packs: bool) -> str:
 
 def gradient_engine(engine: str) -> str:
     """The engine that computes gradients for a problem whose values come from ``engine``."""
-    if engine == "reference":
-        raise ParameterError("the reference engine computes values only; use engine='general' for gradients")
     return "compiled" if engine == "rc2-fused" else engine
 
 
@@ -200,22 +196,6 @@ def run_filter(
 ) -> FilterOutput:
     """Kalman filter of the stochastic model with the noise in ``values``, every intermediate result kept."""
     return kalman_filter_arrays(filter_arrays(network, values, data, hold))
-
-
-# ----------------------------------------------------------------------------- the reference engine
-
-
-def reference_cost(
-    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str, method: str
-) -> float:
-    """``J_LS`` (``method="ls"``) or ``-log L`` in plain NumPy: the reference engine."""
-    if method == "ls":
-        ss = network.state_space(network_theta(network, values))
-        x0 = initial_state(ss, values, data)
-        Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
-        x = propagate_reference(Phi, G0, G1, which, data.u, x0)
-        return trapezoid_sse(data.t, data.y - (x @ ss.C.T + data.u @ ss.D.T))
-    return kalman_filter_reference(filter_arrays(network, values, data, hold)).nll
 
 
 # ----------------------------------------------------------------------------- the general engine

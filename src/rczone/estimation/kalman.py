@@ -16,9 +16,8 @@ missing output is skipped on its own, and the likelihood is exact [2]_.
 
 There is one filter, :func:`rczone.kernels.kalman.kalman_filter` (compiled, with the
 forward sensitivities of the likelihood); :func:`kalman_filter_arrays`, :func:`kalman_nll`
-and :func:`kalman_innovations_fast` call it. :func:`kalman_filter_reference` is its plain
-NumPy twin, written from the same two step functions (:func:`update_step`,
-:func:`predict_step`); the tests compare the two, and both with a brute-force joint Gaussian
+and :func:`kalman_innovations_fast` call it. Its plain NumPy twin lives in the tests
+(``tests/oracles.py``), which compare the two, and both with a brute-force joint Gaussian
 density. :func:`kalman_nll_rc2` runs the fused 2-state kernel of :mod:`rczone.kernels.rc2`.
 
 References
@@ -161,76 +160,6 @@ class FilterOutput:
     n_obs: int
 
 
-# --------------------------------------------------------------------------- the NumPy twin
-
-
-def update_step(x: np.ndarray, P: np.ndarray, c: np.ndarray, r: float, e: float) -> tuple:
-    """Scalar measurement update of one output (the ``update_step`` of :func:`rczone.kernels.kalman.kalman_filter`).
-
-    ``s = c'Pc + r``, ``k = Pc/s``, ``x + k e``, ``P - k (Pc)'``; returns ``(x, P, s)``.
-    """
-    pc = P @ c
-    s = c @ pc + r
-    k = pc / s
-    P = P - np.outer(k, pc)
-    return x + k * e, 0.5 * (P + P.T), s
-
-
-def predict_step(x: np.ndarray, P: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, drive: np.ndarray) -> tuple:
-    """Time update (the ``predict_step`` of :func:`rczone.kernels.kalman.kalman_filter`): ``(Phi x + drive, Phi P Phi' + Qd)``."""
-    P = Phi @ P @ Phi.T + Qd
-    return Phi @ x + drive, 0.5 * (P + P.T)
-
-
-def kalman_filter_reference(problem: FilterProblem) -> FilterOutput:
-    """Run the filter over all samples in plain NumPy: the reference the compiled filter is tested against.
-
-    ``x0, P0`` are the prior of the state at the first sample (the first measurement is used
-    in the likelihood). The observed outputs of each sample are processed one at a time
-    (:func:`update_step`); missing ones (NaN in ``y``) are skipped. Complex matrices are
-    allowed (complex-step differentiation).
-
-    Parameters
-    ----------
-    problem : FilterProblem
-
-    Returns
-    -------
-    FilterOutput
-    """
-    Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R = problem
-    r = measurement_variances(R)
-    N, n, ny = y.shape[0], x0.shape[0], y.shape[1]
-    dtype = np.result_type(Phi, Qd, x0, P0, C, D, r, float)
-    drive = input_drive(Gamma0, Gamma1, which, u)
-    yd = y - u @ D.T
-    e_all = np.full((N, ny), np.nan, dtype)
-    S_all = np.empty((N, ny, ny), dtype)
-    xp_all = np.empty((N, n), dtype)
-    xf_all = np.empty((N, n), dtype)
-    Pp_all = np.empty((N, n, n), dtype)
-    x = np.array(x0, dtype=dtype)
-    P = np.array(P0, dtype=dtype)
-    nll = 0.0
-    n_obs = 0
-    for k in range(N):
-        xp_all[k] = x
-        Pp_all[k] = P
-        S_all[k] = C @ P @ C.T + np.diag(r)
-        obs = np.flatnonzero(~np.isnan(np.real(y[k])))
-        e_all[k, obs] = yd[k, obs] - C[obs] @ x
-        for j in obs:
-            e = yd[k, j] - C[j] @ x
-            x, P, s = update_step(x, P, C[j], r[j], e)
-            nll = nll + 0.5 * (np.log(s) + e * e / s)
-            n_obs += 1
-        xf_all[k] = x
-        if k < N - 1:
-            x, P = predict_step(x, P, Phi[which[k]], Qd[which[k]], drive[k])
-    nll = nll + 0.5 * n_obs * _LOG_2PI
-    return FilterOutput(nll, e_all, S_all, xp_all, xf_all, Pp_all, n_obs)
-
-
 # --------------------------------------------------------------------------- the compiled filter
 
 
@@ -267,13 +196,18 @@ def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, Filter
 
 
 def kalman_filter_arrays(problem: FilterProblem) -> FilterOutput:
-    """The compiled filter with every intermediate result; argument and result as :func:`kalman_filter_reference`."""
+    """The compiled filter over ``problem``, with every intermediate result.
+
+    ``x0, P0`` are the prior of the state at the first sample (the first measurement is used
+    in the likelihood). The observed outputs of each sample are processed one at a time;
+    missing ones (NaN in ``y``) are skipped.
+    """
     nll, n_obs, (e, _, xp, xf, Pp, S) = _compiled(problem, keep=True)
     return FilterOutput(nll, e, S, xp, xf, Pp, n_obs)
 
 
 def kalman_nll(problem: FilterProblem) -> float:
-    """``-log L`` (including ``0.5 n log 2 pi``) by the compiled filter; argument as :func:`kalman_filter_reference`."""
+    """``-log L`` (including ``0.5 n log 2 pi``) by the compiled filter (:func:`kalman_filter_arrays`)."""
     return _compiled(problem, keep=False)[0]
 
 

@@ -7,7 +7,7 @@ decomposition [1]_ with the outputs of a sample processed one at a time (sequent
 processing, exact for diagonal ``R`` [2]_): each observed output is a scalar update, a missing
 output (NaN) is skipped on its own, and no matrix is inverted.
 
-Its plain-NumPy twin, :func:`rczone.estimation.kalman.kalman_filter_reference`, is written
+Its plain-NumPy twin (``tests/oracles.py``, ``kalman_filter_reference``) is written
 from the same two step functions (``update_step``: one scalar measurement update;
 ``predict_step``: the time update), which the sample loop here carries out in place (marked
 by comments): a numba call with array arguments costs reference counting on every array,

@@ -1,6 +1,6 @@
 """Compiled state propagation ``x[k+1] = Phi[w] x[k] + G0[w] u[k] + G1[w] u[k+1]``.
 
-The compiled twin of :func:`rczone.simulation.simulate.propagate_reference`: explicit
+The compiled twin of the plain NumPy loop of the tests (``tests/oracles.py``): explicit
 loops over the small matrices, so a step costs ``n (n + 2 p)`` multiply-adds and no
 Python or BLAS call overhead.
 """

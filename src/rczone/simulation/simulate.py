@@ -11,7 +11,7 @@ discretizations are computed in one batch by the exact spectral formulas of
 :mod:`rczone.simulation.discretize` (closed form for ``n <= 2``, a symmetric
 eigen-decomposition otherwise) instead of one matrix exponential each; any other state
 space uses the matrix exponential. The sample loop runs compiled
-(:mod:`rczone.kernels.propagate`); :func:`propagate_reference` is its plain twin.
+(:mod:`rczone.kernels.propagate`); its plain twin is in the tests (``tests/oracles.py``).
 
 When the flow changes at nearly every sample (more than :data:`FEW_KEYS` distinct
 ``(dt, m)``) and the model has one supply-air flow and three or more states,
@@ -158,22 +158,6 @@ def propagate(
     from rczone.kernels.propagate import propagate as propagate_compiled
 
     return propagate_compiled(Phi, G0, G1, which, u, x0)
-
-
-def propagate_reference(
-    Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray, x0: np.ndarray
-) -> np.ndarray:
-    """Plain NumPy version of :func:`propagate` (the reference the compiled kernel is tested against).
-
-    Complex matrices are allowed (complex-step differentiation).
-    """
-    N = u.shape[0]
-    x = np.empty((N, x0.shape[0]), np.result_type(Phi, G0, G1, u, x0))
-    x[0] = x0
-    for k in range(N - 1):
-        w = which[k]
-        x[k + 1] = Phi[w] @ x[k] + G0[w] @ u[k] + G1[w] @ u[k + 1]
-    return x
 
 
 def _rank_one_form_of(ss: BilinearStateSpace, m_max: float) -> RankOneForm | None:

@@ -113,8 +113,8 @@ def test_ls_cost_fast_path_equals_the_open_loop_simulation(hold) -> None:
 @pytest.mark.parametrize("hold", ["zoh", "foh"])
 def test_ml_cost_from_parameter_values_equals_the_reference_filter(hold) -> None:
     """The general engine (Python assembly, compiled discretization and filter) vs the NumPy reference."""
-    from rczone.estimation.engines import reference_cost
     from rczone.models import get_model
+    from tests.oracles import reference_cost
 
     rng = np.random.default_rng(11)
     for net in (NET2, get_model("second-order-paper")):

@@ -14,10 +14,10 @@ from rczone.simulation.discretize import symmetrizing_scale
 from rczone.simulation.simulate import (
     _FORMS_KEPT,
     _rank_one_form_of,
-    propagate_reference,
     transition_matrices,
 )
 from tests.netfactory import one_r_one_c, thirteen_state
+from tests.oracles import propagate_reference
 
 NET2 = RCNetwork(
     "two",

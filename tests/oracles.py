@@ -1,0 +1,153 @@
+"""Plain NumPy oracles of the compiled paths: the filter, the simulation loop and the identification costs.
+
+These are the references the tests compare rczone's compiled kernels and engines with. They
+are written from the textbook recursions in the plainest form (one Python loop over the
+samples, dense NumPy algebra, complex values allowed for complex-step differentiation), and
+they are not part of the product: nothing in ``src/`` imports them.
+
+References
+----------
+.. [1] A. C. Harvey, *Forecasting, Structural Time Series Models and the Kalman Filter*,
+   Cambridge University Press, 1989, section 3.4 (prediction-error decomposition).
+.. [2] J. Durbin, S. J. Koopman, *Time Series Analysis by State Space Methods*, 2nd ed.,
+   Oxford University Press, 2012, section 6.4 (univariate treatment of multivariate series).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+
+from rczone.errors import ParameterError
+from rczone.estimation.costs import Objective, log_prior_penalty
+from rczone.estimation.data import Dataset
+from rczone.estimation.engines import filter_arrays, initial_state, network_theta, trapezoid_sse
+from rczone.estimation.kalman import FilterOutput, FilterProblem, input_drive, measurement_variances
+from rczone.network import RCNetwork
+from rczone.simulation.simulate import transition_matrices
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+# ----------------------------------------------------------------------------- the Kalman filter
+
+
+def update_step(x: np.ndarray, P: np.ndarray, c: np.ndarray, r: float, e: float) -> tuple:
+    """Scalar measurement update of one output (the ``update_step`` of :func:`rczone.kernels.kalman.kalman_filter`).
+
+    ``s = c'Pc + r``, ``k = Pc/s``, ``x + k e``, ``P - k (Pc)'``; returns ``(x, P, s)``.
+    """
+    pc = P @ c
+    s = c @ pc + r
+    k = pc / s
+    P = P - np.outer(k, pc)
+    return x + k * e, 0.5 * (P + P.T), s
+
+
+def predict_step(x: np.ndarray, P: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, drive: np.ndarray) -> tuple:
+    """Time update (the ``predict_step`` of :func:`rczone.kernels.kalman.kalman_filter`): ``(Phi x + drive, Phi P Phi' + Qd)``."""
+    P = Phi @ P @ Phi.T + Qd
+    return Phi @ x + drive, 0.5 * (P + P.T)
+
+
+def kalman_filter_reference(problem: FilterProblem) -> FilterOutput:
+    """Run the filter over all samples in plain NumPy: the reference the compiled filter is tested against.
+
+    ``x0, P0`` are the prior of the state at the first sample (the first measurement is used
+    in the likelihood). The observed outputs of each sample are processed one at a time
+    (:func:`update_step`); missing ones (NaN in ``y``) are skipped. Complex matrices are
+    allowed (complex-step differentiation).
+
+    Parameters
+    ----------
+    problem : FilterProblem
+
+    Returns
+    -------
+    FilterOutput
+    """
+    Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R = problem
+    r = measurement_variances(R)
+    N, n, ny = y.shape[0], x0.shape[0], y.shape[1]
+    dtype = np.result_type(Phi, Qd, x0, P0, C, D, r, float)
+    drive = input_drive(Gamma0, Gamma1, which, u)
+    yd = y - u @ D.T
+    e_all = np.full((N, ny), np.nan, dtype)
+    S_all = np.empty((N, ny, ny), dtype)
+    xp_all = np.empty((N, n), dtype)
+    xf_all = np.empty((N, n), dtype)
+    Pp_all = np.empty((N, n, n), dtype)
+    x = np.array(x0, dtype=dtype)
+    P = np.array(P0, dtype=dtype)
+    nll = 0.0
+    n_obs = 0
+    for k in range(N):
+        xp_all[k] = x
+        Pp_all[k] = P
+        S_all[k] = C @ P @ C.T + np.diag(r)
+        obs = np.flatnonzero(~np.isnan(np.real(y[k])))
+        e_all[k, obs] = yd[k, obs] - C[obs] @ x
+        for j in obs:
+            e = yd[k, j] - C[j] @ x
+            x, P, s = update_step(x, P, C[j], r[j], e)
+            nll = nll + 0.5 * (np.log(s) + e * e / s)
+            n_obs += 1
+        xf_all[k] = x
+        if k < N - 1:
+            x, P = predict_step(x, P, Phi[which[k]], Qd[which[k]], drive[k])
+    nll = nll + 0.5 * n_obs * _LOG_2PI
+    return FilterOutput(nll, e_all, S_all, xp_all, xf_all, Pp_all, n_obs)
+
+
+# ----------------------------------------------------------------------------- the simulation loop
+
+
+def propagate_reference(
+    Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray, x0: np.ndarray
+) -> np.ndarray:
+    """``x[k+1] = Phi[w] x[k] + G0[w] u[k] + G1[w] u[k+1]`` in a Python loop (complex values allowed)."""
+    N = u.shape[0]
+    x = np.empty((N, x0.shape[0]), np.result_type(Phi, G0, G1, u, x0))
+    x[0] = x0
+    for k in range(N - 1):
+        w = which[k]
+        x[k + 1] = Phi[w] @ x[k] + G0[w] @ u[k] + G1[w] @ u[k + 1]
+    return x
+
+
+# ----------------------------------------------------------------------------- the identification costs
+
+
+def reference_cost(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str, method: str
+) -> float:
+    """``J_LS`` (``method="ls"``, trapezoid rule on the open-loop errors) or ``-log L``, in plain NumPy."""
+    if method == "ls":
+        ss = network.state_space(network_theta(network, values))
+        x0 = initial_state(ss, values, data)
+        Phi, G0, G1, which = transition_matrices(ss, data.t, data.m, hold)
+        x = propagate_reference(Phi, G0, G1, which, data.u, x0)
+        return trapezoid_sse(data.t, data.y - (x @ ss.C.T + data.u @ ss.D.T))
+    return kalman_filter_reference(filter_arrays(network, values, data, hold)).nll
+
+
+def objective_reference_cost(objective: Objective, theta: np.ndarray) -> float:
+    """The cost of ``objective`` at physical values ``theta`` by :func:`reference_cost`; ``inf`` where invalid."""
+    values = objective.spec.values(theta)
+    try:
+        j = reference_cost(
+            objective.network,
+            values,
+            objective.data,
+            objective.hold,
+            "ls" if objective.method == "ls" else "ml",
+        )
+    except (ParameterError, np.linalg.LinAlgError):
+        return math.inf
+    if objective.method == "map":
+        j = objective.likelihood_weight * j + log_prior_penalty(
+            objective.spec, np.asarray(theta, dtype=float), objective.prior_spread
+        )
+    return j if math.isfinite(j) else math.inf
