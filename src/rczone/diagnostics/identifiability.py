@@ -104,6 +104,8 @@ class ParameterVerdict:
     ``value`` is the parameter at the operating point, ``construction`` the model's declared
     (construction) value. ``borderline`` is true when moving any of the deciding quantities by
     :data:`VERDICT_MARGIN` could change the verdict; "identifiable" is never borderline.
+    ``at_bound`` ("lower" or "upper") when the value sits at a bound of its search box: the verdict
+    is then "not identifiable", whatever the local quantities say.
     """
 
     name: str
@@ -119,6 +121,7 @@ class ParameterVerdict:
     worst_case_bias: float = 0.0
     value: float = math.nan
     borderline: bool = False
+    at_bound: str | None = None
 
     def to_dict(self) -> dict:
         return {k: v for k, v in vars(self).items() if k != "name"}
@@ -147,6 +150,10 @@ class OperatingPoint:
         The choice in words.
     fit_free : tuple of str
         Parameters the quick fit estimated (empty without a fit).
+    at_bound : dict of str to {"lower", "upper"}
+        Parameters (diagnosed or fitted) whose value sits at a bound of its search box
+        (:meth:`rczone.estimation.parameters.ParameterSpec.near_bound`): the data push them beyond
+        it, so the point is degenerate and every verdict is read at an arbitrary place.
     """
 
     source: str
@@ -157,6 +164,7 @@ class OperatingPoint:
     fit_residual_K: float = math.nan
     reason: str = ""
     fit_free: tuple[str, ...] = ()
+    at_bound: dict[str, str] = field(default_factory=dict)
 
     @property
     def residual_used_K(self) -> float:
@@ -179,6 +187,7 @@ class OperatingPoint:
             "reproduces_data": self.reproduces_data,
             "reason": self.reason,
             "fit_free": list(self.fit_free),
+            "at_bound": dict(self.at_bound),
         }
 
 
@@ -343,7 +352,10 @@ def choose_operating_point(
     if mode == "model" or (mode == "auto" and r_model <= threshold):
         how = "as asked" if mode == "model" else f"they reproduce the data within {threshold:.2f} K"
         reason = f"the model's values ({how}: residual {r_model:.2f} K RMS {what})"
-        return OperatingPoint("model", theta, states, r_model, threshold, reason=reason)
+        pinned = parameters_at_bound(net, free, theta)
+        return OperatingPoint(
+            "model", theta, states, r_model, threshold, reason=reason + _pinned_words(pinned), at_bound=pinned
+        )
     from rczone.calibrate import calibrate
     from rczone.estimation.fit import default_free
 
@@ -363,7 +375,46 @@ def choose_operating_point(
             " than assumed: read the verdicts with caution, or raise the model error"
         )
     states = dict(zip(net.state_names, map(float, x0), strict=True))
-    return OperatingPoint("fit", fitted, states, r_model, threshold, r_fit, reason, fit_free)
+    pinned = parameters_at_bound(net, [n for n in fit_free if n in net.parameters], fitted)
+    reason += _pinned_words(pinned)
+    return OperatingPoint("fit", fitted, states, r_model, threshold, r_fit, reason, fit_free, pinned)
+
+
+def parameters_at_bound(
+    network: RCNetwork, names: Sequence[str], theta: Mapping[str, float]
+) -> dict[str, str]:
+    """Which of ``names`` sit at a bound of the search box a fit would use, and which bound.
+
+    The box is the one :func:`rczone.estimation.parameters.make_spec` gives (declared bounds, else
+    a factor 1000 around the declared value); "at" is within 0.1 % of its width in the optimizer's
+    variable (:meth:`~rczone.estimation.parameters.ParameterSpec.near_bound`).
+    """
+    from rczone.estimation.parameters import make_spec
+
+    names = [n for n in names if n in network.parameters and network.parameters[n].expr is None]
+    if not names:
+        return {}
+    try:
+        spec = make_spec(network, names)
+    except ParameterError:
+        return {}
+    values = network.values(theta)
+    th = np.array([values[n] for n in spec.names], dtype=float)
+    near = spec.near_bound(th)
+    eta = spec.to_eta(th)
+    mid = 0.5 * (spec.eta_lower + spec.eta_upper)
+    return {n: ("upper" if e > c else "lower") for n, e, c, hit in zip(spec.names, eta, mid, near) if hit}
+
+
+def _pinned_words(pinned: Mapping[str, str]) -> str:
+    if not pinned:
+        return ""
+    which = ", ".join(f"{n} at its {b} bound" for n, b in pinned.items())
+    them = "them" if len(pinned) > 1 else "it"
+    return (
+        f"; at this point {which}: the data push {them} beyond the search box, so every verdict is read"
+        f" at a degenerate point (widen the bounds or fix {them}, and diagnose again)"
+    )
 
 
 def _indicator_frame(zm: ZoneModel, frame: pd.DataFrame, data: Dataset) -> pd.DataFrame:
@@ -529,7 +580,17 @@ def diagnose(
         others = [(abs(corr[j, k]), free[k]) for k in range(len(free)) if k != j]
         rho, partner = max(others) if others else (0.0, None)
         verdicts[name] = _verdict(
-            words, name, float(se[j]), rho, partner, changes, sigma_K, ind, float(bias[j]), model_error_K
+            words,
+            name,
+            float(se[j]),
+            rho,
+            partner,
+            changes,
+            sigma_K,
+            ind,
+            float(bias[j]),
+            model_error_K,
+            at_bound=op.at_bound.get(name),
         )
     return IdentifiabilityReport(
         verdicts,
@@ -610,6 +671,8 @@ def _verdict(
     ind: DataIndicators,
     bias: float = 0.0,
     model_error: float = 0.0,
+    *,
+    at_bound: str | None = None,
 ) -> ParameterVerdict:
     network = words.network
     tenth, tenfold = changes
@@ -620,16 +683,26 @@ def _verdict(
         _rule(se * a, bias * b, tenth * c, tenfold * d, sigma)
         for a, b, c, d in itertools.product((1 / m, m), repeat=4)
     }
-    borderline = nearby != {verdict}
+    borderline = nearby != {verdict} and not at_bound
     demoted = verdict == IDENTIFIABLE and borderline
     if demoted:
         verdict = WEAK
+    if at_bound:
+        # the sensitivities at a bound say nothing about where the data want the parameter
+        verdict = NOT_IDENTIFIABLE
     kind = network.parameters[name].kind
     reasons, advice = [], []
     bounds = parameter_boundaries(network, name)
     sur = [s for s in ind.surroundings if s.name in bounds]
     measured = words.measured
-    if demoted:
+    if at_bound:
+        unit = network.parameters[name].unit
+        reasons.append(
+            f"its value {words.value[name]:.4g}{' ' + unit if unit else ''} sits at the {at_bound} bound of its"
+            " search box: the data push it beyond, so the analysis there cannot tell its value"
+        )
+        advice.append(f"widen the bounds of {name} (or fix it) and diagnose again")
+    elif demoted:
         reasons.append(
             f"it meets the rules for identifiable by less than the {VERDICT_MARGIN:.0%} margin"
             f" (±{_percent(se)}, worst-case shift {_factor(bias)}), so another data set of the same"
@@ -708,6 +781,7 @@ def _verdict(
         worst_case_bias=float(bias),
         value=float(words.value[name]),
         borderline=borderline,
+        at_bound=at_bound,
     )
 
 

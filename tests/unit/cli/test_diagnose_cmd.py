@@ -301,3 +301,31 @@ def test_design_for_a_heater_schedules_its_power(tmp_path, capsys):
 def test_design_mistakes_exit_2_with_one_line(tmp_path, capsys, args, message):
     _one_error(capsys, main(["design", *args, "--out", str(tmp_path / "s.csv")]), message)
     assert not (tmp_path / "s.csv").exists()
+
+
+def test_a_parameter_at_its_bound_is_never_identifiable(tmp_path, capsys):
+    """The data were made with Ci = 2e7 J/K; the model file caps Ci at 3e6 J/K.
+
+    The quick fit pins Ci at that bound. Local sensitivities there say nothing about where the data
+    want Ci, so the verdict is "not identifiable" with the bound named, and the operating point says
+    it is degenerate (issue: an office's Ci at the family's 1e9 J/K bound was called identifiable).
+    """
+    zm = family("TiTe+heater", theta={"Ci": 2e7})
+    heated(zm, "prbs", hours=48).to_csv(tmp_path / "heated.csv", index=False)
+    toml = model_to_toml(family("TiTe+heater"))
+    capped = toml.replace("bounds = [10000.0, 1000000000.0]", "bounds = [10000.0, 3000000.0]")
+    assert capped != toml
+    (tmp_path / "capped.toml").write_text(capped)
+    out = tmp_path / "d.json"
+    args = ["diagnose", str(tmp_path / "heated.csv"), "--model", str(tmp_path / "capped.toml")]
+    assert main([*args, "--json", str(out)]) == 0
+    d = _json(out)
+    op = d["operating_point"]
+    assert op["source"] == "fit" and op["theta"]["Ci"] == pytest.approx(3e6, rel=0.01)
+    assert op["at_bound"] == {"Ci": "upper"}
+    assert "Ci at its upper bound" in op["reason"] and "push it beyond" in op["reason"]
+    ci = d["parameters"]["Ci"]
+    assert ci["verdict"] == "not identifiable" and ci["at_bound"] == "upper"
+    assert "upper bound" in ci["reason"] and "widen the bounds" in ci["advice"]
+    # the other parameters are not at a bound and keep verdicts from their own evidence
+    assert all(d["parameters"][n]["at_bound"] is None for n in ("Ce", "Rie", "Rea"))
