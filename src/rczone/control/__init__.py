@@ -4,22 +4,32 @@ Modules: :mod:`~rczone.control.noise` (the discrete noise model of a fit),
 :mod:`~rczone.control.disturbance` (the appended disturbance state),
 :mod:`~rczone.control.model` (the model as a controller sees it, its exact discretization and
 derivatives in the flow), :mod:`~rczone.control.observer` (Kalman filter, steady-state gain,
-:func:`estimate_state`).
+:func:`estimate_state`), :mod:`~rczone.control.energy` (how a zone's fan, reheat and cooling
+energy is counted) and :mod:`~rczone.control.mpc` (the reference economic MPC, OSQP).
 """
 
 from rczone.control.disturbance import Disturbance
+from rczone.control.energy import ZonePower, zone_power
 from rczone.control.model import ControlModel, DiscreteMatrices, FlowDerivative
+from rczone.control.mpc import MPC, ControlAction, Forecast, MPCSettings, Plan
 from rczone.control.noise import NoiseModel
 from rczone.control.observer import Estimate, KalmanObserver, StateEstimate, estimate_state
 
 __all__ = [
+    "MPC",
+    "ControlAction",
     "ControlModel",
     "DiscreteMatrices",
     "Disturbance",
     "Estimate",
     "FlowDerivative",
+    "Forecast",
     "KalmanObserver",
+    "MPCSettings",
     "NoiseModel",
+    "Plan",
     "StateEstimate",
+    "ZonePower",
     "estimate_state",
+    "zone_power",
 ]
