@@ -21,6 +21,10 @@ def control_test(
     no_disturbance: Annotated[
         bool, typer.Option("--no-disturbance", help="The MPC's observer estimates no unmeasured heat input.")
     ] = False,
+    price: Annotated[
+        str,
+        typer.Option("--price", help="flat, or tou: 3x price from noon to 6 pm (the MPC minimizes cost)."),
+    ] = "flat",
     json_out: Annotated[
         Path | None, typer.Option("--json", help="Write the scores as JSON ('-': stdout).")
     ] = None,
@@ -34,7 +38,13 @@ def control_test(
     zm = model(model_spec)
     out = out_console(json_out)
     res = closed_loop_test(
-        zm, season=scenario, days=days, seed=seed, controller=controller, disturbance=not no_disturbance
+        zm,
+        season=scenario,
+        days=days,
+        seed=seed,
+        controller=controller,
+        disturbance=not no_disturbance,
+        price=price,
     )
     out.print(esc(res.summary()))
     write_json(json_out, res.to_dict())

@@ -13,6 +13,7 @@ Scores (from 6 pm of the first day on; the warm-up is not scored):
 * ``comfort_Kh``: the integral of the room air temperature's distance outside the thermostat's
   occupied band (``heat_occ``, ``cool_occ``), over the occupied hours, K h;
 * ``energy_kWh``: reheat + cooling + fan energy of the zone (:mod:`rczone.control.energy`);
+* ``cost``: the same energy weighted by the price signal (equal to ``energy_kWh`` for a flat price);
 * ``peak_flow_kg_s``; ``max_discharge_degC``;
 * ``prediction_rmse_K``: the model's 10-min-ahead prediction error along the run (its Kalman
   filter without a disturbance state, on the run's sensed data averaged over each 10 min);
@@ -54,6 +55,11 @@ from rczone.virtual.weather import diurnal_curve
 
 SEASONS = ("summer", "winter")
 CONTROLLERS = ("mpc", "thermostat")
+#: Price signals: flat (energy), or time-of-use with a peak price of :data:`PEAK_PRICE` from
+#: noon to 6 pm (a summer on-peak window, when pre-cooling pays).
+PRICES = ("flat", "tou")
+PEAK_PRICE = 3.0
+PEAK_HOURS = (18 * 3600.0, 24 * 3600.0)  # s after 6 pm: noon to 6 pm
 #: Warm-up before the first 6 pm, s (the MPC's observer settles; not scored).
 WARMUP = 6 * 3600.0
 #: Interval of the prediction-error score, s.
@@ -68,6 +74,13 @@ def band(cfg: ControllerConfig, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     return lower, upper, ~unocc
 
 
+def price_signal(kind: str, t: np.ndarray) -> np.ndarray:
+    """Price per kWh at ``t`` (s from 6 pm): 1, or :data:`PEAK_PRICE` in the peak window ("tou")."""
+    tm = np.asarray(t, float) % DAY
+    peak = (tm >= PEAK_HOURS[0]) & (tm < PEAK_HOURS[1])
+    return np.where(peak & (kind == "tou"), PEAK_PRICE, 1.0)
+
+
 class MPCZoneController:
     """The reference MPC as a controller of the virtual building (``ObservingController``).
 
@@ -78,12 +91,14 @@ class MPCZoneController:
         The zone thermostat's settings: its band and schedule are the MPC's comfort band.
     season : str
         For the outdoor forecast's diurnal curve.
+    price : {"flat", "tou"}
     """
 
-    def __init__(self, mpc: MPC, config: ControllerConfig, season: str) -> None:
+    def __init__(self, mpc: MPC, config: ControllerConfig, season: str, price: str = "flat") -> None:
         self.mpc = mpc
         self.cfg = config
         self.season = season
+        self.price = price
         self.readings: dict[str, float] = {}
         self.next_time: float | None = None
         self.action = None
@@ -104,7 +119,9 @@ class MPCZoneController:
         held = {c: np.full(times.size, r[c]) for c in SURROUNDINGS}
         held["Tsd"] = np.full(times.size, float(np.mean([r[c] for c in SURROUNDINGS])))
         lower, upper, _ = band(self.cfg, times)
-        return Forecast({"To": to, **held}, np.full(times.size, t_ahu), lower, upper)
+        return Forecast(
+            {"To": to, **held}, np.full(times.size, t_ahu), lower, upper, price_signal(self.price, times)
+        )
 
     def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
         if self.next_time is None or t >= self.next_time - 1e-9:
@@ -161,7 +178,9 @@ class ClosedLoopResult:
         return "\n".join(lines)
 
 
-def _check(season: str, days: float, controller: str) -> None:
+def _check(season: str, days: float, controller: str, price: str) -> None:
+    if price not in PRICES:
+        raise ParameterError(f"unknown price signal {price!r}; " + did_you_mean(price, PRICES))
     if season not in SEASONS:
         raise ParameterError(f"unknown scenario {season!r}; " + did_you_mean(season, SEASONS))
     if controller not in CONTROLLERS:
@@ -179,6 +198,7 @@ def closed_loop_test(
     controller: str = "mpc",
     disturbance: bool = True,
     settings: MPCSettings | None = None,
+    price: str = "flat",
 ) -> ClosedLoopResult:
     """Run the virtual building for ``days`` with ``controller`` on its target zone, and score it.
 
@@ -194,19 +214,21 @@ def closed_loop_test(
     disturbance : bool
         The MPC's observer estimates an unmeasured heat input (offset-free); False: none.
     settings : MPCSettings, optional
+    price : {"flat", "tou"}
+        The price the MPC minimizes (``cost`` in the scores); the thermostat ignores it.
 
     Returns
     -------
     ClosedLoopResult
     """
-    _check(season, days, controller)
+    _check(season, days, controller, price)
     bld = build_building()
     duration = round(days * DAY / CONTROL_DT) * CONTROL_DT
     cfg = thermostat_configs(bld, season, np.random.default_rng(seed), warmup=WARMUP, daily=True)["target"]
     ctrl = None
     if controller == "mpc":
         mpc = MPC(model, settings, disturbance=Disturbance("heat") if disturbance else None)
-        ctrl = MPCZoneController(mpc, cfg, season)
+        ctrl = MPCZoneController(mpc, cfg, season, price)
     r = run(
         bld,
         season,
@@ -216,7 +238,7 @@ def closed_loop_test(
         controllers={"target": ctrl} if ctrl else None,
         daily=True,
     )
-    result = _score(r, bld, cfg, model)
+    result = _score(r, bld, cfg, model, price)
     setup = {
         "model": model.label,
         "scenario": season,
@@ -224,6 +246,7 @@ def closed_loop_test(
         "seed": seed,
         "controller": controller,
         "disturbance_estimate": bool(disturbance) if controller == "mpc" else None,
+        "price": price,
     }
     solve = None
     if ctrl is not None and ctrl.solve_times:
@@ -231,7 +254,9 @@ def closed_loop_test(
     return ClosedLoopResult({**result[0], "solve_time_s": solve}, setup, result[1], result[2])
 
 
-def _score(r: EmulatorRun, bld, cfg: ControllerConfig, model: ZoneModel) -> tuple[dict, np.ndarray, dict]:
+def _score(
+    r: EmulatorRun, bld, cfg: ControllerConfig, model: ZoneModel, price: str
+) -> tuple[dict, np.ndarray, dict]:
     """Scores and series of the scored part of a run (from t = 0)."""
     k0 = int(np.searchsorted(r.t, 0.0))
     t = r.t[k0:-1]
@@ -246,6 +271,7 @@ def _score(r: EmulatorRun, bld, cfg: ControllerConfig, model: ZoneModel) -> tupl
     scores = {
         "comfort_Kh": float((outside * occ).sum() * h),
         "energy_kWh": float(sum(kwh.values())),
+        "cost": float((p.total * price_signal(price, t)).sum() * CONTROL_DT / 3.6e6),
         "reheat_kWh": kwh["reheat"],
         "cooling_kWh": kwh["cooling"],
         "fan_kWh": kwh["fan"],

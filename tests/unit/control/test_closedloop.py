@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from rczone.control.closedloop import closed_loop_test
+from rczone.control.closedloop import PEAK_PRICE, closed_loop_test, price_signal
 from rczone.control.energy import zone_power
 from rczone.control.mpc import MPCSettings
 from rczone.errors import ParameterError
@@ -42,8 +42,26 @@ def test_the_comfort_score_integrates_the_distance_outside_the_occupied_band(zm)
 
 @pytest.mark.parametrize(
     ("kwargs", "match"),
-    [({"season": "autumn"}, "autumn"), ({"controller": "pid"}, "pid"), ({"days": 0}, "days")],
+    [
+        ({"season": "autumn"}, "autumn"),
+        ({"controller": "pid"}, "pid"),
+        ({"days": 0}, "days"),
+        ({"price": "hourly"}, "hourly"),
+    ],
 )
 def test_bad_arguments_raise_one_line_errors(zm, kwargs, match):
     with pytest.raises(ParameterError, match=match):
         closed_loop_test(zm, **kwargs)
+
+
+def test_the_cost_weights_energy_by_the_price_signal(zm):
+    flat = closed_loop_test(zm, season="summer", days=1, seed=4, controller="thermostat")
+    tou = closed_loop_test(zm, season="summer", days=1, seed=4, controller="thermostat", price="tou")
+    assert flat.scores["cost"] == pytest.approx(flat.scores["energy_kWh"])
+    assert tou.scores["energy_kWh"] == flat.scores["energy_kWh"]  # the thermostat ignores prices
+    peak = price_signal("tou", tou.t) == PEAK_PRICE
+    assert tou.scores["cost"] == pytest.approx(
+        flat.scores["energy_kWh"] + (PEAK_PRICE - 1) * tou.series["power_W"][peak].sum() * 60 / 3.6e6
+    )
+    hours = np.array([17.0, 18.0, 23.99, 24.0]) * 3600.0  # 11 am, noon, 5:59 pm, 6 pm
+    np.testing.assert_array_equal(price_signal("tou", hours), [1.0, PEAK_PRICE, PEAK_PRICE, 1.0])
