@@ -6,8 +6,22 @@ continuous or exact discrete LTI matrices at a chosen mass flow (the bilinear mo
 for constant flow), as plain numpy arrays (:meth:`ZoneModel.arrays`, :meth:`ZoneModel.discrete`)
 or as a python-control ``StateSpace`` (:meth:`ZoneModel.to_control`, optional extra
 ``rczone[control]``). This module is the MPC-facing entry point; it imports no plotting.
+
+It also re-exports :mod:`rczone.control`: the noise model, the Kalman observer with an optional
+disturbance state (:func:`estimate_state`) and the reference economic MPC (:class:`MPC`,
+optional extra ``rczone[mpc]`` for its QP solver).
 """
 
+from rczone.control import MPC, Disturbance, Forecast, MPCSettings, estimate_state
 from rczone.models.zone import FORMAT, DiscreteModel, ZoneModel
 
-__all__ = ["FORMAT", "DiscreteModel", "ZoneModel"]
+__all__ = [
+    "FORMAT",
+    "MPC",
+    "DiscreteModel",
+    "Disturbance",
+    "Forecast",
+    "MPCSettings",
+    "ZoneModel",
+    "estimate_state",
+]

@@ -51,6 +51,7 @@ def version() -> None:
 # Command modules register themselves on `app` when imported.
 from rczone.cli import (  # noqa: E402, F401
     commands_batch,
+    commands_control,
     commands_demo,
     commands_diagnose,
     commands_fit,

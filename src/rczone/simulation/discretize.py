@@ -32,7 +32,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
+from scipy.linalg import expm, expm_frechet
 
 
 def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -50,12 +50,38 @@ def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
     Phi : ndarray, shape (n, n)
     Gamma : ndarray, shape (n, p)
     """
+    n = A.shape[0]
+    E = expm(_zoh_block(A, B, dt))
+    return E[:n, :n], E[:n, n:]
+
+
+def _zoh_block(A: np.ndarray, B: np.ndarray, dt: float) -> np.ndarray:
+    """``[[A dt, B dt], [0, 0]]``, whose exponential holds the ZOH pair."""
     n, p = B.shape
     blk = np.zeros((n + p, n + p), np.result_type(A, B))
     blk[:n, :n] = A * dt
     blk[:n, n:] = B * dt
-    E = expm(blk)
-    return E[:n, :n], E[:n, n:]
+    return blk
+
+
+def zoh_derivative(
+    A: np.ndarray, B: np.ndarray, dA: np.ndarray, dB: np.ndarray, dt: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Derivative of the :func:`zoh` pair ``(Phi, Gamma)`` along a direction ``(dA, dB)``.
+
+    The ZOH pair is a block of ``expm([[A dt, B dt], [0, 0]])``; its derivative is the same
+    block of the Fréchet derivative of the exponential in the direction ``[[dA dt, dB dt],
+    [0, 0]]`` (Higham [3]_, section 10.6; scipy's ``expm_frechet``). With ``dA = N``, ``dB = M``
+    this is the sensitivity of the exact discrete model to a supply flow.
+
+    Returns
+    -------
+    dPhi : ndarray, shape (n, n)
+    dGamma : ndarray, shape (n, p)
+    """
+    n = A.shape[0]
+    _, L = expm_frechet(_zoh_block(A, B, dt), _zoh_block(dA, dB, dt))
+    return L[:n, :n], L[:n, n:]
 
 
 def foh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

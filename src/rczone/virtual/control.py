@@ -33,7 +33,9 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -87,6 +89,8 @@ class ControllerConfig:
         Highest discharge temperature, degC.
     tau_coil : float
         Reheat coil time constant, s.
+    period : float, optional
+        Repeat the schedule every ``period`` s (one day for runs of several days); ``None``: one night.
     """
 
     heat_occ: float
@@ -102,6 +106,35 @@ class ControllerConfig:
     ti: float = 1200.0
     ts_max: float = 35.0
     tau_coil: float = 180.0
+    period: float | None = None
+
+    def unoccupied(self, t: float) -> bool:
+        """Whether the schedule is in unoccupied mode at ``t`` (s from 6 pm)."""
+        tm = t % self.period if self.period else t
+        return self.unocc_start <= tm < self.unocc_end
+
+
+@runtime_checkable
+class ZoneController(Protocol):
+    """What the virtual building asks of a zone's controller (thermostat, forced schedule, MPC).
+
+    :meth:`step` is called once per control interval (:data:`CONTROL_DT`) with the time (s from
+    6 pm), the zone's sensed air temperature and the AHU supply temperature (degC), and returns
+    the flow (kg/s) and discharge temperature (degC) held over the next interval.
+    """
+
+    def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]: ...
+
+
+@runtime_checkable
+class ObservingController(ZoneController, Protocol):
+    """A controller that also reads the building's other sensors before each :meth:`step`.
+
+    :meth:`observe` gets ``{"To": outdoor temperature, <air node>: sensed temperature of every
+    zone}``, degC (e.g. a model-predictive controller whose model needs the neighbours).
+    """
+
+    def observe(self, t: float, readings: Mapping[str, float]) -> None: ...
 
 
 def controller_configs(
@@ -170,7 +203,7 @@ class VAVController:
         self.ts = None  # discharge temperature (coil output), degC
 
     def _mode(self, t: float) -> bool:
-        return self.cfg.unocc_start <= t < self.cfg.unocc_end
+        return self.cfg.unoccupied(t)
 
     def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
         """Advance one control interval; returns ``(m, Ts)`` in kg/s and degC."""
@@ -215,7 +248,7 @@ class TightController:
     def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
         """Advance one control interval; returns ``(m, Ts)`` in kg/s and degC."""
         c = self.cfg
-        unocc = c.unocc_start <= t < c.unocc_end
+        unocc = c.unoccupied(t)
         sp = 0.5 * (c.heat_unocc + c.cool_unocc) if unocc else 0.5 * (c.heat_occ + c.cool_occ)
         span = c.ts_max - t_ahu
         if self.integral is None:  # bumpless start at mid-span

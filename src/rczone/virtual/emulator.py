@@ -22,6 +22,7 @@ References
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
@@ -35,8 +36,10 @@ from rczone.virtual.control import (
     FLOW_LEVELS,
     SEASONS,
     ControllerConfig,
+    ObservingController,
     TightController,
     VAVController,
+    ZoneController,
     controller_configs,
 )
 from rczone.virtual.operation import SCHEDULE_GAIN, TIGHT_FLOW, Operation, sensor_reading
@@ -51,6 +54,22 @@ AHU_DRIFT_TAU = 1800.0
 #: leave, and leave the walls and furniture warm at 6 pm.
 DAY_GAIN = {"target": 700.0, "n1": 700.0, "n2": 700.0, "hw": 200.0, "f": 700.0, "c": 700.0}
 DAY_END = 0.0
+#: One day, s; with ``daily=True`` schedules and daytime gains repeat with this period.
+DAY = 86400.0
+#: Start of the daytime gains with ``daily=True``, s after 6 pm (8 am).
+DAY_START = 14 * 3600.0
+
+
+def day_gain_share(t: float, daily: bool) -> float:
+    """Share of :data:`DAY_GAIN` present at ``t`` (s from 6 pm).
+
+    One night (``daily=False``): full until an hour before 6 pm, ramping down to zero at 6 pm
+    (only the warm-up sees them). Several days: the same ramp every day, on from 8 am.
+    """
+    if not daily:
+        return min(max((DAY_END - t) / 3600.0, 0.0), 1.0)
+    tm = t % DAY
+    return min(max((DAY - tm) / 3600.0, 0.0), 1.0) if tm >= DAY_START else 0.0
 
 
 @dataclass(frozen=True)
@@ -136,6 +155,8 @@ class EmulatorRun:
         Zone air temperatures as the BMS sensed them (what the controllers used), degC.
     n_discretizations : int
         Distinct flow vectors met (size of the ZOH cache).
+    t_ahu, t_out : ndarray, shape (N,), optional
+        AHU supply and outdoor temperatures over the intervals, degC.
     """
 
     t: np.ndarray
@@ -147,6 +168,8 @@ class EmulatorRun:
     input_names: tuple[str, ...]
     flow_names: tuple[str, ...]
     n_discretizations: int
+    t_ahu: np.ndarray | None = None
+    t_out: np.ndarray | None = None
 
     def state(self, name: str) -> np.ndarray:
         """True temperature trajectory of node ``name``, shape (N + 1,)."""
@@ -179,6 +202,33 @@ def _initial_state(bld: VirtualBuilding, season: str, heat_sp: Mapping[str, floa
     return x_base + G @ ts
 
 
+def thermostat_configs(
+    bld: VirtualBuilding,
+    season: str,
+    rng: np.random.Generator,
+    *,
+    warmup: float = 6 * 3600.0,
+    operation: Operation | None = None,
+    daily: bool = False,
+) -> dict[str, ControllerConfig]:
+    """The thermostat settings (setpoints, schedule) that :func:`run` will draw from ``rng``.
+
+    ``rng`` is not advanced (a copy is used), so a controller can be given the zone's band
+    before ``run(bld, season, rng, ...)`` is called with the same generator.
+    """
+    _, g_ctrl, _, _ = copy.deepcopy(rng).spawn(4)
+    return _configs(bld, season, g_ctrl, warmup, operation or Operation(), daily)
+
+
+def _configs(
+    bld: VirtualBuilding, season: str, g_ctrl: np.random.Generator, warmup: float, op: Operation, daily: bool
+) -> dict[str, ControllerConfig]:
+    return {
+        z: replace(_with_deadband(c, op.deadband_K), period=DAY if daily else None)
+        for z, c in controller_configs(season, bld.zones, g_ctrl, -warmup).items()
+    }
+
+
 def run(
     bld: VirtualBuilding,
     season: str,
@@ -188,6 +238,9 @@ def run(
     forced: Mapping[str, tuple[Command, ...]] | None = None,
     sense: Callable[[np.ndarray, np.random.Generator], np.ndarray] = sense_temperature,
     operation: Operation | None = None,
+    *,
+    controllers: Mapping[str, ZoneController] | None = None,
+    daily: bool = False,
 ) -> EmulatorRun:
     """Simulate the building in closed loop from ``-warmup`` to ``duration`` s after 6 pm.
 
@@ -206,6 +259,11 @@ def run(
     operation : Operation, optional
         Loop, night deadband, unmeasured scheduled gains and thermostat placement
         (:mod:`rczone.virtual.operation`); default: the operation of the shipped nights.
+    controllers : mapping of zone to ZoneController, optional
+        Zones run by a controller of the caller's (:class:`~rczone.virtual.control.ZoneController`;
+        an :class:`~rczone.virtual.control.ObservingController` also reads every sensor first).
+    daily : bool
+        Runs of several days: the thermostats' schedules and the daytime gains repeat every day.
 
     Returns
     -------
@@ -227,16 +285,15 @@ def run(
     t_ahu = s.t_ahu + drift
 
     op = operation or Operation()
-    cfgs = {
-        z: _with_deadband(c, op.deadband_K)
-        for z, c in controller_configs(season, bld.zones, g_ctrl, -warmup).items()
-    }
-    ctrls: dict[str, VAVController | ForcedController | TightController] = {
+    cfgs = _configs(bld, season, g_ctrl, warmup, op, daily)
+    ctrls: dict[str, ZoneController] = {
         z: TightController(cfgs[z], TIGHT_FLOW) if op.loop == "tight" else VAVController(cfgs[z], -warmup)
         for z in bld.zones
     }
     for z, cmds in forced.items():
         ctrls[z] = ForcedController(cmds, VAVController(cfgs[z], -warmup))
+    ctrls.update(dict(controllers or {}))
+    observers = {z: c for z, c in ctrls.items() if isinstance(c, ObservingController)}
     ss = bld.network.state_space()
     n, p, nf = len(ss.state_names), len(ss.input_names), len(ss.flow_names)
     air_idx = np.array([ss.state_names.index(bld.air_nodes[z]) for z in bld.zones])
@@ -263,11 +320,18 @@ def run(
         sensed[k] = sense(reading, g_sense)
         if k == n_steps:
             break
-        uk = u_base + min(max((DAY_END - t[k]) / 3600.0, 0.0), 1.0) * u_day
+        uk = u_base + day_gain_share(float(t[k]), daily) * u_day
         if op.gains == "schedule":
-            occupied = np.array([not (cfgs[z].unocc_start <= t[k] < cfgs[z].unocc_end) for z in bld.zones])
+            occupied = np.array([not cfgs[z].unoccupied(float(t[k])) for z in bld.zones])
             uk[gain_idx] += SCHEDULE_GAIN * occupied
         uk[to_idx] = to[k]
+        if observers:
+            readings = {
+                "To": float(to[k]),
+                **{bld.air_nodes[z]: float(sensed[k, j]) for j, z in enumerate(bld.zones)},
+            }
+            for c in observers.values():
+                c.observe(float(t[k]), readings)
         mk = np.empty(nf)
         for j, z in enumerate(bld.zones):
             mk[j], uk[ts_idx[j]] = ctrls[z].step(float(t[k]), float(sensed[k, j]), float(t_ahu[k]))
@@ -287,6 +351,8 @@ def run(
         input_names=ss.input_names,
         flow_names=ss.flow_names,
         n_discretizations=len(cache),
+        t_ahu=t_ahu[:-1].copy(),
+        t_out=to[:-1].copy(),
     )
 
 

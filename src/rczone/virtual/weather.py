@@ -41,6 +41,13 @@ def check_season(season: str) -> str:
     return season
 
 
+def diurnal_curve(season: str, t: np.ndarray) -> np.ndarray:
+    """The smooth part ``mean + amp cos(2 pi (h - 15)/24)`` at ``t`` (s from 6 pm), degC: a forecast."""
+    mean, amp = DIURNAL[check_season(season)]
+    h = NIGHT_START_HOUR + np.asarray(t, dtype=float) / 3600.0
+    return mean + amp * np.cos(2 * np.pi * (h - 15.0) / 24.0)
+
+
 def outdoor_temperature(season: str, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """Outdoor temperature at times ``t`` (s from 6 pm, equally spaced), degC.
 
@@ -54,10 +61,8 @@ def outdoor_temperature(season: str, t: np.ndarray, rng: np.random.Generator) ->
     -------
     ndarray, shape (N,)
     """
-    mean, amp = DIURNAL[check_season(season)]
     t = np.asarray(t, dtype=float)
-    h = NIGHT_START_HOUR + t / 3600.0
-    base = mean + amp * np.cos(2 * np.pi * (h - 15.0) / 24.0) + rng.normal(0.0, OFFSET_STD)
+    base = diurnal_curve(season, t) + rng.normal(0.0, OFFSET_STD)
     dt = float(t[1] - t[0]) if t.size > 1 else 60.0
     a = np.exp(-dt / NOISE_TAU)
     w = rng.normal(0.0, NOISE_STD * np.sqrt(1 - a * a), size=t.size)

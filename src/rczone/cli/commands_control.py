@@ -1,0 +1,55 @@
+"""``rczone control-test``: run the virtual building with a controller on its target zone, and score it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from rczone.cli.common import MODEL_HELP, esc, model, out_console, write_json
+from rczone.cli.main import app
+
+
+@app.command("control-test")
+def control_test(
+    model_spec: Annotated[str, typer.Option("--model", help=MODEL_HELP)] = "second-order",
+    scenario: Annotated[str, typer.Option("--scenario", help="summer or winter.")] = "summer",
+    days: Annotated[float, typer.Option("--days", help="Days to run (from 6 pm).")] = 1.0,
+    seed: Annotated[int, typer.Option("--seed", help="Weather, settings and noise.")] = 0,
+    controller: Annotated[str, typer.Option("--controller", help="mpc or thermostat.")] = "mpc",
+    no_disturbance: Annotated[
+        bool, typer.Option("--no-disturbance", help="The MPC's observer estimates no unmeasured heat input.")
+    ] = False,
+    price: Annotated[
+        str,
+        typer.Option("--price", help="flat, or tou: 3x price from noon to 6 pm (the MPC minimizes cost)."),
+    ] = "flat",
+    json_out: Annotated[
+        Path | None, typer.Option("--json", help="Write the scores as JSON ('-': stdout).")
+    ] = None,
+    report_dir: Annotated[
+        Path | None, typer.Option("--report", help="Folder for report.html and figures.")
+    ] = None,
+) -> None:
+    """Closed-loop test on the virtual building: comfort (K h), energy (kWh), peak flow, prediction RMSE."""
+    from rczone.control.closedloop import closed_loop_test
+
+    zm = model(model_spec)
+    out = out_console(json_out)
+    res = closed_loop_test(
+        zm,
+        season=scenario,
+        days=days,
+        seed=seed,
+        controller=controller,
+        disturbance=not no_disturbance,
+        price=price,
+    )
+    out.print(esc(res.summary()))
+    write_json(json_out, res.to_dict())
+    if report_dir:
+        from rczone.report.control import closed_loop_report
+
+        closed_loop_report(res).write(report_dir)
+        out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")

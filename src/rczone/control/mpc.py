@@ -1,0 +1,488 @@
+"""A reference economic MPC for one VAV zone: flow and reheat as decisions, a comfort band, OSQP.
+
+Every ``dt`` (default 10 min) the controller
+
+1. updates its Kalman observer (:mod:`rczone.control.observer`) with the measured room
+   temperature, after predicting over the last interval with what it applied;
+2. solves, over ``H`` steps (default 36, 6 h), the economic problem
+
+   .. math::
+
+       \\min \\sum_k \\pi_k \\Delta t\\,(P_k + \\dot Q_{cool,k} + P_{fan,k})
+            + w_1 s_k + w_2 s_k^2 + \\text{small move penalties}
+
+   subject to the model, ``T_low,k - s_k <= Ti_k <= T_high,k + s_k``, ``s_k >= 0``,
+   ``m_min <= m_k <= m_max`` and ``0 <= P_k <= m_k cp (Ts_max - T_ahu,k)`` (the discharge
+   temperature limit, linear in ``(m, P)``). The energy terms are those of
+   :mod:`rczone.control.energy`; ``pi`` a price (default 1 per kWh: energy);
+3. applies the first flow and reheat power (discharge temperature ``T_ahu + P/(m cp)``).
+
+**The bilinear term by sequential linearization.** With the reheat power ``P`` as a heat
+input (:class:`~rczone.control.model.ControlModel`) the model is bilinear only in the flow.
+Around a nominal trajectory ``(m_k, x_k, P_k)`` the exact discrete model is linearized in
+the flow with its exact derivatives (:meth:`ControlModel.flow_derivative`),
+``x+ = Ad(m_k) x + Bd(m_k) u + Ed(m_k) P + (dAd x_k + dBd u + dEd P_k)(m - m_k)``, and the
+cooling load ``m cp (Ti - T_ahu)`` to first order. The QP is solved, the nominal trajectory
+re-simulated with the exact model at the new flows, and the QP solved again
+(``linearizations`` passes, default 2; Diehl et al. [2]_ call this a real-time iteration when
+one pass is made per sample). The first nominal is the last plan shifted by one step, and
+OSQP starts from the last primal and dual solution (warm start).
+
+**Why OSQP.** An operator-splitting QP solver (Stellato et al. [1]_): maintained (Oxford and
+Princeton, v1 2024), BSD-licensed, small binary wheels with only numpy and scipy as
+dependencies, widely used (CVXPY's default QP solver, do-mpc's and acados' QP option), sparse
+and warm-startable, and it reports infeasibility instead of failing silently. It is an
+optional extra (``pip install 'rczone[mpc]'``); the rest of rczone does not need it.
+
+References
+----------
+.. [1] B. Stellato, G. Banjac, P. Goulart, A. Bemporad, S. Boyd, "OSQP: an operator splitting
+   solver for quadratic programs", Mathematical Programming Computation 12 (2020) 637-672.
+.. [2] M. Diehl, H. G. Bock, J. P. Schlöder, "A real-time iteration scheme for nonlinear
+   optimization in optimal feedback control", SIAM J. Control Optim. 43(5) (2005) 1714-1736.
+.. [3] F. Oldewurtel et al., "Use of model predictive control and weather forecasts for energy
+   efficient building climate control", Energy and Buildings 45 (2012) 15-27.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+import scipy.sparse as sp
+
+from rczone.control.disturbance import Disturbance
+from rczone.control.energy import FAN_W_PER_KG_S
+from rczone.control.model import ControlModel
+from rczone.control.observer import Estimate, KalmanObserver
+from rczone.data.units import to_si
+from rczone.errors import InputShapeError, ParameterError, RczoneError
+from rczone.models.zone import ZoneModel
+from rczone.network import CP_AIR
+
+#: Joules per kWh.
+J_PER_KWH = 3.6e6
+
+
+@dataclass(frozen=True)
+class MPCSettings:
+    """Settings of :class:`MPC`, bounds in the user's units (converted to SI once, by :class:`MPC`).
+
+    Parameters
+    ----------
+    dt : float
+        Control interval, s.
+    horizon : int
+        Prediction steps.
+    flow_min, flow_max : float
+        Supply-flow bounds in ``flow_unit`` (any flow unit of :mod:`rczone.data.units`).
+    ts_max : float
+        Highest discharge temperature in ``temperature_unit``.
+    comfort_weight, comfort_weight_quadratic : float
+        Cost per K and per K^2 outside the band, per step (price units; energy costs about 0.1
+        to 0.3 per step).
+    move_weight : float
+        Cost per (kg/s)^2 of flow change and per kW^2 of reheat change between steps.
+    linearizations : int
+        Sequential-linearization passes per step.
+    """
+
+    dt: float = 600.0
+    horizon: int = 36
+    flow_min: float = 0.02
+    flow_max: float = 0.12
+    flow_unit: str = "kg/s"
+    ts_max: float = 35.0
+    temperature_unit: str = "degC"
+    comfort_weight: float = 5.0
+    comfort_weight_quadratic: float = 50.0
+    move_weight: float = 1e-2
+    linearizations: int = 2
+
+    def __post_init__(self) -> None:
+        for k in ("dt", "comfort_weight", "comfort_weight_quadratic", "move_weight"):
+            v = getattr(self, k)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or (k == "dt" and v <= 0):
+                raise ParameterError(f"MPC setting {k} must be a finite number >= 0 (dt > 0), got {v!r}")
+        for k in ("horizon", "linearizations"):
+            v = getattr(self, k)
+            if not (isinstance(v, int) and v >= 1):
+                raise ParameterError(f"MPC setting {k} must be an integer >= 1, got {v!r}")
+
+
+def _osqp() -> Any:
+    """The OSQP module, or a one-line error saying how to install it."""
+    try:
+        import osqp
+    except ImportError:
+        raise RczoneError(
+            "the MPC needs the QP solver OSQP; install the extra: pip install 'rczone[mpc]'"
+        ) from None
+    return osqp
+
+
+class Limits(NamedTuple):
+    """Input bounds in SI: flow (kg/s) and highest discharge temperature (degC)."""
+
+    m_min: float
+    m_max: float
+    ts_max: float
+
+
+def si_limits(s: MPCSettings) -> Limits:
+    """The bounds of ``s`` in SI units, checked."""
+    m_min, m_max = to_si([s.flow_min, s.flow_max], s.flow_unit, "flow", "MPC flow bounds")
+    ts_max = float(to_si([s.ts_max], s.temperature_unit, "temperature", "MPC ts_max")[0])
+    if not (0 < m_min <= m_max and math.isfinite(m_max)):
+        raise ParameterError(
+            f"MPC flow bounds must satisfy 0 < flow_min <= flow_max, got {s.flow_min!r}, {s.flow_max!r} "
+            f"{s.flow_unit} (the supply air needs a minimum flow to carry the reheat)"
+        )
+    return Limits(float(m_min), float(m_max), ts_max)
+
+
+@dataclass(frozen=True, eq=False)
+class Forecast:
+    """What the controller is told about the next ``H`` steps, SI, time-first (length >= H + 1).
+
+    Attributes
+    ----------
+    inputs : mapping of str to ndarray
+        Every model input except the supply temperature, e.g. ``To``, ``Tsd``, ``Q`` (a missing
+        input with a model default, such as ``Q = 50 W``, takes the default).
+    t_ahu : ndarray
+        AHU supply temperature before reheat, degC.
+    lower, upper : ndarray
+        Comfort band, degC.
+    price : ndarray, optional
+        Price per kWh (default 1: energy).
+    """
+
+    inputs: Mapping[str, np.ndarray]
+    t_ahu: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    price: np.ndarray | None = None
+
+    def length(self) -> int:
+        return min(len(self.t_ahu), len(self.lower), len(self.upper), *(len(v) for v in self.inputs.values()))
+
+
+class Plan(NamedTuple):
+    """An optimal plan: flows (H,) kg/s, reheat (H,) W, states (H+1, n), predicted outputs (H+1,),
+    slack (H,) K, QP status and solve time (s, all passes)."""
+
+    m: np.ndarray
+    reheat: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    slack: np.ndarray
+    status: str
+    solve_time: float
+
+
+class ControlAction(NamedTuple):
+    """What :meth:`MPC.step` applies: flow kg/s, reheat W, discharge temperature degC, and the plan."""
+
+    m: float
+    reheat: float
+    ts: float
+    plan: Plan
+
+
+class QPData(NamedTuple):
+    """The linearized problem over the horizon (SI): matrices per step and cost coefficients."""
+
+    Ad: np.ndarray
+    Ed: np.ndarray
+    G: np.ndarray
+    c: np.ndarray
+    qm: np.ndarray
+    qp: np.ndarray
+    qx: np.ndarray
+
+
+class _Triplets:
+    """A sparse matrix assembled block by block (rows grow as constraints are added)."""
+
+    def __init__(self) -> None:
+        self.rows = 0
+        self.r: list[np.ndarray] = []
+        self.c: list[np.ndarray] = []
+        self.v: list[np.ndarray] = []
+
+    def block(self, r0: int, c0: int, values: np.ndarray) -> None:
+        rr, cc = np.indices(values.shape)
+        self.r.append((rr + r0).ravel())
+        self.c.append((cc + c0).ravel())
+        self.v.append(np.asarray(values, float).ravel())
+
+    def matrix(self, ncols: int) -> sp.csc_matrix:
+        return sp.csc_matrix(
+            (np.concatenate(self.v), (np.concatenate(self.r), np.concatenate(self.c))),
+            shape=(self.rows, ncols),
+        )
+
+
+@dataclass
+class _Memory:
+    """What the controller keeps between steps (the observer estimate, the last plan and action)."""
+
+    est: Estimate | None = None
+    time: float | None = None
+    u: np.ndarray | None = None
+    action: ControlAction | None = None
+    solver: Any = None
+    z: np.ndarray | None = None
+    innovations: list[float] = field(default_factory=list)
+
+
+class MPC:
+    """Economic MPC of one zone (see the module notes).
+
+    Parameters
+    ----------
+    model : ZoneModel or ControlModel
+        With one supply flow.
+    settings : MPCSettings, optional
+    disturbance : Disturbance or None, optional
+        The disturbance state of the observer (default an integrating heat disturbance at the
+        room node; ``None`` for none). Ignored when ``model`` is a ControlModel.
+    """
+
+    def __init__(
+        self,
+        model: ZoneModel | ControlModel,
+        settings: MPCSettings | None = None,
+        *,
+        disturbance: Disturbance | None = Disturbance(),  # noqa: B008 (frozen, immutable default)
+    ) -> None:
+        self.cm = model if isinstance(model, ControlModel) else ControlModel(model, disturbance=disturbance)
+        if len(self.cm.flow_names) != 1 or not self.cm.model.network.supply_air:
+            raise ParameterError(
+                f"the MPC needs a model with one supply-air flow; {self.cm.model.name!r} has flows "
+                f"{list(self.cm.flow_names)}"
+            )
+        self.settings = settings or MPCSettings()
+        self.limits = si_limits(self.settings)
+        self.observer = KalmanObserver(self.cm)
+        sa = self.cm.model.network.supply_air[0]
+        self._ts = self.cm.input_names.index(sa.temperature)
+        self._defaults = dict(self.cm.model.inputs.defaults)
+        self._mem = _Memory()
+
+    # ------------------------------------------------------------ inputs
+    def _input_matrix(self, fc: Forecast, H: int) -> np.ndarray:
+        """Model inputs over the horizon, shape (H + 1, p); the supply temperature is ``t_ahu``."""
+        cols = []
+        for i, name in enumerate(self.cm.input_names):
+            if i == self._ts:
+                cols.append(np.asarray(fc.t_ahu, float)[: H + 1])
+            elif name in fc.inputs:
+                cols.append(np.asarray(fc.inputs[name], float)[: H + 1])
+            elif name in self._defaults:
+                cols.append(np.full(H + 1, self._defaults[name]))
+            else:
+                raise InputShapeError(f"the forecast has no input {name!r} (the model needs it)")
+        u = np.column_stack(cols)
+        if not np.all(np.isfinite(u)):
+            raise InputShapeError("the forecast has non-finite inputs")
+        return u
+
+    def _check(self, fc: Forecast) -> int:
+        H = self.settings.horizon
+        if fc.length() < H + 1:
+            raise InputShapeError(
+                f"the forecast must cover horizon + 1 = {H + 1} steps, it has {fc.length()}"
+            )
+        band = np.column_stack([fc.lower[: H + 1], fc.upper[: H + 1]])
+        if not np.all(np.isfinite(band)) or np.any(band[:, 0] > band[:, 1]):
+            raise InputShapeError("the comfort band must be finite with lower <= upper")
+        return H
+
+    # ------------------------------------------------------------ the QP
+    def simulate(self, x0: np.ndarray, u: np.ndarray, m: np.ndarray, reheat: np.ndarray) -> np.ndarray:
+        """States (H+1, n) of the exact discrete model under flows ``m`` and reheat ``reheat`` (H,)."""
+        x = [np.asarray(x0, float)]
+        for k in range(len(m)):
+            d = self.cm.discrete(self.settings.dt, m[k])
+            x.append(d.Ad @ x[-1] + d.Bd @ u[k] + d.Ed[:, 0] * reheat[k])
+        return np.array(x)
+
+    def linearize(
+        self, x0: np.ndarray, u: np.ndarray, fc: Forecast, m: np.ndarray, reheat: np.ndarray
+    ) -> QPData:
+        """The problem linearized around the nominal flows ``m`` and reheat ``reheat`` (H,)."""
+        dt, H = self.settings.dt, len(m)
+        xn = self.simulate(x0, u, m, reheat)
+        c = self.cm.matrices
+        yn = xn @ c.C[0] + u @ c.D[0]
+        Ad, Ed, G, const = [], [], [], []
+        for k in range(H):
+            d, g = self.cm.discrete(dt, m[k]), self.cm.flow_derivative(dt, m[k])
+            gk = g.dAd[0] @ xn[k] + g.dBd[0] @ u[k] + g.dEd[0][:, 0] * reheat[k]
+            Ad.append(d.Ad)
+            Ed.append(d.Ed[:, 0])
+            G.append(gk)
+            const.append(d.Bd @ u[k] - gk * m[k])
+        price = np.ones(H) if fc.price is None else np.asarray(fc.price, float)[:H]
+        w = price * dt / J_PER_KWH
+        to = np.asarray(fc.inputs.get("To", np.full(H + 1, np.inf)), float)[:H]
+        t_ahu = np.asarray(fc.t_ahu, float)[:H]
+        cool_t = np.minimum(yn[:H], to) - t_ahu
+        active = (cool_t > 0) & (yn[:H] < to)
+        qm = w * (FAN_W_PER_KG_S + CP_AIR * np.maximum(cool_t, 0.0))
+        qx = w * CP_AIR * m * active  # on the output at the start of each step (k >= 1 free)
+        return QPData(np.array(Ad), np.array(Ed), np.array(G), np.array(const), qm, w, qx)
+
+    def _qp(self, x0, u, fc, q: QPData, m_prev: float, p_prev: float):
+        """The sparse QP ``min 1/2 z'Pz + q'z, l <= Az <= u`` in z = [x_1..x_H, m, P (kW), s]."""
+        s = self.settings
+        H, n = len(q.qm), len(x0)
+        c = self.cm.matrices
+        Cy, Dy = c.C[0], c.D[0]
+        im, ip, isl = n * H, n * H + H, n * H + 2 * H
+        nz = n * H + 3 * H
+        A = _Triplets()
+        lo, hi = [], []
+        eye = np.eye(n)
+        for k in range(H):  # dynamics: x_{k+1} - Ad x_k - G m_k - Ed P_k = c_k (+ Ad x_0)
+            r = A.rows
+            A.block(r, n * k, eye)
+            if k > 0:
+                A.block(r, n * (k - 1), -q.Ad[k])
+            A.block(r, im + k, -q.G[k][:, None])
+            A.block(r, ip + k, -1e3 * q.Ed[k][:, None])
+            A.rows += n
+            rhs = q.c[k] + (q.Ad[0] @ x0 if k == 0 else 0.0)
+            lo.extend(rhs)
+            hi.extend(rhs)
+        low, up = np.asarray(fc.lower, float), np.asarray(fc.upper, float)
+        for k in range(1, H + 1):  # comfort band with slack: y + s >= low, y - s <= up
+            for sign, bounds in ((1.0, (low[k] - Dy @ u[k], np.inf)), (-1.0, (-np.inf, up[k] - Dy @ u[k]))):
+                A.block(A.rows, n * (k - 1), Cy[None, :])
+                A.block(A.rows, isl + k - 1, np.array([[sign]]))
+                A.rows += 1
+                lo.append(bounds[0])
+                hi.append(bounds[1])
+        lim = self.limits
+        span = np.maximum(lim.ts_max - np.asarray(fc.t_ahu, float)[:H], 0.0) * CP_AIR / 1e3
+        for k in range(H):  # input bounds, reheat limit P <= m cp (ts_max - T_ahu), slack >= 0
+            r = A.rows
+            A.block(r, im + k, np.array([[1.0]]))
+            A.block(r + 1, ip + k, np.array([[1.0]]))
+            A.block(r + 2, ip + k, np.array([[1.0]]))
+            A.block(r + 2, im + k, np.array([[-span[k]]]))
+            A.block(r + 3, isl + k, np.array([[1.0]]))
+            A.rows += 4
+            lo.extend([lim.m_min, 0.0, -np.inf, 0.0])
+            hi.extend([lim.m_max, np.inf, 0.0, np.inf])
+        qv = np.zeros(nz)
+        qv[im : im + H] = q.qm
+        qv[ip : ip + H] = q.qp * 1e3
+        qv[isl:] = s.comfort_weight
+        for k in range(1, H):  # the cooling load's dependence on the room temperature
+            qv[n * (k - 1) : n * k] += q.qx[k] * Cy
+        D = sp.diags([np.ones(H), -np.ones(H - 1)], [0, -1], shape=(H, H))  # moves
+        M2 = 2 * s.move_weight * (D.T @ D)
+        P = sp.block_diag(
+            [sp.csc_matrix((n * H, n * H)), M2, M2, 2 * s.comfort_weight_quadratic * sp.eye(H)], format="csc"
+        )
+        qv[im] -= 2 * s.move_weight * m_prev
+        qv[ip] -= 2 * s.move_weight * p_prev / 1e3
+        return sp.triu(P, format="csc"), qv, A.matrix(nz), np.array(lo), np.array(hi)
+
+    def plan(
+        self, x0: np.ndarray, forecast: Forecast, *, nominal: tuple[np.ndarray, np.ndarray] | None = None
+    ) -> Plan:
+        """Solve the problem from state ``x0`` (n,) (see the module notes)."""
+        osqp = _osqp()
+        H = self._check(forecast)
+        u = self._input_matrix(forecast, H)
+        lim = self.limits
+        mem = self._mem
+        m_prev = mem.action.m if mem.action else lim.m_min
+        p_prev = mem.action.reheat if mem.action else 0.0
+        m, reheat = nominal if nominal is not None else (np.full(H, lim.m_min), np.zeros(H))
+        elapsed, status, z = 0.0, "", None
+        n = len(x0)
+        for _ in range(self.settings.linearizations):
+            q = self.linearize(x0, u, forecast, m, reheat)
+            P, qv, A, lo, hi = self._qp(x0, u, forecast, q, m_prev, p_prev)
+            solver = osqp.OSQP()
+            solver.setup(
+                P, qv, A, lo, hi, verbose=False, eps_abs=1e-5, eps_rel=1e-5, max_iter=20000, polishing=True
+            )
+            if mem.z is not None and len(mem.z) == len(qv):
+                solver.warm_start(x=mem.z)
+            t0 = _time.perf_counter()
+            res = solver.solve(raise_error=False)
+            elapsed += _time.perf_counter() - t0
+            status = str(res.info.status)
+            if res.x is None or not np.all(np.isfinite(res.x)):
+                raise RczoneError(
+                    f"the MPC's QP could not be solved ({status}); check the band and the bounds"
+                )
+            z = res.x
+            m = np.clip(z[n * H : n * H + H], lim.m_min, lim.m_max)
+            span = np.maximum(lim.ts_max - np.asarray(forecast.t_ahu, float)[:H], 0.0) * CP_AIR
+            reheat = np.clip(z[n * H + H : n * H + 2 * H] * 1e3, 0.0, m * span)
+        mem.z = z
+        x = self.simulate(x0, u, m, reheat)
+        c = self.cm.matrices
+        return Plan(m, reheat, x, x @ c.C[0] + u @ c.D[0], z[n * H + 2 * H :], status, elapsed)
+
+    # ------------------------------------------------------------ the loop
+    def set_estimate(self, est: Estimate, time: float) -> None:
+        """Start (or reset) the observer from ``est`` at ``time`` (e.g. from :func:`estimate_state`)."""
+        self._mem = _Memory(
+            est=Estimate(np.asarray(est.x, float), np.asarray(est.P, float)), time=float(time)
+        )
+
+    def step(self, time: float, measurements: Mapping[str, float], forecast: Forecast) -> ControlAction:
+        """One control step: observe, plan, return the flow and reheat to hold for ``dt``.
+
+        Parameters
+        ----------
+        time : float
+            s.
+        measurements : mapping
+            The measured outputs (e.g. ``{"Ti": 22.4}``; NaN or missing = not measured).
+        forecast : Forecast
+            From ``time`` on, one value per ``dt``.
+        """
+        H = self._check(forecast)
+        mem = self._mem
+        u_now = self._input_matrix(forecast, H)[0]
+        y = np.array([float(measurements.get(o, np.nan)) for o in self.cm.output_names])
+        if mem.est is None:
+            mem.est = self.observer.prior(y)
+        elif mem.time is not None and mem.action is not None and time > mem.time:
+            mem.est = self.observer.predict(
+                mem.est, mem.u, mem.action.m, time - mem.time, heat=mem.action.reheat
+            )
+        mem.est, e = self.observer.update(mem.est, y, u_now)
+        mem.innovations.append(float(e[0]))
+        nominal = None
+        if mem.action is not None:
+            p = mem.action.plan
+            nominal = (np.r_[p.m[1:], p.m[-1]], np.r_[p.reheat[1:], p.reheat[-1]])
+        plan = self.plan(mem.est.x, forecast, nominal=nominal)
+        m0, r0 = float(plan.m[0]), float(plan.reheat[0])
+        action = ControlAction(m0, r0, float(forecast.t_ahu[0]) + r0 / (m0 * CP_AIR), plan)
+        mem.time, mem.u, mem.action = float(time), u_now, action
+        return action
+
+    @property
+    def estimate(self) -> Estimate | None:
+        """The observer's current (filtered) estimate."""
+        return self._mem.est
+
+    @property
+    def innovations(self) -> np.ndarray:
+        """One-step prediction errors of the first output at every step so far, K."""
+        return np.array(self._mem.innovations)
