@@ -44,7 +44,7 @@ def test_operating_system_refusals_leave_nothing(tmp_path, monkeypatch, code, re
         raise OSError(code, os.strerror(code))
 
     if step == "mkstemp":
-        monkeypatch.setattr(atomic.tempfile, "mkstemp", fail)
+        monkeypatch.setattr(atomic, "_create_temp", fail)
     elif step == "write":
         monkeypatch.setattr(atomic.os, "fsync", fail)
     else:

@@ -7,6 +7,14 @@ Layout of the output folder::
     summary.json, report.html, *.png   the summary (see rczone.batch.summary)
     .lock                  held by the run writing into the folder
 
+Nothing is written outside the folder: every file is written by
+:func:`rczone.atomic.write_bytes_in`, which follows no symbolic link below the folder (a link
+planted at a part's or the table's name is replaced, a link in place of ``parts`` refused), and
+the lock file is opened with ``O_NOFOLLOW`` and must be a regular file with one name (a link
+planted there is refused with one line, its target never opened). The lock is the portable one
+of the ``filelock`` package (``flock`` on POSIX, ``LockFileEx`` on Windows), taken on the
+descriptor opened so.
+
 A task is *done* when its part exists and carries the task's fingerprint (a hash of every
 setting and of the files the task reads, :attr:`~rczone.batch.manifest.Task.fingerprint`),
 so a run that is killed loses at most the tasks in flight, the next run skips everything
@@ -22,13 +30,12 @@ wrong type is not a result: its task is computed again and the part replaced.
 from __future__ import annotations
 
 import contextlib
-import errno
-import fcntl
 import hashlib
 import io
 import json
 import os
 import re
+import stat
 import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -36,7 +43,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rczone.atomic import ensure_folder, output_error, write_bytes_atomic
+from rczone.atomic import (
+    NOFOLLOW,
+    ensure_folder,
+    ensure_folder_in,
+    open_in,
+    output_error,
+    write_bytes_in,
+)
 from rczone.batch.manifest import Task
 from rczone.errors import RczoneError
 
@@ -44,6 +58,22 @@ RESULTS = "results.parquet"
 LOCK = ".lock"
 _HELD: set[str] = set()  # folders locked by this process (the lock itself is per process)
 _HELD_GUARD = threading.Lock()
+_LOCK_FDS: set[int] = set()  # descriptors of the lock files held, closed in forked children
+MAX_PART_BYTES = 1 << 20
+"""Largest part file read back (bytes); a part is a few kilobytes, a larger file is not a result."""
+
+
+def _close_lock_fds_in_child() -> None:
+    # flock belongs to the open file: a forked worker would hold the folder after its coordinator
+    # died. Its copy of the descriptor is closed at once (the coordinator's lock stays).
+    for fd in tuple(_LOCK_FDS):
+        with contextlib.suppress(OSError):
+            os.close(fd)
+    _LOCK_FDS.clear()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_close_lock_fds_in_child)
 
 #: Columns of a row and the JSON types they hold (others hold numbers or null).
 TEXT = ("key", "zone", "method", "model", "source", "status", "error", "fingerprint", "flags")
@@ -91,6 +121,29 @@ def valid_row(row: object) -> bool:
     return all(isinstance(row.get(k), str) for k in ("key", "zone", "method", "fingerprint"))
 
 
+def _holder(fd: int) -> str:
+    """The pid written in a held lock file ("?" where the holder's lock hides it, as on Windows)."""
+    try:
+        os.lseek(fd, 0, os.SEEK_SET)
+        text = os.read(fd, 32).decode("ascii", "replace").strip()
+    except OSError:
+        return "?"
+    return text if text.isdigit() else "?"
+
+
+def _read_part(path: Path) -> str:
+    """A part's text: a regular file of at most MAX_PART_BYTES, never a pipe or a link's target."""
+    fd = os.open(path, os.O_RDONLY | NOFOLLOW | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_PART_BYTES:
+            raise ValueError("not a part")
+        with os.fdopen(os.dup(fd), "rb") as fh:
+            return fh.read(MAX_PART_BYTES + 1).decode("utf-8")
+    finally:
+        os.close(fd)
+
+
 class ResultStore:
     """The results folder of one batch.
 
@@ -105,7 +158,7 @@ class ResultStore:
 
     def __init__(self, folder: str | os.PathLike) -> None:
         self.folder = ensure_folder(folder)
-        self.parts = ensure_folder(self.folder / "parts")
+        self.parts = ensure_folder_in(self.folder, "parts")
         self._rows: dict[str, dict] | None = None
 
     @contextlib.contextmanager
@@ -126,28 +179,28 @@ class ResultStore:
                 _HELD.discard(here)
 
     def _lock_file(self, path: Path) -> Iterator[ResultStore]:
-        try:
-            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        except OSError as exc:
-            raise output_error(path, exc) from None
+        from filelock import lock_descriptor
+
+        fd = open_in(self.folder, LOCK)  # O_NOFOLLOW, a regular file with one name: never a link's target
+        _LOCK_FDS.add(fd)
         try:
             try:
-                # a POSIX record lock belongs to this process: forked workers do not hold it, and it
-                # ends with the process however it ends
-                fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                # whole-file lock on this descriptor: it ends with the process however it ends
+                held = lock_descriptor(fd, blocking=False)
             except OSError as exc:
-                if exc.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                    raise output_error(path, exc, "lock") from None
-                holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip() or "?"
+                raise output_error(path, exc, "lock") from None
+            if not held:
                 raise FolderBusyError(
-                    f"results folder {os.fspath(self.folder)!r} is in use by another run (pid {holder});"
+                    f"results folder {os.fspath(self.folder)!r} is in use by another run (pid {_holder(fd)});"
                     " wait for it to finish, or give another --out"
-                ) from None
+                )
             os.ftruncate(fd, 0)
-            os.pwrite(fd, str(os.getpid()).encode("ascii"), 0)
+            os.lseek(fd, 0, os.SEEK_SET)
+            os.write(fd, str(os.getpid()).encode("ascii"))
             self._rows = None  # another run may have written since: read the parts again
             yield self
         finally:
+            _LOCK_FDS.discard(fd)
             os.close(fd)  # releases the lock
 
     def _load(self) -> dict[str, dict]:
@@ -155,7 +208,7 @@ class ResultStore:
             rows: dict[str, dict] = {}
             for p in sorted(self.parts.glob("*.json")):
                 try:
-                    row = json.loads(p.read_text(encoding="utf-8"))
+                    row = json.loads(_read_part(p))
                 except (OSError, ValueError, RecursionError):  # a foreign or damaged file: not a result
                     continue
                 if valid_row(row) and p.name == part_name(row["key"]):
@@ -174,7 +227,7 @@ class ResultStore:
         """Write one task's row atomically (:class:`~rczone.errors.OutputError` if it cannot be)."""
         row = {k: _plain(v) for k, v in row.items()}
         data = json.dumps(row, allow_nan=True).encode("utf-8")
-        path = write_bytes_atomic(self.parts / part_name(row["key"]), data)
+        path = write_bytes_in(self.folder, f"parts/{part_name(row['key'])}", data)
         self._load()[row["key"]] = row
         return path
 
@@ -194,4 +247,4 @@ class ResultStore:
         """Write ``results.parquet`` (``table``, default all rows) atomically and return its path."""
         buf = io.BytesIO()
         (self.table() if table is None else table).to_parquet(buf, index=False)
-        return write_bytes_atomic(self.folder / RESULTS, buf.getvalue())
+        return write_bytes_in(self.folder, RESULTS, buf.getvalue())

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from rczone.atomic import write_json_atomic
+from rczone.atomic import write_json_in
 from rczone.report import Report
 
 VERDICTS = ("identifiable", "weak", "not identifiable")
@@ -88,7 +88,7 @@ def write_summary(df: pd.DataFrame, folder: str | Path, title: str = "rczone bat
     """Write ``summary.json`` and ``report.html`` (+ PNG) into ``folder``; return the summary."""
     folder = Path(folder)
     s = summarize(df)
-    write_json_atomic(folder / "summary.json", s)
+    write_json_in(folder, "summary.json", s)
     rep = Report(f"{title}: {s['tasks']} calibrations of {s['zones']} zones")
     rep.paragraph(f"{s['ok']} succeeded, {s['failed']} failed.", "warn" if s["failed"] else "")
     params = [p for p in parameter_names(df) if not p.startswith(("sigma_", "x0_"))]

@@ -86,10 +86,13 @@ def constants(items: Iterable[str] | None) -> dict[str, float] | None:
 
 
 def out_console(json_out: Path | None) -> Console:
-    """The console for the human-readable output: stderr when JSON goes to stdout (``--json -``)."""
+    """The console for the human-readable output: stderr when JSON goes to stdout (``--json -``,
+    ``--json /dev/stdout`` or a link to it)."""
     from rich.console import Console
 
-    return Console(stderr=json_out is not None and str(json_out) == "-")
+    from rczone.atomic import is_stream
+
+    return Console(stderr=json_out is not None and is_stream(json_out))
 
 
 def write_json(json_out: Path | None, payload: Any) -> None:

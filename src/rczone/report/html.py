@@ -6,13 +6,14 @@ import base64
 import html
 import io
 import os
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from rczone.atomic import write_bytes_atomic, write_text_atomic
+from rczone.atomic import write_bytes_in, write_text_in
 
 _CSS = """
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;max-width:1050px;margin:2em auto;
@@ -26,6 +27,13 @@ figcaption{font-size:.9em;color:#555}.note{background:#f6f8fa;border-left:4px so
 .warn{background:#fff8e6;border-left:4px solid #d69e2e;padding:.6em 1em}
 .bad{color:#c53030;font-weight:600}.good{color:#2f855a;font-weight:600}
 """
+
+
+def file_stem(name: str) -> str:
+    """A figure's file name from a name that may hold a user's string (an output ``../x``): one
+    plain file inside the report folder."""
+    stem = re.sub(r"[^A-Za-z0-9_-]+", "_", name).strip("_")[:100]
+    return stem or "figure"
 
 
 def fmt(v: object, digits: int = 4) -> str:
@@ -74,7 +82,7 @@ class Report:
         buf = io.BytesIO()
         fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
         png = buf.getvalue()
-        self.figures[name] = png
+        self.figures[file_stem(name)] = png
         b64 = base64.b64encode(png).decode("ascii")
         self.parts.append(
             f'<figure><img alt="{html.escape(caption or name)}" src="data:image/png;base64,{b64}">'
@@ -90,8 +98,8 @@ class Report:
         )
 
     def write(self, folder: str | os.PathLike) -> Path:
-        """Write ``report.html`` and every figure's PNG into ``folder`` (atomically each)."""
+        """Write ``report.html`` and every figure's PNG into ``folder`` (atomically each, never outside it)."""
         folder = Path(folder)
         for name, png in self.figures.items():
-            write_bytes_atomic(folder / f"{name}.png", png)
-        return write_text_atomic(folder / "report.html", self.render())
+            write_bytes_in(folder, f"{name}.png", png)
+        return write_text_in(folder, "report.html", self.render())
