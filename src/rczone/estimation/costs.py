@@ -62,7 +62,7 @@ from rczone.estimation.engines import (
     trapezoid_sse,
 )
 from rczone.estimation.parameters import ParameterSpec
-from rczone.kernels.problem import cost_theta, evaluate
+from rczone.kernels.problem import evaluate
 from rczone.network import RCNetwork
 
 __all__ = [
@@ -218,7 +218,7 @@ class Objective:
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
         if self._packed is not None:
-            return float(cost_theta(np.asarray(theta, dtype=np.float64), self._packed))
+            return float(evaluate(np.asarray(theta, dtype=np.float64), self._packed, False)[0])
         if self.engine == "reference":
             return self.reference_cost(theta)
         return self._general(np.asarray(theta, dtype=float), False)[0]

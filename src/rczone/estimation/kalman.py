@@ -249,7 +249,8 @@ def _compiled(Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R, keep: bool)
             np.empty((ny, 0)),
         ),
         (f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
-        (f(u, dtype=float), f(y, dtype=float)),
+        # writable (a Dataset's arrays are read-only), as every caller's: one compiled specialization
+        (np.require(u, np.float64, "CW"), np.require(y, np.float64, "CW")),
         (bool(np.any(Gamma1)), False, STEADY_RTOL),
         outs,
     )
