@@ -1,15 +1,17 @@
-# rczone developer tasks. Every target creates .venv on first use.
+# rczone developer tasks. Every target creates .venv on first use, with the pinned versions of
+# constraints.txt (pyproject.toml keeps the floors for users; `make lock` re-pins on purpose).
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+PIP := $(BIN)/python -m pip install --quiet -c constraints.txt
 
-.PHONY: test demo lint format bench clean
+.PHONY: test demo lint format bench docs lock clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml constraints.txt
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	$(PIP) --upgrade pip setuptools
+	$(PIP) --no-build-isolation -e ".[dev]"
 	touch $(STAMP)
 
 test: $(STAMP)
@@ -27,8 +29,17 @@ format: $(STAMP)
 	$(BIN)/ruff check --fix src tests bench
 
 bench: $(STAMP)
+	$(BIN)/python bench/first_run.py
 	$(BIN)/python bench/run.py
 	$(BIN)/python bench/batch.py
 
+# The API reference (Sphinx + numpydoc) into docs/api/_build/html; warnings are errors.
+docs: $(STAMP)
+	$(BIN)/python -m sphinx -b html -q -E -W --keep-going docs/api docs/api/_build/html
+
+# Re-resolve every dependency and pin it in constraints.txt (see its header).
+lock:
+	bash .ci/lock
+
 clean:
-	rm -rf $(VENV) demo-output .pytest_cache
+	rm -rf $(VENV) demo-output .pytest_cache docs/api/_build

@@ -1,4 +1,4 @@
-"""Compare model orders in the time and frequency domain (Lin et al. 2012, section III).
+"""Compare model orders in the time and frequency domain (Lin et al. 2012 [1]_, section III).
 
 Time domain (the paper's Fig. 4): every model is simulated open loop on the measured inputs of
 a data set and compared with the measured room temperature. Frequency domain (Figs. 5, 6): the

@@ -1,4 +1,4 @@
-"""Frequency response of the LTI case and the paper's model-order error measure.
+"""Frequency response of the LTI case and the paper's model-order error measure [1]_.
 
 References
 ----------

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from tests.shared_data import SHARED
+from tests.shared_data import SHARED, require
 
 from .scripts import load_script as load
 
@@ -19,8 +19,8 @@ def test_skips_cleanly_without_data(tmp_path, capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not (SHARED / "data" / "bacher_madsen_prbs").is_dir(), reason="shared real data absent")
 def test_forward_selection_runs_on_the_prbs_experiment(tmp_path):
+    require(SHARED / "data" / "bacher_madsen_prbs", what="shared real data")
     assert load_script().main(["--shared", str(SHARED), "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "model_selection.json").read_text())
     steps = res["forward"]["steps"]

@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from tests.shared_data import SHARED
+from tests.shared_data import SHARED, require
 from tests.validation.scripts import load_script
 
 
@@ -27,8 +27,7 @@ def test_synthetic_zone_of_an_unshipped_structure_is_fitted_right_by_default(tmp
 @pytest.mark.parametrize("name", ["bacher_madsen_prbs", "armadillo_pysip", "leec_classroom_vav"])
 def test_real_buildings_reach_the_32_start_optimum_by_default(tmp_path, capsys, name) -> None:
     mod = load_script("own_building")
-    if not (SHARED / mod.REAL[name][0]).exists():
-        pytest.skip(f"{name}: shared real data absent")
+    require(SHARED / mod.REAL[name][0], what=f"{name}: shared real data")
     assert mod.main(["--only", name, "--out", str(tmp_path), "--shared", str(SHARED)]) == 0
     r = json.loads((tmp_path / "own_building.json").read_text())[name]
     assert r["gap_to_32_starts"] <= 0.5, r

@@ -7,10 +7,9 @@ import importlib.util
 import json
 from pathlib import Path
 
-import pytest
+from tests.shared_data import SHARED, require
 
 SCRIPT = Path(__file__).resolve().parents[2] / "validation" / "real_data.py"
-SHARED = Path(__file__).resolve().parents[3] / "shared"
 
 
 def load_script():
@@ -25,8 +24,12 @@ def test_skips_cleanly_without_data(tmp_path, capsys):
     assert "skipped: data not found" in capsys.readouterr().out
 
 
-@pytest.mark.skipif(not (SHARED / "data" / "bacher_madsen_prbs").is_dir(), reason="shared real data absent")
 def test_real_data_fits_validate_on_held_out_data(tmp_path):
+    require(
+        SHARED / "data" / "bacher_madsen_prbs",
+        SHARED / "data" / "leec_classroom_vav",
+        what="shared real data",
+    )
     mod = load_script()
     assert mod.main(["--shared", str(SHARED), "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "real_data.json").read_text())

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import sys
 import warnings
+from contextlib import nullcontext
 
 import typer
 
@@ -76,6 +77,19 @@ def _error(message: object) -> int:
     return 2
 
 
+#: Commands that run compiled kernels: they announce a first compilation (rczone.cli.compile_notice).
+COMPUTING = frozenset({"demo", "diagnose", "design", "fit", "predict", "select", "fit-many", "validate"})
+
+
+def _notice_for(argv: list[str]):
+    """The compile notice for a computing command (which imports numba anyway), else nothing."""
+    if not argv or argv[0] not in COMPUTING or "--help" in argv:
+        return nullcontext()
+    from rczone.cli.compile_notice import compile_notice
+
+    return compile_notice()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit code (also used by the console script).
 
@@ -83,8 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     no traceback), 3 a fit flagged untrustworthy, 4 ``fit-many`` stored failed zones, 5
     ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
     """
+    argv = sys.argv[1:] if argv is None else list(argv)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _notice_for(argv):
             warnings.showwarning = _show_warning
             code = app(args=argv, standalone_mode=False)  # returns typer.Exit's code in this mode
     except RczoneError as exc:

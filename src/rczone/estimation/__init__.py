@@ -1,4 +1,4 @@
-"""Identification of R, C and noise parameters from data (Lin et al. 2012, section IV).
+"""Identification of R, C and noise parameters from data (Lin et al. 2012 [1]_, section IV).
 
 ``fit(network, data, free=[...], method="ls"|"ml"|"map")`` is the entry point; the
 modules hold the pieces: :mod:`parameters` (free set, bounds, theta/eta), :mod:`kalman`

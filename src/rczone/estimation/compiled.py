@@ -30,7 +30,7 @@ from rczone.kernels.arrays import (
     Slots,
 )
 from rczone.kernels.kalman import STEADY_RTOL
-from rczone.kernels.problem import cost_z
+from rczone.kernels.problem import evaluate, theta_of_z
 from rczone.network.parameters import proportional_base
 from rczone.simulation.discretize import SYMMETRY_RTOL
 
@@ -157,8 +157,9 @@ def compiled_problem(objective) -> Problem | None:
 
 def compiled_cost(problem: Problem, eta: np.ndarray) -> float:
     """The compiled cost at optimizer values ``eta`` (for tests and checks)."""
-    lo, hi, _ = problem.box
+    lo, hi, logp = problem.box
     f = (np.asarray(eta, dtype=float) - lo) / (hi - lo)
     with np.errstate(divide="ignore"):
         z = np.log(f) - np.log1p(-f)
-    return float(cost_z(z, problem))
+    # cost_z's steps from Python: cost_z itself is inlined into compiled callers only
+    return float(evaluate(theta_of_z(z, lo, hi, logp), problem, False)[0])

@@ -62,7 +62,7 @@ from rczone.estimation.engines import (
 )
 from rczone.estimation.parameters import ParameterSpec
 from rczone.kernels.arrays import Problem
-from rczone.kernels.problem import cost_theta, evaluate
+from rczone.kernels.problem import evaluate
 from rczone.network import RCNetwork
 
 __all__ = [
@@ -220,7 +220,7 @@ class Objective:
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
         if self._packed is not None:
-            return float(cost_theta(np.asarray(theta, dtype=np.float64), self._packed))
+            return float(evaluate(np.asarray(theta, dtype=np.float64), self._packed, False)[0])
         return self._general(np.asarray(theta, dtype=float), False)[0]
 
     def theta_value_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:

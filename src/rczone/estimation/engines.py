@@ -329,14 +329,15 @@ def general_cost(
         scale = np.empty(0) if scale is None else scale
         mats = interval_matrices(A, N, B, M, keys, qc, scale, foh, not ls)
         dmats = no_sensitivities(keys.shape[0], n, p)
-    y = f(data.y, dtype=float)
+    # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization
+    y = np.require(data.y, np.float64, "CW")
     outs = outputs(data.n_samples, n, ny, q, ls, False)
     nll, n_obs, g, fim = kalman_filter(
         mats,
         dmats,
         Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
         Prior(x0, np.diag(sx**2), dx0, dP0),
-        Series(f(data.u, dtype=float), y, which),
+        Series(np.require(data.u, np.float64, "CW"), y, which),
         FilterOptions(foh, ls, STEADY_RTOL),
         outs,
     )

@@ -186,7 +186,8 @@ def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, Filter
             np.empty((ny, 0)),
         ),
         Prior(f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
-        Series(f(u, dtype=float), f(y, dtype=float), f(which, dtype=np.int64)),
+        # writable (a Dataset's arrays are read-only), as every caller's: one compiled specialization
+        Series(np.require(u, np.float64, "CW"), np.require(y, np.float64, "CW"), f(which, dtype=np.int64)),
         FilterOptions(bool(np.any(Gamma1)), False, STEADY_RTOL),
         outs,
     )

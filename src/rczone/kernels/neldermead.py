@@ -34,7 +34,7 @@ from rczone.kernels.problem import cost_z
 BIG = 1e300
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")  # inlined: see rczone.kernels.problem.cost_theta
 def _scaled(z: np.ndarray, prob, scale: float) -> float:
     v = cost_z(z, prob)
     v = v / scale if math.isfinite(v) else math.inf

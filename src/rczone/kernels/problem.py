@@ -419,13 +419,16 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
     return j, grad, curv
 
 
-@njit(cache=True, error_model="numpy")
+# The two wrappers are inlined where compiled code calls them (the search's inner loop): compiled as
+# functions of their own, each would link and optimize the whole filter tree once more (seconds of
+# compile time each); Python calls evaluate() directly.
+@njit(cache=True, error_model="numpy", inline="always")
 def cost_theta(theta: np.ndarray, prob) -> float:
     """The cost at physical values ``theta``; ``inf`` where the model is invalid."""
     return evaluate(theta, prob, False)[0]
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def cost_z(z: np.ndarray, prob) -> float:
     """The cost at direct-search variables ``z`` (:func:`theta_of_z`, then :func:`cost_theta`)."""
     lo, hi, logp = prob.box

@@ -57,6 +57,6 @@ def propagate(
         f(G0, dtype=np.float64),
         f(G1, dtype=np.float64),
         f(which, dtype=np.int64),
-        f(u, dtype=np.float64),
+        np.require(u, np.float64, "CW"),  # writable: read-only inputs would compile a second specialization
         f(x0, dtype=np.float64),
     )

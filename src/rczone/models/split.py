@@ -195,6 +195,10 @@ def exact_wall_response(
         kelvin of room temperature; with the room held at 0, ``y_transfer`` is the heat flow
         into the room per kelvin of far-side temperature; ``y_far`` is the far-side analogue
         of ``y_room``. At DC ``y_room = y_transfer = y_far = 1 / r_total``.
+
+    References
+    ----------
+    .. [2] H. S. Carslaw, J. C. Jaeger, *Conduction of Heat in Solids*, 2nd ed., Oxford 1959.
     """
     w = _omega(freq_hz)
     t = _series(construction.film_in, w.size)

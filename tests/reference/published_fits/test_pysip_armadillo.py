@@ -9,14 +9,16 @@ import pytest
 
 from rczone.estimation import Dataset, fit, ml_cost
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
-from tests.shared_data import SHARED
+from tests.shared_data import SHARED, require
 
 REF_FILE = SHARED / "reference" / "published_fits.json"
 DATA_FILE = SHARED / "data" / "armadillo_pysip" / "armadillo_data_H2.csv"
 
-pytestmark = pytest.mark.skipif(
-    not (REF_FILE.exists() and DATA_FILE.exists()), reason="shared Armadillo data/reference not available"
-)
+
+@pytest.fixture(autouse=True)
+def _armadillo_files() -> None:
+    require(REF_FILE, DATA_FILE, what="shared Armadillo data/reference")
+
 
 DAY = 86400.0  # pySIP's time unit in this example is the day
 

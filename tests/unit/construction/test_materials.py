@@ -21,7 +21,7 @@ from rczone.construction import (
     construction_names,
 )
 from rczone.errors import ParameterError
-from tests.shared_data import SHARED
+from tests.shared_data import SHARED, require
 
 REFERENCE = SHARED / "reference" / "ashrae" / "derived_RC_per_m2.csv"
 #: The reference file used the outside (wind) film only for these constructions.
@@ -29,8 +29,7 @@ EXTERIOR_IN_REFERENCE = ("Exterior Wall", "Roof/Ceiling")
 
 
 def reference_rows():
-    if not REFERENCE.exists():
-        pytest.skip(f"shared reference {REFERENCE} not available")
+    require(REFERENCE)
     with REFERENCE.open(encoding="utf-8") as fh:
         return list(csv.DictReader(fh))
 

@@ -22,7 +22,7 @@ from rczone.models.split import (
     split_construction,
     symmetric_split,
 )
-from tests.shared_data import SHARED
+from tests.shared_data import SHARED, require
 
 REFERENCE = SHARED / "reference" / "ashrae" / "derived_RC_per_m2.csv"
 EXTERIOR_IN_REFERENCE = ("Exterior Wall", "Roof/Ceiling")
@@ -75,8 +75,7 @@ def fine_ladder(c: Construction, cells_per_layer: int):
 
 @pytest.mark.parametrize("name", construction_names())
 def test_symmetric_split_matches_the_shared_reference(name):
-    if not REFERENCE.exists():
-        pytest.skip(f"shared reference {REFERENCE} not available")
+    require(REFERENCE)
     with REFERENCE.open(encoding="utf-8") as fh:
         row = next(r for r in csv.DictReader(fh) if r["construction"] == name)
     s = symmetric_split(ashrae_construction(name, exterior=name.endswith(EXTERIOR_IN_REFERENCE)))
