@@ -24,7 +24,13 @@ from rczone.errors import ParameterError
 from rczone.estimation.costs import Objective, log_prior_penalty
 from rczone.estimation.data import Dataset
 from rczone.estimation.engines import filter_arrays, initial_state, network_theta, trapezoid_sse
-from rczone.estimation.kalman import FilterOutput, FilterProblem, input_drive, measurement_variances
+from rczone.estimation.kalman import (
+    FilterOutput,
+    FilterProblem,
+    input_drive,
+    kalman_filter_arrays,
+    measurement_variances,
+)
 from rczone.network import RCNetwork
 from rczone.simulation.simulate import transition_matrices
 
@@ -151,3 +157,25 @@ def objective_reference_cost(objective: Objective, theta: np.ndarray) -> float:
             objective.spec, np.asarray(theta, dtype=float), objective.prior_spread
         )
     return j if math.isfinite(j) else math.inf
+
+
+# ----------------------------------------------------------------------------- the k-step predictor
+
+
+def k_step_prediction_error(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int = 1, hold: str = "zoh"
+) -> np.ndarray:
+    """``y[j] - y_hat[j | j - k]`` from the filtered state at ``j - k`` stepped by hand; NaN for the first ``k``.
+
+    The loop form of :func:`rczone.estimation.forecast.k_step_band` (which is vectorized over origins).
+    """
+    problem = filter_arrays(network, values, data, hold)
+    out = kalman_filter_arrays(problem)
+    drive = input_drive(problem.G0, problem.G1, problem.which, problem.u)
+    err = np.full(problem.y.shape, np.nan)
+    for j in range(k, data.n_samples):
+        x = out.x_filt[j - k]
+        for i in range(j - k, j):
+            x = problem.Phi[problem.which[i]] @ x + drive[i]
+        err[j] = problem.y[j] - (problem.C @ x + problem.D @ problem.u[j])
+    return err

@@ -7,9 +7,8 @@
 * ``"lbfgs"``: L-BFGS-B on ``eta`` with its own box constraints and the exact gradient of
   :meth:`~rczone.estimation.costs.Objective.value_and_gradient` (one evaluation per step); a
   plain callable cost gets a central-difference gradient (:func:`central_gradient`).
-* Multistart: the first start is the spec's start; the others are a Latin hypercube in
-  ``eta`` over the bounds intersected with a factor ``spread`` around the construction
-  (or start) value. Every start's outcome is kept.
+* Multistart (the global search, :mod:`rczone.estimation.search`) calls :func:`minimize_from`
+  from each of its starts.
 
 References
 ----------
@@ -19,10 +18,7 @@ References
    several variables without calculating derivatives", Computer Journal 7 (1964) 155-162.
 .. [3] R. H. Byrd, P. Lu, J. Nocedal, C. Zhu, "A limited memory algorithm for bound
    constrained optimization", SIAM J. Sci. Comput. 16 (1995) 1190-1208.
-.. [4] M. D. McKay, R. J. Beckman, W. J. Conover, "A comparison of three methods for
-   selecting values of input variables in the analysis of output from a computer
-   code", Technometrics 21 (1979) 239-245.
-.. [5] J. Nocedal, S. J. Wright, *Numerical Optimization*, 2nd ed., Springer 2006,
+.. [4] J. Nocedal, S. J. Wright, *Numerical Optimization*, 2nd ed., Springer 2006,
    section 8.1 (finite-difference step choice).
 """
 
@@ -68,7 +64,7 @@ def central_gradient(
 
     The step balances truncation error (order ``h^2``) against rounding error (order
     ``eps |f| / h``); with ``x = eta`` (log parameters of order 1-20) the default
-    ``1e-5 ~ eps^(1/3)`` is near the optimum for smooth costs [5]_. Where one side is
+    ``1e-5 ~ eps^(1/3)`` is near the optimum for smooth costs [4]_. Where one side is
     not finite (an invalid model), the one-sided difference with ``f0 = f(x)`` is used.
 
     Returns
@@ -293,38 +289,3 @@ def _is_stationary(g: np.ndarray, eta: np.ndarray, spec: ParameterSpec) -> bool:
     at_hi = (eta >= spec.eta_upper) & (g < 0)
     g = np.where(at_lo | at_hi, 0.0, g)
     return bool(np.max(np.abs(g)) < 1e-6)
-
-
-def latin_hypercube_starts(
-    spec: ParameterSpec, n_starts: int, rng: np.random.Generator, spread: float = 10.0
-) -> np.ndarray:
-    """Start points (theta), the first being ``spec.start``.
-
-    The other ``n_starts - 1`` form a Latin hypercube in eta over the bounds intersected
-    with ``[c / spread, c * spread]`` (log parameters) or ``c +- (hi - lo) / 4`` (others)
-    around the construction value ``c`` (the start where no construction value exists).
-
-    Returns
-    -------
-    ndarray, shape (n_starts, n_free)
-    """
-    if n_starts < 1:
-        raise ParameterError(f"n_starts must be >= 1, got {n_starts}")
-    if not spread > 1:
-        raise ParameterError(f"spread must be > 1, got {spread}")
-    out = np.empty((n_starts, spec.n_free))
-    out[0] = spec.start
-    if n_starts == 1:
-        return out
-    centre = spec.to_eta(np.where(np.isfinite(spec.construction), spec.construction, spec.start))
-    lo_b, hi_b = spec.eta_lower, spec.eta_upper
-    half = np.where(spec.log, math.log(spread), 0.25 * (hi_b - lo_b))
-    lo = np.maximum(lo_b, centre - half)
-    hi = np.minimum(hi_b, centre + half)
-    from rczone.estimation.search import latin_hypercube
-
-    unit = latin_hypercube(n_starts - 1, spec.n_free, rng)
-    # keep starts strictly inside the bounds (the logit transform needs it)
-    unit = 1e-6 + (1 - 2e-6) * unit
-    out[1:] = spec.to_theta(lo + unit * (hi - lo))
-    return out

@@ -29,7 +29,7 @@ from rczone.estimation.costs import (
 )
 from rczone.estimation.data import Dataset
 from rczone.estimation.innovations import acf, ljung_box_q
-from rczone.estimation.kalman import input_drive, kalman_filter_arrays
+from rczone.estimation.kalman import kalman_filter_arrays
 from rczone.network import RCNetwork
 from rczone.simulation.simulate import propagate, transition_matrices
 
@@ -203,48 +203,6 @@ def open_loop_band(
     y_hat = out.x_pred @ arrays.C.T + arrays.u @ arrays.D.T
     sd = np.sqrt(np.einsum("kii->ki", out.S))
     return y_hat, sd
-
-
-@dataclass(frozen=True, eq=False)
-class PredictionError:
-    """k-step-ahead prediction errors of the Kalman predictor.
-
-    Attributes
-    ----------
-    k : int
-    error : ndarray, shape (N, ny)
-        ``y[j] - y_hat[j | j-k]``; NaN for the first ``k`` samples and missing ``y``.
-    rmse_K : float
-    """
-
-    k: int
-    error: np.ndarray
-    rmse_K: float
-
-
-def k_step_prediction_error(
-    network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int = 1, hold: str = "zoh"
-) -> PredictionError:
-    """Prediction of ``y[j]`` from the filtered state at ``j - k`` and the known inputs.
-
-    ``k = 1`` gives the innovations of the filter (except at the first sample). ``values``
-    must hold the noise parameters (``sigma_v``, ``sigma_w_*``, ``sigma_x0_*``).
-    """
-    if k < 1:
-        raise ParameterError(f"k must be >= 1 (steps ahead), got {k}")
-    data.check_against(network)
-    args = filter_arrays(network, values, data, hold)
-    Phi, G0, G1, which, u, y, C, D = args.Phi, args.G0, args.G1, args.which, args.u, args.y, args.C, args.D
-    out = kalman_filter_arrays(args)
-    N = data.n_samples
-    drive = input_drive(G0, G1, which, u)
-    err = np.full(y.shape, np.nan)
-    for j in range(k, N):
-        x = out.x_filt[j - k]
-        for i in range(j - k, j):
-            x = Phi[which[i]] @ x + drive[i]
-        err[j] = y[j] - (C @ x + D @ u[j])
-    return PredictionError(k, err, float(np.sqrt(np.nanmean(err**2))))
 
 
 @dataclass(frozen=True, eq=False)

@@ -5,9 +5,8 @@ import pytest
 
 from rczone.errors import ParameterError
 from rczone.estimation import Dataset
-from rczone.estimation.costs import run_filter
+from rczone.estimation.forecast import k_step_band
 from rczone.estimation.validation import (
-    k_step_prediction_error,
     ljung_box,
     open_loop_error,
     per_output_errors,
@@ -27,25 +26,17 @@ def test_open_loop_error_zero_at_truth_and_reports_max() -> None:
     assert off.max_abs_K >= off.rmse_K > 0.01
 
 
-def test_one_step_prediction_equals_filter_innovations() -> None:
-    data = data2(noise=0.05, rng=np.random.default_rng(2))
-    p1 = k_step_prediction_error(NET2, NOISE, data, k=1)
-    innov = run_filter(NET2, NOISE, data).innovations
-    np.testing.assert_allclose(p1.error[1:], innov[1:], rtol=1e-10, atol=1e-12)
-    assert np.isnan(p1.error[0]).all()
-    # k steps ahead: undefined for the first k samples, finite afterwards
-    p6 = k_step_prediction_error(NET2, NOISE, data, k=6)
-    assert np.isnan(p6.error[:6]).all() and np.isfinite(p6.error[6:]).all()
-    with pytest.raises(ParameterError, match="k must be >= 1"):
-        k_step_prediction_error(NET2, NOISE, data, k=0)
-
-
 def test_k_step_prediction_error_grows_towards_open_loop_with_a_wrong_model() -> None:
     d = data2()
     data = Dataset(d.t, d.u, d.m, d.y, d.input_names, d.flow_names, d.output_names)
     wrong = {**NOISE, "Rw": 0.03}
-    rm = [k_step_prediction_error(NET2, wrong, data, k=k).rmse_K for k in (1, 3, 12)]
+    rm = []
+    for k in (1, 3, 12):
+        y_hat, _ = k_step_band(NET2, wrong, data, k)
+        rm.append(float(np.sqrt(np.nanmean((data.y - y_hat) ** 2))))
     assert rm[0] < rm[1] < rm[2]
+    with pytest.raises(ParameterError, match="k must be a positive integer"):
+        k_step_band(NET2, NOISE, data, 0)
 
 
 def test_ljung_box_accepts_white_noise_and_rejects_ar1() -> None:
