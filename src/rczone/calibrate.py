@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -26,6 +27,7 @@ from rczone.estimation.innovations import (
     ljung_box_lags,
     open_loop_analysis,
 )
+from rczone.estimation.methods import DEFAULT_METHOD, REGISTRY, method_of
 from rczone.estimation.validation import (
     INITIAL_STATE_PRIOR_K,
     InitialStateEstimate,
@@ -38,6 +40,8 @@ from rczone.estimation.validation import (
 )
 from rczone.models import ZoneModel, load_model
 from rczone.network import RCNetwork
+from rczone.results import Result
+from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, verdict_of
 
 ModelLike = ZoneModel | RCNetwork | str | os.PathLike
 
@@ -127,26 +131,37 @@ def dataset(
     return Dataset(t, u, m if m.shape[1] else None, y, net.input_names, net.flow_names, net.outputs)
 
 
-@dataclass(frozen=True, eq=False)
-class Calibration:
-    """A fit and its open-loop check on the calibration data.
+@dataclass(frozen=True, eq=False, repr=False)
+class Calibration(Result):
+    """A fit, its open-loop check on the calibration data, the checks after it and one verdict.
 
     Attributes
     ----------
     result : FitResult
+        The fit.
     model : ZoneModel
-        The fitted model (structure and conventions of the input model, the estimates as values).
+        The fitted model (structure and conventions of the input model, the estimates as values;
+        its provenance names the data and the model fitted).
     open_loop : OpenLoopError
         Open-loop simulation of the fitted model on the calibration data. The unmeasured nodes
         start where the data say: at the initial state an LS fit estimates with the parameters, and
         for ML and MAP at :func:`~rczone.estimation.validation.estimate_initial_state` (the
         filter itself needs no estimate).
     residuals : ResidualTest
-        Whiteness of the open-loop error (not expected to be white; see the innovations for ML).
+        Whiteness of the open-loop error of the first output (not expected to be white; see the
+        innovations for ML, and :attr:`open_loop_residuals` for every output).
     innovations : ResidualAnalysis or None
         Whiteness of the one-step innovations (ML and MAP fits; None for LS or too few samples).
     open_loop_residuals : ResidualAnalysis or None
         The same statistics on the open-loop error, labelled as such.
+    checks : dict or None
+        JSON-ready post-fit checks (profiles, estimates at bounds or far from construction, fits to
+        other data and their disagreements, predictions of other data;
+        :func:`rczone.workflow.checks.check_fit`); None when not made.
+    identifiability : IdentifiabilityReport or None
+        The identifiability analysis at the estimates; None when not made.
+    verdict : Verdict
+        The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
 
     result: FitResult
@@ -155,6 +170,27 @@ class Calibration:
     residuals: ResidualTest
     innovations: ResidualAnalysis | None = None
     open_loop_residuals: ResidualAnalysis | None = None
+    checks: dict | None = None
+    identifiability: Any = None
+    verdict: Verdict = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", verdict_of(self.result, self.identifiability, self.checks))
+
+    @property
+    def data_label(self) -> str:
+        """The data's name, as the provenance records it."""
+        return str(self.model.provenance.get("data", "data"))
+
+    @property
+    def model_label(self) -> str:
+        """The model's name, as the provenance records it."""
+        return str(self.model.provenance.get("model", self.model.label))
+
+    @property
+    def exit_code(self) -> int:
+        """0 for a trustworthy fit, :data:`~rczone.results.verdict.EXIT_UNTRUSTED` for a flagged one."""
+        return 0 if self.verdict.trustworthy else EXIT_UNTRUSTED
 
     def to_frame(self) -> pd.DataFrame:
         """The parameter table (:meth:`FitResult.to_frame`)."""
@@ -167,11 +203,87 @@ class Calibration:
             (o, float(r), float(w)) for o, r, w in zip(self.model.network.outputs, rmse, worst, strict=True)
         ]
 
+    def _repr_line(self) -> str:
+        state = "trustworthy" if self.verdict.trustworthy else "flagged"
+        return (
+            f"{self.model_label} fitted to {self.data_label} by {self.result.method.upper()},"
+            f" {self.result.n_params} parameters, {state}"
+        )
+
+    def summary_lines(self) -> list:
+        """What ``rczone fit`` prints, in order (rich markup)."""
+        from rczone.results.fit_text import esc, parameter_table, residual_lines, search_line
+
+        r = self.result
+        title = f"{esc(self.model_label)} fitted to {esc(self.data_label)} by {r.method.upper()}"
+        lines: list = [parameter_table(r, title), search_line(r)]
+        lines.append(
+            f"open-loop RMSE {self.open_loop.rmse_K:.3f} K, max {self.open_loop.max_abs_K:.3f} K;"
+            f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K; {r.n_evals} evaluations"
+        )
+        per_output = self.output_errors()
+        if len(per_output) > 1:
+            lines.append(
+                "open loop per output: "
+                + "; ".join(f"{esc(o)} RMSE {rmse:.3f} K, max {worst:.3f} K" for o, rmse, worst in per_output)
+            )
+        lines += residual_lines(self.innovations or self.open_loop_residuals)
+        used = self.model.provenance.get("constants") or {}
+        if used:
+            lines.append("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in used.items()))
+        lines += [f"note: {esc(note)}" for note in (*r.notes, *self.verdict.notes)]
+        lines += [f"[yellow]warning:[/] {esc(reason)}" for reason in self.verdict.reasons]
+        if not self.verdict.trustworthy:
+            lines.append(
+                f"[red]result flagged[/] (exit code {EXIT_UNTRUSTED}): do not use these estimates without"
+                " checking the warnings above"
+            )
+        return lines
+
+    def to_dict(self) -> dict:
+        """What ``rczone fit --json`` writes: the fit, its errors, residuals, checks and verdict."""
+        from rczone.estimation.parameters import measurement_noise_names
+
+        r = self.result
+        payload = r.to_dict()
+        net = self.model.network
+        payload.update(
+            data=self.data_label,
+            model=self.model_label,
+            open_loop_rmse_K=self.open_loop.rmse_K,
+            open_loop_max_error_K=self.open_loop.max_abs_K,
+            outputs={
+                o: {
+                    "open_loop_rmse_K": rmse,
+                    "open_loop_max_error_K": worst,
+                    "sigma_v_K": r.estimates.get(noise),
+                }
+                for (o, rmse, worst), noise in zip(
+                    self.output_errors(), measurement_noise_names(net.outputs), strict=True
+                )
+            },
+            ljung_box_p=self.residuals.p_value,
+            innovations=self.innovations.to_dict() if self.innovations is not None else None,
+            open_loop_residuals=self.open_loop_residuals.to_dict() if self.open_loop_residuals else None,
+            constants=self.model.provenance.get("constants") or {},
+            identifiability={
+                k: {"verdict": v.verdict, "reason": v.reason}
+                for k, v in self.identifiability.parameters.items()
+            }
+            if self.identifiability
+            else {},
+            checks=self.checks,
+            trustworthy=self.verdict.trustworthy,
+            verdict=self.verdict.to_dict(),
+            exit_code=self.exit_code,
+        )
+        return payload
+
 
 def calibrate(
     model: ModelLike,
     frame: pd.DataFrame,
-    method: str = "ls",
+    method: str = DEFAULT_METHOD,
     free: Sequence[str] | None = None,
     optimizer: str = "auto",
     n_starts: int | None = None,
@@ -191,7 +303,8 @@ def calibrate(
     frame : DataFrame
         ``time`` (s) or a DatetimeIndex, and a column per model input and output (by name; the
         model's conventions fill inputs the data lack).
-    method : {"ls", "ml", "map"}
+    method : {"ml", "ls", "map"}
+        A method of :data:`rczone.estimation.methods.REGISTRY`; default ML, as ``rczone fit``.
     free : sequence of str, optional
         Default :func:`rczone.estimation.fit.default_free`.
     optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
@@ -239,7 +352,8 @@ def calibrate(
     )
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
-    noise = {k: v for k, v in values.items() if k.startswith("sigma_")} if method != "ls" else {}
+    kind = method_of(method)
+    noise = {k: v for k, v in values.items() if k.startswith("sigma_")} if kind.stochastic else {}
     initial = {k: v for k, v in values.items() if k.startswith("x0_")}
     fitted = zm.with_values(
         theta,
@@ -247,7 +361,8 @@ def calibrate(
         method=method,
         optimizer=optimizer,
         free=list(free),
-        cost=res.cost,
+        objective_value=res.objective_value,
+        engine=res.engine,
         rmse_K=res.rmse_K,
         std_errors={k: float(v) for k, v in res.std_errors.items()},
         initial_state=initial,
@@ -258,14 +373,14 @@ def calibrate(
         covariance=parameter_covariance(res),
         **dict(provenance or {}),
     )
-    if method != "ls":  # as LS estimates them: the unmeasured nodes start where the data say
+    if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
         initial = _estimated_start(fitted, values, data, has_noise=True).values
     ol = open_loop_error(net, {**theta, **initial}, data)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = None
     if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
         olr = open_loop_analysis(ol.error, data)
-        if method != "ls":
+        if kind.stochastic:
             inn = innovation_analysis(net, values, data, res.hold)
     return Calibration(res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr)
 
@@ -444,7 +559,8 @@ def prediction(
         sources.append("the model's noise levels")
     else:
         y_hat = open_loop_error(net, {**zm.theta, **values}, data).y_hat
-        rmse = zm.provenance.get("rmse_K") if zm.provenance.get("method") == "ls" else None
+        fitted_by = REGISTRY.get(str(zm.provenance.get("method")))
+        rmse = zm.provenance.get("rmse_K") if fitted_by is not None and not fitted_by.stochastic else None
         if isinstance(rmse, (int, float)) and np.isfinite(rmse):
             sd = np.full_like(y_hat, float(rmse))
             sources.append("the open-loop RMSE of the least-squares fit")

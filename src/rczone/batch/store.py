@@ -46,7 +46,7 @@ _HELD: set[str] = set()  # folders locked by this process (the lock itself is pe
 _HELD_GUARD = threading.Lock()
 
 #: Columns of a row and the JSON types they hold (others hold numbers or null).
-TEXT = ("key", "zone", "method", "model", "source", "status", "error", "fingerprint", "flags")
+TEXT = ("key", "zone", "method", "model", "source", "status", "error", "fingerprint", "flags", "engine")
 FLAGS = ("converged", "trustworthy")
 COUNTS = ("n_evals",)
 STATUSES = ("ok", "failed")

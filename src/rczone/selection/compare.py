@@ -102,8 +102,8 @@ class Candidate:
 
     @property
     def fit_loglik(self) -> float:
-        """``log L`` of the fit at the estimate (the fit's cost is ``-log L``), of all the model's outputs."""
-        return -float(self.calibration.result.cost)
+        """``log L`` of the fit at the estimate, of all the model's outputs."""
+        return float(self.calibration.result.llf)
 
     @property
     def loglik(self) -> float:
@@ -138,7 +138,7 @@ class Candidate:
             "innovations": inn.to_dict() if inn is not None else None,
             "parameters": {n: r.estimates[n] for n in r.names},
             "std_errors": {n: r.std_errors[n] for n in r.names},
-            "units": dict(r.units),
+            "units": {n: e.unit for n, e in r.parameters.items()},
             "trustworthy": r.trustworthy,
             "flags": list(r.flags),
             "retried_from_simpler": self.retried,
@@ -439,11 +439,11 @@ def select_models(
         retried = False
         if simpler:
             best = max(simpler, key=lambda c: c.fit_loglik)
-            if -cal.result.cost < best.fit_loglik - LOGLIK_TOLERANCE:
+            if cal.result.llf < best.fit_loglik - LOGLIK_TOLERANCE:
                 # below a special case of itself: the search missed the optimum; start where the simpler one is
                 again = run(_warm_start(by_name[name], best, nests[(best.name, name)]))
                 retried = True
-                if again.result.cost < cal.result.cost:
+                if again.result.llf > cal.result.llf:
                     cal = again
         fitted[name] = Candidate(name, cal, int(np.isfinite(cal.open_loop.error).sum()), retried)
         return fitted[name]
