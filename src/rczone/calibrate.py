@@ -76,6 +76,33 @@ def frame_from(data: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def time_index(frame: pd.DataFrame, t: np.ndarray) -> pd.DatetimeIndex | None:
+    """The time stamps of the samples at ``t`` (as :func:`frame_from` made them), in the data's time zone.
+
+    A frame indexed by time stamps (or with a datetime ``time`` column) gives them from its first
+    stamp; UTC epoch seconds (a loaded trend log) give UTC stamps, converted to the zone of the
+    frame's DatetimeIndex when it has one. None when the data have no clock time.
+    """
+    index = frame.index if isinstance(frame.index, pd.DatetimeIndex) else None
+    t = np.asarray(t, dtype=float)
+    if "time" in frame and pd.api.types.is_datetime64_any_dtype(frame["time"]):
+        return pd.DatetimeIndex(frame["time"].iloc[0] + pd.to_timedelta(t, unit="s"), name="timestamp")
+    if "time" in frame:
+        if not (t.size and t[0] > EPOCH_SECONDS):
+            return None
+        stamps = pd.to_datetime(t, unit="s", utc=True)
+        if index is not None and index.tz is not None:
+            stamps = stamps.tz_convert(index.tz)
+        return pd.DatetimeIndex(stamps, name="timestamp")
+    if index is not None and len(index):
+        return pd.DatetimeIndex(index[0] + pd.to_timedelta(t, unit="s"), name="timestamp")
+    return None
+
+
+#: Times above this (s) are UTC epoch seconds (after 1973), not seconds from the start of the data.
+EPOCH_SECONDS = 1e8
+
+
 def complete_stretch(u: np.ndarray, m: np.ndarray, y: np.ndarray) -> slice:
     """The longest run of samples where every input and flow is known and some output is measured.
 
@@ -408,8 +435,8 @@ def predict(
     return open_loop_error(zm.network, dict(zm.theta), data)
 
 
-@dataclass(frozen=True, eq=False)
-class Prediction:
+@dataclass(frozen=True, eq=False, repr=False)
+class Prediction(Result):
     """An open-loop or k-step-ahead prediction with a band of plus or minus two standard deviations.
 
     Attributes
@@ -428,6 +455,10 @@ class Prediction:
     initial_state : InitialStateEstimate, optional
         Open loop: the unmeasured nodes' initial temperatures estimated from the data (None when
         they start at the steady state).
+    index : DatetimeIndex, optional
+        The samples' time stamps in the data's time zone (None when the data have no clock time).
+    model_label, data_label : str
+        Names of the model and the data, for titles.
     """
 
     t: np.ndarray
@@ -440,6 +471,9 @@ class Prediction:
     sd_parameters: np.ndarray | None = None
     steps: int | None = None
     initial_state: InitialStateEstimate | None = None
+    index: pd.DatetimeIndex | None = None
+    model_label: str = "model"
+    data_label: str = "data"
 
     @property
     def horizon(self) -> str:
@@ -468,11 +502,8 @@ class Prediction:
         inside = (e <= 2 * self.sd) & ok
         return np.where(ok.sum(axis=0) > 0, inside.sum(axis=0) / np.maximum(ok.sum(axis=0), 1), np.nan)
 
-    def to_frame(self) -> pd.DataFrame:
-        """``time`` (and ``timestamp_utc`` for epoch times), then per output measured, predicted, lower, upper."""
-        cols: dict[str, np.ndarray] = {"time": self.t}
-        if self.t.size and self.t[0] > 1e8:  # epoch seconds: also a readable UTC time stamp
-            cols["timestamp_utc"] = pd.to_datetime(self.t, unit="s", utc=True).strftime("%Y-%m-%dT%H:%M:%SZ")
+    def _columns(self) -> dict[str, np.ndarray]:
+        cols: dict[str, np.ndarray] = {}
         for j, o in enumerate(self.outputs):
             cols[f"{o}_measured"] = self.measured[:, j]
             cols[f"{o}_predicted"] = self.predicted[:, j]
@@ -482,10 +513,86 @@ class Prediction:
                 cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
             if self.sd_parameters is not None:
                 cols[f"{o}_sd_parameters"] = self.sd_parameters[:, j]
-        return pd.DataFrame(cols)
+        return cols
+
+    def to_frame(self) -> pd.DataFrame:
+        """Per output measured, predicted, lower and upper (2 sigma), indexed by the data's time stamps.
+
+        Without clock time (seconds from the start), a ``time`` column in seconds instead.
+        """
+        if self.index is not None:
+            return pd.DataFrame(self._columns(), index=self.index)
+        return pd.DataFrame({"time": self.t, **self._columns()})
+
+    def series_frame(self) -> pd.DataFrame:
+        """The layout of the series file: ``time`` (s), ``timestamp_utc`` for epoch times, then the columns."""
+        cols: dict[str, np.ndarray] = {"time": self.t}
+        if self.t.size and self.t[0] > EPOCH_SECONDS:  # epoch seconds: also a readable UTC time stamp
+            cols["timestamp_utc"] = pd.to_datetime(self.t, unit="s", utc=True).strftime("%Y-%m-%dT%H:%M:%SZ")
+        return pd.DataFrame({**cols, **self._columns()})
+
+    def _repr_line(self) -> str:
+        rmse = ", ".join(f"{o} RMSE {v:.3f} K" for o, v in zip(self.outputs, self.rmse_K))
+        return f"{self.model_label} on {self.data_label}, {self.horizon}, {len(self.t)} samples, {rmse}"
+
+    def summary_lines(self) -> list:
+        """What ``rczone predict`` prints (before the files it writes)."""
+        from rczone.results.fit_text import esc
+
+        lines = []
+        start = self.initial_state
+        if start is not None and start.sd:
+            lines.append(
+                "initial temperatures of the unmeasured nodes, estimated from the data (steady state for the"
+                " first sample in brackets): "
+                + ", ".join(
+                    f"{esc(k.removeprefix('x0_'))} {start.values[k]:.2f} ({start.steady[k]:.2f}) ± {sd:.2f} K"
+                    for k, sd in start.sd.items()
+                )
+            )
+        for j, o in enumerate(self.outputs):
+            lines.append(
+                f"{esc(self.data_label)}: {esc(o)} {self.horizon} RMSE {self.rmse_K[j]:.3f} K, max error"
+                f" {self.max_abs_K[j]:.3f} K; {self.coverage[j]:.0%} of the measurements inside the 2-sigma band"
+                f" ({esc(self.band_source)})"
+            )
+        return lines
+
+    def to_dict(self) -> dict:
+        """What ``rczone predict --json`` writes."""
+        start = self.initial_state
+        one = len(self.outputs) == 1
+        return {
+            "model": self.model_label,
+            "data": self.data_label,
+            "rmse_K": float(self.rmse_K[0]) if one else dict(zip(self.outputs, map(float, self.rmse_K))),
+            "max_error_K": float(self.max_abs_K[0])
+            if one
+            else dict(zip(self.outputs, map(float, self.max_abs_K))),
+            "band": self.band_source,
+            "horizon": self.horizon,
+            "steps": self.steps,
+            "initial_state": {
+                k.removeprefix("x0_"): {
+                    "estimate_degC": v,
+                    "steady_degC": start.steady[k],
+                    "sd_K": start.sd[k],
+                }
+                for k, v in start.values.items()
+                if k in start.sd
+            }
+            if start is not None
+            else None,
+            "coverage_2sigma": dict(zip(self.outputs, map(float, self.coverage))),
+            "mean_sd_K": {
+                part: {o: float(np.nanmean(a[:, j])) for j, o in enumerate(self.outputs)}
+                for part, a in (("noise", self.sd_noise), ("estimates", self.sd_parameters))
+                if a is not None and np.isfinite(a).any()
+            },
+        }
 
     def write(self, path: str | os.PathLike) -> None:
-        """Write :meth:`to_frame` as ``.csv`` or ``.parquet`` (atomically)."""
+        """Write :meth:`series_frame` as ``.csv`` or ``.parquet`` (atomically)."""
         import io
 
         from rczone.atomic import write_bytes_atomic, write_text_atomic
@@ -493,10 +600,10 @@ class Prediction:
         p = os.fspath(path)
         low = p.lower()
         if low.endswith(".csv"):
-            write_text_atomic(p, self.to_frame().to_csv(index=False))
+            write_text_atomic(p, self.series_frame().to_csv(index=False))
         elif low.endswith((".parquet", ".pq")):
             buf = io.BytesIO()
-            self.to_frame().to_parquet(buf, index=False)
+            self.series_frame().to_parquet(buf, index=False)
             write_bytes_atomic(p, buf.getvalue())
         else:
             raise DataError(f"the series file must end in .csv or .parquet, got {p!r}")
@@ -509,6 +616,7 @@ def prediction(
     steps: int | None = None,
     parameters: bool = True,
     initial_state: str = "estimated",
+    label: str = "data",
 ) -> Prediction:
     """Open-loop (or ``steps``-ahead) prediction of ``model`` on data with a two-sigma band.
 
@@ -532,6 +640,8 @@ def prediction(
         the model's ``sigma_x0`` or 1 K), and the band starts from the estimate's uncertainty;
         ``"steady"``: at the steady state for the first sample's inputs, which shows a slow node's
         unknown start as a bias lasting its time constant.
+    label : str
+        The data's name, for titles.
     """
     from rczone.estimation.forecast import noise_band, parameter_sd
 
@@ -587,7 +697,21 @@ def prediction(
     source = (
         " and ".join(sources) if sources else "none: the model has no noise levels (fit it by ML for a band)"
     )
-    return Prediction(data.t, data.y, y_hat, total, net.outputs, source, sd, sd_par, steps, start)
+    return Prediction(
+        data.t,
+        data.y,
+        y_hat,
+        total,
+        net.outputs,
+        source,
+        sd,
+        sd_par,
+        steps,
+        start,
+        index=time_index(frame, data.t),
+        model_label=zm.label,
+        data_label=label,
+    )
 
 
 #: Where an open-loop prediction starts its unmeasured nodes (:func:`prediction`).

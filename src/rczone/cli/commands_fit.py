@@ -218,8 +218,6 @@ def predict(
     The band adds the process and measurement noise of a model fitted by ML (or the RMSE of an
     LS fit) and the uncertainty of the estimates saved with a fitted model.
     """
-    import numpy as np
-
     from rczone.calibrate import prediction
     from rczone.errors import ParameterError
 
@@ -228,23 +226,10 @@ def predict(
     zm = model(model_file)
     frame = read_frame(data, column_map, zm)
     label = data_label(data)
-    pred = prediction(zm, frame, constants(const), steps=steps, initial_state=initial_state)
+    pred = prediction(zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label)
     console = out_console(json_out)
-    start = pred.initial_state
-    if start is not None and start.sd:
-        console.print(
-            "initial temperatures of the unmeasured nodes, estimated from the data (steady state for the"
-            " first sample in brackets): "
-            + ", ".join(
-                f"{esc(k.removeprefix('x0_'))} {start.values[k]:.2f} ({start.steady[k]:.2f}) ± {sd:.2f} K"
-                for k, sd in start.sd.items()
-            )
-        )
-    for j, o in enumerate(zm.network.outputs):
-        console.print(
-            f"{esc(label)}: {esc(o)} {pred.horizon} RMSE {pred.rmse_K[j]:.3f} K, max error {pred.max_abs_K[j]:.3f} K;"
-            f" {pred.coverage[j]:.0%} of the measurements inside the 2-sigma band ({esc(pred.band_source)})"
-        )
+    for line in pred.summary_lines():
+        console.print(line)
     if out is not None:
         pred.write(out)
         console.print(f"series written to [bold]{esc(out)}[/]")
@@ -253,37 +238,4 @@ def predict(
 
         prediction_report(pred, label, zm.label).write(report_dir)
         console.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
-    if json_out:
-        write_json(
-            json_out,
-            {
-                "model": zm.label,
-                "data": label,
-                "rmse_K": float(pred.rmse_K[0])
-                if len(pred.rmse_K) == 1
-                else dict(zip(pred.outputs, map(float, pred.rmse_K))),
-                "max_error_K": float(pred.max_abs_K[0])
-                if len(pred.max_abs_K) == 1
-                else dict(zip(pred.outputs, map(float, pred.max_abs_K))),
-                "band": pred.band_source,
-                "horizon": pred.horizon,
-                "steps": pred.steps,
-                "initial_state": {
-                    k.removeprefix("x0_"): {
-                        "estimate_degC": v,
-                        "steady_degC": start.steady[k],
-                        "sd_K": start.sd[k],
-                    }
-                    for k, v in start.values.items()
-                    if k in start.sd
-                }
-                if start is not None
-                else None,
-                "coverage_2sigma": dict(zip(pred.outputs, map(float, pred.coverage))),
-                "mean_sd_K": {
-                    part: {o: float(np.nanmean(a[:, j])) for j, o in enumerate(pred.outputs)}
-                    for part, a in (("noise", pred.sd_noise), ("estimates", pred.sd_parameters))
-                    if a is not None and np.isfinite(a).any()
-                },
-            },
-        )
+    write_json(json_out, pred.to_dict())

@@ -1,0 +1,203 @@
+"""The functions :mod:`rczone` exports: load, fit, predict, with the command line's defaults.
+
+Each takes the data first and its options by keyword only, builds the same settings as the
+command (:class:`~rczone.workflow.settings.FitSettings`) and returns a result that prints what the
+command prints (``summary()``) and serializes to what its ``--json`` writes (``to_dict()``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from rczone.calibrate import Calibration, Prediction, as_model, prediction
+from rczone.errors import DataError, ParameterError
+from rczone.estimation.methods import DEFAULT_METHOD
+from rczone.models import ZoneModel
+from rczone.workflow.checks import fit_and_check
+from rczone.workflow.settings import FitSettings
+
+PathLike = str | os.PathLike
+ModelLike = ZoneModel | PathLike
+
+
+def load_data(
+    source: PathLike, *, columns: PathLike | None = None, model: ModelLike | None = None
+) -> pd.DataFrame:
+    """A zone's data as a frame, read exactly as the command line reads them.
+
+    Parameters
+    ----------
+    source : str or path
+        A CSV or Parquet trend log, or a built-in data set's name (``"A"``, ``"B"``, ``"C"``).
+    columns : str or path, optional
+        A TOML column map (``--columns``; ``docs/data.md``).
+    model : ZoneModel, str or path, optional
+        The model the data are for: its signal names are read from a file without a map, and a
+        map may name them (a heater ``Ph``).
+
+    Returns
+    -------
+    DataFrame
+        SI units, a column per signal and ``time`` (s). A trend log is indexed by its time stamps
+        in the column map's time zone (UTC without a map); a built-in set by seconds.
+    """
+    from rczone.sources import read_frame, read_model_frame
+
+    zm = as_model(model) if model is not None else None
+    frame = read_frame(source, columns) if zm is None else read_model_frame(source, columns, zm)
+    t = frame["time"].to_numpy(dtype=float)
+    if t.size and t[0] > 1e8:  # UTC epoch seconds of a loaded trend log
+        tz = "UTC"
+        if columns is not None:
+            from rczone.data import read_column_map
+
+            tz = read_column_map(columns, zm.signal_quantities() if zm is not None else None).timezone
+        frame.index = pd.DatetimeIndex(pd.to_datetime(t, unit="s", utc=True).tz_convert(tz), name="timestamp")
+    return frame
+
+
+def _frame(
+    data: pd.DataFrame | PathLike, columns: PathLike | None, zm: ZoneModel
+) -> tuple[pd.DataFrame, str]:
+    """A frame and its name from a frame or a source."""
+    if isinstance(data, pd.DataFrame):
+        return data, str(data.attrs.get("name", "data"))
+    if isinstance(data, str | os.PathLike):
+        return load_data(data, columns=columns, model=zm), Path(str(data)).name
+    raise DataError(
+        f"data must be a DataFrame, a file or a built-in data set name, got {type(data).__name__}"
+    )
+
+
+def fit(
+    model: ModelLike,
+    data: pd.DataFrame | PathLike,
+    *,
+    method: str = DEFAULT_METHOD,
+    free: Sequence[str] | None = None,
+    optimizer: str = "auto",
+    n_starts: int | None = None,
+    seed: int = 0,
+    noise: str = "measured",
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    check_on: Sequence[pd.DataFrame | PathLike] = (),
+    checks: bool = True,
+    profiles: bool = True,
+    label: str | None = None,
+) -> Calibration:
+    """Fit a model to data: ``rczone fit`` in Python.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        A built-in name, a model file, a saved model (its values are the start) or a model.
+    data : DataFrame, str or path
+        A frame (``time`` in s or a DatetimeIndex, a column per signal), a trend log or a built-in
+        data set's name.
+    method : str
+        ``"ml"`` (default, as the command line), ``"ls"`` or ``"map"``
+        (:data:`rczone.estimation.methods.REGISTRY`).
+    free : sequence of str, optional
+        Free parameters; default the model's, plus noise levels for ML and MAP.
+    optimizer : str
+        ``"auto"``, ``"nelder-mead"``, ``"powell"`` or ``"lbfgs"``.
+    n_starts : int, optional
+        Local searches; default the global search, 1 for one local search.
+    seed : int
+        Seed of the global search.
+    noise : {"measured", "all"}
+        ML and MAP: process noise on the measured states or on every state.
+    constants : mapping, optional
+        Inputs held constant (SI units), e.g. ``{"Q": 50}``.
+    columns : str or path, optional
+        A column map for ``data`` and ``check_on`` given as files.
+    check_on : sequence, optional
+        Other data: fitted too, their estimates compared, and predicted with this fit.
+    checks : bool
+        Make the checks after the fit (identifiability at the estimates, profiles), as
+        ``rczone fit --json`` does; they enter the one verdict.
+    profiles : bool
+        With ``checks``: profile each R and C over a factor of ten.
+    label : str, optional
+        The data's name in titles and the JSON; default the file name (or ``"data"``).
+
+    Returns
+    -------
+    Calibration
+        ``summary()`` is what ``rczone fit`` prints, ``to_dict()`` what ``--json`` writes.
+    """
+    zm = as_model(model)
+    settings = FitSettings(
+        method=method,
+        free=tuple(free) if free else None,
+        optimizer=optimizer,
+        n_starts=n_starts,
+        seed=seed,
+        noise=noise,
+        constants=dict(constants or {}),
+        checks=checks,
+        profiles=profiles,
+    )
+    frame, name = _frame(data, columns, zm)
+    others = {}
+    for k, other in enumerate(check_on):
+        f, other_name = _frame(other, columns, zm)
+        others[other_name if other_name not in others and other_name != "data" else f"data {k + 1}"] = f
+    return fit_and_check(zm, frame, settings, label=label or name, others=others)
+
+
+def predict(
+    model: ModelLike,
+    data: pd.DataFrame | PathLike,
+    *,
+    steps: int | None = None,
+    initial_state: str = "estimated",
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    parameters: bool = True,
+    label: str | None = None,
+) -> Prediction:
+    """Predict data with a model, open loop or ``steps`` ahead, with a 2-sigma band: ``rczone predict``.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        A fitted model (or any model: its values are used).
+    data : DataFrame, str or path
+        As for :func:`fit`.
+    steps : int, optional
+        Steps ahead from the Kalman filter (a model fitted by ML); default open loop.
+    initial_state : {"estimated", "steady"}
+        Open loop: where the unmeasured nodes start.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    columns : str or path, optional
+        A column map for ``data`` given as a file.
+    parameters : bool
+        Include the estimates' uncertainty in the band.
+    label : str, optional
+        The data's name in titles and the JSON.
+
+    Returns
+    -------
+    Prediction
+        ``to_frame()`` is indexed by the data's time stamps.
+    """
+    if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or steps < 1):
+        raise ParameterError(f"steps must be a positive integer, got {steps!r}")
+    zm = as_model(model)
+    frame, name = _frame(data, columns, zm)
+    return prediction(
+        zm,
+        frame,
+        dict(constants) if constants else None,
+        steps=steps,
+        parameters=parameters,
+        initial_state=initial_state,
+        label=label or name,
+    )
