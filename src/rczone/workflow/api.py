@@ -43,12 +43,15 @@ def load_data(
     -------
     DataFrame
         SI units, a column per signal and ``time`` (s). A trend log is indexed by its time stamps
-        in the column map's time zone (UTC without a map); a built-in set by seconds.
+        in the column map's time zone (UTC without a map); a built-in set by sample number.
+        ``attrs["name"]`` is the file's (or set's) name, which :func:`fit` and :func:`predict`
+        use as the data's name.
     """
     from rczone.sources import read_frame, read_model_frame
 
     zm = as_model(model) if model is not None else None
     frame = read_frame(source, columns) if zm is None else read_model_frame(source, columns, zm)
+    frame.attrs["name"] = Path(str(source)).name  # the data's name in titles and JSON, as on the command line
     t = frame["time"].to_numpy(dtype=float)
     if t.size and t[0] > 1e8:  # UTC epoch seconds of a loaded trend log
         tz = "UTC"
