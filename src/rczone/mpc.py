@@ -6,6 +6,20 @@ continuous or exact discrete LTI matrices at a chosen mass flow (the bilinear mo
 for constant flow), as plain numpy arrays (:meth:`ZoneModel.arrays`, :meth:`ZoneModel.discrete`)
 or as a python-control ``StateSpace`` (:meth:`ZoneModel.to_control`, optional extra
 ``rczone[control]``). This module is the MPC-facing entry point; it imports no plotting.
+
+Examples
+--------
+The one-node family model ``Ti`` (room capacity ``Ci`` behind ``Ria`` to outdoors) at 10-min steps:
+its discrete pole is ``exp(-dt / (Ria Ci))``, and a model with supply air needs its operating flow.
+
+>>> import numpy as np
+>>> from rczone.models import load_model
+>>> zm = load_model("Ti")
+>>> d = zm.discrete(600.0)
+>>> bool(np.isclose(d.Ad[0, 0], np.exp(-600.0 / (zm.theta["Ria"] * zm.theta["Ci"]))))
+True
+>>> load_model("second-order-paper").discrete(600.0, m=0.1).Ad.shape
+(2, 2)
 """
 
 from rczone.models.zone import FORMAT, DiscreteModel, ZoneModel

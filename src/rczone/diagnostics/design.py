@@ -344,7 +344,15 @@ def design_test(
     ti0 : float, optional
         Zone temperature at the start (default: the middle of the band); the other nodes start in
         equilibrium with it and the first inputs.
-    sigma_K, correlation_time_s : as in :func:`~rczone.diagnostics.identifiability.diagnose`.
+    dt : float
+        Sample time of the schedule and of the final check, s.
+    sigma_K, correlation_time_s : float
+        As in :func:`~rczone.diagnostics.identifiability.diagnose`.
+    max_sweeps : int
+        Most passes of the coordinate search over the segments (it stops earlier when a pass
+        improves nothing).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each segment of a pass.
 
     Returns
     -------
