@@ -38,7 +38,7 @@ _EXPORTS = {
     "predict": "rczone.workflow.api",
     "FitSettings": "rczone.workflow.settings",
     "simulate": "rczone.simulation",
-    "diagnose": "rczone.diagnostics",
+    "diagnose": "rczone.workflow.api",
     "design_test": "rczone.diagnostics.design",
     "select_models": "rczone.selection",
     # results

@@ -204,3 +204,66 @@ def predict(
         initial_state=initial_state,
         label=label or name,
     )
+
+
+def diagnose(
+    model: ModelLike,
+    data: pd.DataFrame | PathLike,
+    *,
+    free: Sequence[str] | None = None,
+    sigma: float = 0.1,
+    model_error: float = 0.2,
+    operating_point: str = "auto",
+    seed: int = 0,
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    label: str | None = None,
+):
+    """Can these data identify the model's parameters, and why: ``rczone diagnose`` in Python.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        The model; the analysis is made at its values if they reproduce the data, else at a quick
+        least-squares fit's (:func:`rczone.diagnostics.diagnose`).
+    data : DataFrame, str or path
+        As for :func:`fit`.
+    free : sequence of str, optional
+        Parameters to diagnose; default the model's free R, C and gains.
+    sigma : float
+        Error level a fit must see through (sensor noise and model error), K.
+    model_error : float
+        Structural model error the verdicts allow for, K RMS (0: none).
+    operating_point : {"auto", "model", "fit"}
+        Where the analysis is made.
+    seed : int
+        Seed of the quick fit's global search.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    columns : str or path, optional
+        A column map for ``data`` given as a file.
+    label : str, optional
+        The data's name in titles and the JSON.
+
+    Returns
+    -------
+    IdentifiabilityReport
+        ``summary()`` is what ``rczone diagnose`` prints, ``to_dict()`` what its ``--json`` writes.
+    """
+    import dataclasses
+
+    from rczone.diagnostics import diagnose as run
+
+    zm = as_model(model)
+    frame, name = _frame(data, columns, zm)
+    rep = run(
+        zm,
+        frame,
+        free=list(free) if free else None,
+        sigma_K=sigma,
+        model_error_K=model_error,
+        constants=dict(constants) if constants else None,
+        operating_point=operating_point,
+        seed=seed,
+    )
+    return dataclasses.replace(rep, data_label=label or name)

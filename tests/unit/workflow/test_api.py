@@ -129,3 +129,16 @@ def test_every_exported_name_resolves() -> None:
         assert getattr(rczone, name) is not None
     with pytest.raises(AttributeError, match="no attribute 'fitt'"):
         rczone.fitt  # noqa: B018
+
+
+def test_diagnose_to_dict_is_what_the_cli_writes(tmp_path, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("COLUMNS", str(WIDTH))
+    out = tmp_path / "diag.json"
+    assert main(["diagnose", "A", "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    rep = rczone.diagnose("second-order-paper", "A")
+    assert json.loads(out.read_text()) == _as_written(rep.to_dict())
+    assert printed == rep.summary(width=WIDTH)
+    frame = rep.to_frame()
+    assert frame.loc["Rw", "unit"] == "K/W" and frame.loc["Cr", "unit"] == "J/K"  # units in the table
+    assert len(repr(rep)) < 200
