@@ -40,7 +40,7 @@ _EXPORTS = {
     "simulate": "rczone.simulation",
     "diagnose": "rczone.workflow.api",
     "design_test": "rczone.diagnostics.design",
-    "select_models": "rczone.selection",
+    "select_models": "rczone.workflow.api",
     # results
     "Calibration": "rczone.calibrate",
     "Prediction": "rczone.calibrate",

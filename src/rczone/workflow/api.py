@@ -267,3 +267,106 @@ def diagnose(
         seed=seed,
     )
     return dataclasses.replace(rep, data_label=label or name)
+
+
+def read_for_models(
+    source: PathLike,
+    columns: PathLike | None,
+    models: Sequence[ZoneModel],
+    required: Sequence[str] | None = None,
+) -> pd.DataFrame:
+    """Data with every candidate's signals, read as ``rczone select`` reads them.
+
+    Parameters
+    ----------
+    source : str or path
+        A trend log or a built-in data set's name.
+    columns : str or path, optional
+        A column map.
+    models : sequence of ZoneModel
+        The candidates: the union of their signals is read.
+    required : sequence of str, optional
+        Columns that must exist; default every candidate's required signals.
+
+    Returns
+    -------
+    DataFrame
+    """
+    from rczone.sources import read_frame
+
+    signals: dict[str, str] = {}
+    needed: list[str] = []
+    for zm in models:
+        signals.update(zm.signal_quantities())
+        needed += [s for s in zm.required_signals() if s not in needed]
+    outputs = list(dict.fromkeys(o for zm in models for o in zm.network.outputs))
+    return read_frame(source, columns, signals, needed if required is None else list(required), outputs)
+
+
+def select_models(
+    models: Sequence[ModelLike],
+    data: pd.DataFrame | PathLike,
+    *,
+    criterion: str = "bic",
+    forward: bool = False,
+    alpha: float = 0.05,
+    noise: str = "all",
+    n_starts: int | None = None,
+    seed: int = 0,
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    label: str | None = None,
+):
+    """Fit candidate models to the same data by ML and choose one: ``rczone select`` in Python.
+
+    Parameters
+    ----------
+    models : sequence of ZoneModel, str or path
+        At least two candidates.
+    data : DataFrame, str or path
+        As for :func:`fit`; a file is read with every candidate's signals.
+    criterion : {"bic", "aic"}
+        Without ``forward``: the criterion to minimize.
+    forward : bool
+        Forward selection by likelihood-ratio tests along the nesting of the candidates.
+    alpha : float
+        Level of the tests.
+    noise : {"all", "measured"}
+        Process noise on every state (default, as the command) or on the measured ones.
+    n_starts : int, optional
+        Local searches per fit; default the global search.
+    seed : int
+        Seed of the global searches.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    columns : str or path, optional
+        A column map for ``data`` given as a file.
+    label : str, optional
+        The data's name in titles and the JSON.
+
+    Returns
+    -------
+    Selection
+        ``summary()`` is what ``rczone select`` prints, ``to_dict()`` what its ``--json`` writes.
+    """
+    import dataclasses
+
+    from rczone.selection import select_models as run
+
+    zms = [as_model(m) for m in models]
+    if isinstance(data, pd.DataFrame):
+        frame, name, source = data, str(data.attrs.get("name", "data")), ""
+    else:
+        frame, name, source = read_for_models(data, columns, zms), Path(str(data)).name, str(data)
+    sel = run(
+        zms,
+        frame,
+        dict(constants) if constants else None,
+        rule=criterion.strip().lower(),
+        forward=forward,
+        alpha=alpha,
+        n_starts=n_starts,
+        seed=seed,
+        noise=noise,
+    )
+    return dataclasses.replace(sel, data_label=label or name, source=source, noise=noise)

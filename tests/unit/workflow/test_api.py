@@ -142,3 +142,17 @@ def test_diagnose_to_dict_is_what_the_cli_writes(tmp_path, capsys, monkeypatch) 
     frame = rep.to_frame()
     assert frame.loc["Rw", "unit"] == "K/W" and frame.loc["Cr", "unit"] == "J/K"  # units in the table
     assert len(repr(rep)) < 200
+
+
+def test_select_to_dict_is_what_the_cli_writes(tmp_path, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("COLUMNS", str(WIDTH))
+    rczone.load_data("C").iloc[:240].to_csv(tmp_path / "short.csv", index=False)
+    out = tmp_path / "sel.json"
+    args = ["select", str(tmp_path / "short.csv"), "--model", "second-order-paper", "--model", "Ti+air+gain"]
+    rc = main([*args, "--starts", "1", "--json", str(out)])
+    printed = capsys.readouterr().out
+    sel = rczone.select_models(["second-order-paper", "Ti+air+gain"], tmp_path / "short.csv", n_starts=1)
+    assert rc == sel.exit_code
+    assert json.loads(out.read_text()) == _as_written(sel.to_dict())
+    assert printed == sel.summary(width=WIDTH)
+    assert sel.selected in repr(sel) and len(repr(sel)) < 200
