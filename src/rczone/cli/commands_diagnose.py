@@ -287,12 +287,13 @@ def design(
     Every number is read, and the schedule written, in the chosen units (--units, else the column
     map's, else SI); the schedule has clock times from --start.
     """
+    import dataclasses
+
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-    from rich.table import Table
 
     from rczone.data.units import DEFAULT_AIR_DENSITY
-    from rczone.diagnostics.design import DesignLimits, actuatable, design_test, from_si
+    from rczone.diagnostics.design import DesignLimits, actuatable, design_test
     from rczone.errors import ParameterError
 
     zm = model(model_name)
@@ -364,27 +365,11 @@ def design(
         res = design_test(zm, free_list, hours * 3600.0, limits, conditions=conds, ti0=ti0, progress=report)
     finally:
         bar.stop()
-    setpoints = {a: unit[a] for a in res.actuated}
-    table_df = res.table(when, setpoints)
-    res.to_csv(out, when, setpoints)
+    units_shown = {k: unit[k] for k in (*res.actuated, out_name)}
+    res = dataclasses.replace(res, model_label=zm.label, start=when, display_units=units_shown)
+    res.to_csv(out, when, {a: unit[a] for a in res.actuated})
     console = out_console(json_out)
-    table = Table(title=f"Forced-response schedule for {esc(zm.label)}")
-    for c in table_df.columns:
-        table.add_column(esc(c))
-    for row in table_df.itertuples(index=False):
-        table.add_row(*(esc(f"{v:g}" if isinstance(v, float) else v) for v in row))
-    console.print(table)
-    lo, hi = from_si(res.predicted[[res.predicted.argmin(), res.predicted.argmax()]], t_unit, "temperature")
-    se = ", ".join(f"{esc(k)} ±{v:.0%}" for k, v in res.expected_se.items())
-    console.print(f"predicted {esc(out_name)} {lo:.1f}..{hi:.1f} {esc(t_unit)}; expected {se}")
+    for line in res.summary_lines():
+        console.print(line)
     console.print(f"schedule written to [bold]{esc(out)}[/]")
-    write_json(
-        json_out,
-        {
-            **res.to_dict(),
-            "model": zm.label,
-            "units": {k: unit[k] for k in (*res.actuated, out_name)},
-            "start": str(when),
-            "setpoints": table_df.to_dict(orient="list"),
-        },
-    )
+    write_json(json_out, res.to_dict())
