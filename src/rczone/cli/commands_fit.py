@@ -19,6 +19,10 @@ from rczone.cli.common import (
     write_json,
 )
 from rczone.cli.main import app
+from rczone.estimation.methods import DEFAULT_METHOD, REGISTRY
+
+#: The methods of the registry, for --help.
+METHOD_HELP = "; ".join(f"{m.name}: {m.title}" for m in REGISTRY.values()) + "."
 
 
 def _starts(text: str) -> int | None:
@@ -39,9 +43,7 @@ def _starts(text: str) -> int | None:
 def fit(
     data: Annotated[Path, typer.Argument(help="CSV/Parquet file, or a built-in data set name (A, B, C).")],
     model_name: Annotated[str, typer.Option("--model", help=MODEL_HELP)] = "second-order-paper",
-    method: Annotated[
-        str, typer.Option(help="ls (output error), ml (Kalman likelihood) or map (ML + prior).")
-    ] = "ml",
+    method: Annotated[str, typer.Option(help=METHOD_HELP)] = DEFAULT_METHOD,
     free: Annotated[
         str | None,
         typer.Option(
