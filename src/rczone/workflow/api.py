@@ -137,7 +137,7 @@ def fit(
     zm = as_model(model)
     settings = FitSettings(
         method=method,
-        free=tuple(free) if free else None,
+        free=free,
         optimizer=optimizer,
         n_starts=n_starts,
         seed=seed,

@@ -156,3 +156,31 @@ def test_select_to_dict_is_what_the_cli_writes(tmp_path, capsys, monkeypatch) ->
     assert json.loads(out.read_text()) == _as_written(sel.to_dict())
     assert printed == sel.summary(width=WIDTH)
     assert sel.selected in repr(sel) and len(repr(sel)) < 200
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"method": "lsq"}, r"unknown method 'lsq'; did you mean 'ls'"),
+        ({"optimizer": "bfgs"}, "optimizer must be 'auto' or one of"),
+        ({"noise": "some"}, "noise must be one of measured, all"),
+        ({"n_starts": 0}, "n_starts must be None"),
+        ({"free": "Cr"}, "free must be a sequence of names"),
+        ({"seed": 1.5}, "seed must be an integer"),
+    ],
+)
+def test_bad_fit_options_are_one_clear_error_before_any_work(kwargs, match) -> None:
+    with pytest.raises(rczone.ParameterError, match=match):
+        rczone.fit("second-order-paper", "C", **kwargs)
+
+
+def test_data_of_the_wrong_kind_is_a_data_error() -> None:
+    with pytest.raises(rczone.DataError, match="data must be a DataFrame, a file or a built-in"):
+        rczone.fit("second-order-paper", 42)
+    with pytest.raises(rczone.DataError, match="does not exist"):
+        rczone.predict("second-order-paper", "no-such-file.csv")
+
+
+def test_check_on_other_data_enters_the_verdict() -> None:
+    cal = rczone.fit("second-order-paper", "C", method="ls", n_starts=1, profiles=False, check_on=["A"])
+    assert "other data" in cal.verdict.checked and "A" in cal.checks["other_fits"]
