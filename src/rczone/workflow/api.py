@@ -14,10 +14,11 @@ from pathlib import Path
 import pandas as pd
 
 from rczone.calibrate import Calibration, Prediction, as_model, prediction
-from rczone.errors import DataError, ParameterError
+from rczone.errors import ParameterError
 from rczone.estimation.methods import DEFAULT_METHOD
 from rczone.models import ZoneModel
 from rczone.workflow.checks import fit_and_check
+from rczone.workflow.datasource import DataSource, data_source
 from rczone.workflow.settings import FitSettings
 
 PathLike = str | os.PathLike
@@ -25,14 +26,15 @@ ModelLike = ZoneModel | PathLike
 
 
 def load_data(
-    source: PathLike, *, columns: PathLike | None = None, model: ModelLike | None = None
+    source: PathLike | DataSource, *, columns: PathLike | None = None, model: ModelLike | None = None
 ) -> pd.DataFrame:
     """A zone's data as a frame, read exactly as the command line reads them.
 
     Parameters
     ----------
-    source : str or path
-        A CSV or Parquet trend log, or a built-in data set's name (``"A"``, ``"B"``, ``"C"``).
+    source : str, path or DataSource
+        A CSV or Parquet trend log, a built-in data set's name (``"A"``, ``"B"``, ``"C"``) or a
+        :class:`~rczone.workflow.datasource.DataSource` (a virtual night, for one).
     columns : str or path, optional
         A TOML column map (``--columns``; ``docs/data.md``).
     model : ZoneModel, str or path, optional
@@ -47,33 +49,18 @@ def load_data(
         ``attrs["name"]`` is the file's (or set's) name, which :func:`fit` and :func:`predict`
         use as the data's name.
     """
-    from rczone.sources import read_frame, read_model_frame
-
     zm = as_model(model) if model is not None else None
-    frame = read_frame(source, columns) if zm is None else read_model_frame(source, columns, zm)
-    frame.attrs["name"] = Path(str(source)).name  # the data's name in titles and JSON, as on the command line
-    t = frame["time"].to_numpy(dtype=float)
-    if t.size and t[0] > 1e8:  # UTC epoch seconds of a loaded trend log
-        tz = "UTC"
-        if columns is not None:
-            from rczone.data import read_column_map
-
-            tz = read_column_map(columns, zm.signal_quantities() if zm is not None else None).timezone
-        frame.index = pd.DatetimeIndex(pd.to_datetime(t, unit="s", utc=True).tz_convert(tz), name="timestamp")
-    return frame
+    return data_source(source, columns).frame(zm)
 
 
 def _frame(
-    data: pd.DataFrame | PathLike, columns: PathLike | None, zm: ZoneModel
+    data: pd.DataFrame | PathLike | DataSource, columns: PathLike | None, zm: ZoneModel
 ) -> tuple[pd.DataFrame, str]:
-    """A frame and its name from a frame or a source."""
+    """A frame and its name from a frame, a source or what names one."""
     if isinstance(data, pd.DataFrame):
         return data, str(data.attrs.get("name", "data"))
-    if isinstance(data, str | os.PathLike):
-        return load_data(data, columns=columns, model=zm), Path(str(data)).name
-    raise DataError(
-        f"data must be a DataFrame, a file or a built-in data set name, got {type(data).__name__}"
-    )
+    source = data_source(data, columns)
+    return source.frame(zm), source.label
 
 
 def fit(

@@ -184,3 +184,20 @@ def test_data_of_the_wrong_kind_is_a_data_error() -> None:
 def test_check_on_other_data_enters_the_verdict() -> None:
     cal = rczone.fit("second-order-paper", "C", method="ls", n_starts=1, profiles=False, check_on=["A"])
     assert "other data" in cal.verdict.checked and "A" in cal.checks["other_fits"]
+
+
+def test_data_sources_are_one_protocol(tmp_path) -> None:
+    from rczone.workflow.datasource import DataSource, data_source
+
+    rczone.load_data("C").iloc[:120].to_csv(tmp_path / "c.csv", index=False)
+    log, night = data_source(tmp_path / "c.csv"), data_source("C")
+    virtual = rczone.VirtualNight("autumn", "forced", 3)
+    assert all(isinstance(s, DataSource) for s in (log, night, virtual))
+    assert (log.label, log.files) == ("c.csv", (str(tmp_path / "c.csv"),))
+    assert (night.label, night.files) == ("C", ()) and virtual.label == "virtual:autumn/forced/3"
+    # a source and the name of one give the same frame, titled by the source
+    by_source = rczone.load_data(rczone.TrendLog(str(tmp_path / "c.csv")))
+    pd.testing.assert_frame_equal(by_source, rczone.load_data(tmp_path / "c.csv"))
+    assert by_source.attrs["name"] == "c.csv"
+    with pytest.raises(rczone.DataError, match="built-in data sets: A, B, C"):
+        data_source("D")
