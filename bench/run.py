@@ -366,7 +366,7 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
                 " bound of a plain global search); agreement = relative difference of -log L from fit_ml_peer's",
                 fitp_global,
                 None,
-                lambda res, _: abs(res.cost / fitp().cost - 1),
+                lambda res, _: abs(res.llf / fitp().llf - 1),
                 slow=True,
                 plain_bound=lambda res, done: done["fit_ml_peer"]["plain_median_s"],
             )

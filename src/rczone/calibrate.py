@@ -12,7 +12,8 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -26,6 +27,7 @@ from rczone.estimation.innovations import (
     ljung_box_lags,
     open_loop_analysis,
 )
+from rczone.estimation.methods import DEFAULT_METHOD, REGISTRY, method_of
 from rczone.estimation.validation import (
     INITIAL_STATE_PRIOR_K,
     InitialStateEstimate,
@@ -38,6 +40,8 @@ from rczone.estimation.validation import (
 )
 from rczone.models import ZoneModel, load_model
 from rczone.network import RCNetwork
+from rczone.results import Result
+from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, verdict_of
 
 ModelLike = ZoneModel | RCNetwork | str | os.PathLike
 
@@ -70,6 +74,33 @@ def frame_from(data: pd.DataFrame) -> pd.DataFrame:
         "the data have no 'time' column and no DatetimeIndex; give time in seconds or index the"
         " frame by time stamps"
     )
+
+
+def time_index(frame: pd.DataFrame, t: np.ndarray) -> pd.DatetimeIndex | None:
+    """The time stamps of the samples at ``t`` (as :func:`frame_from` made them), in the data's time zone.
+
+    A frame indexed by time stamps (or with a datetime ``time`` column) gives them from its first
+    stamp; UTC epoch seconds (a loaded trend log) give UTC stamps, converted to the zone of the
+    frame's DatetimeIndex when it has one. None when the data have no clock time.
+    """
+    index = frame.index if isinstance(frame.index, pd.DatetimeIndex) else None
+    t = np.asarray(t, dtype=float)
+    if "time" in frame and pd.api.types.is_datetime64_any_dtype(frame["time"]):
+        return pd.DatetimeIndex(frame["time"].iloc[0] + pd.to_timedelta(t, unit="s"), name="timestamp")
+    if "time" in frame:
+        if not (t.size and t[0] > EPOCH_SECONDS):
+            return None
+        stamps = pd.to_datetime(t, unit="s", utc=True)
+        if index is not None and index.tz is not None:
+            stamps = stamps.tz_convert(index.tz)
+        return pd.DatetimeIndex(stamps, name="timestamp")
+    if index is not None and len(index):
+        return pd.DatetimeIndex(index[0] + pd.to_timedelta(t, unit="s"), name="timestamp")
+    return None
+
+
+#: Times above this (s) are UTC epoch seconds (after 1973), not seconds from the start of the data.
+EPOCH_SECONDS = 1e8
 
 
 def complete_stretch(u: np.ndarray, m: np.ndarray, y: np.ndarray) -> slice:
@@ -127,26 +158,37 @@ def dataset(
     return Dataset(t, u, m if m.shape[1] else None, y, net.input_names, net.flow_names, net.outputs)
 
 
-@dataclass(frozen=True, eq=False)
-class Calibration:
-    """A fit and its open-loop check on the calibration data.
+@dataclass(frozen=True, eq=False, repr=False)
+class Calibration(Result):
+    """A fit, its open-loop check on the calibration data, the checks after it and one verdict.
 
     Attributes
     ----------
     result : FitResult
+        The fit.
     model : ZoneModel
-        The fitted model (structure and conventions of the input model, the estimates as values).
+        The fitted model (structure and conventions of the input model, the estimates as values;
+        its provenance names the data and the model fitted).
     open_loop : OpenLoopError
         Open-loop simulation of the fitted model on the calibration data. The unmeasured nodes
         start where the data say: at the initial state an LS fit estimates with the parameters, and
         for ML and MAP at :func:`~rczone.estimation.validation.estimate_initial_state` (the
         filter itself needs no estimate).
     residuals : ResidualTest
-        Whiteness of the open-loop error (not expected to be white; see the innovations for ML).
+        Whiteness of the open-loop error of the first output (not expected to be white; see the
+        innovations for ML, and :attr:`open_loop_residuals` for every output).
     innovations : ResidualAnalysis or None
         Whiteness of the one-step innovations (ML and MAP fits; None for LS or too few samples).
     open_loop_residuals : ResidualAnalysis or None
         The same statistics on the open-loop error, labelled as such.
+    checks : dict or None
+        JSON-ready post-fit checks (profiles, estimates at bounds or far from construction, fits to
+        other data and their disagreements, predictions of other data;
+        :func:`rczone.workflow.checks.check_fit`); None when not made.
+    identifiability : IdentifiabilityReport or None
+        The identifiability analysis at the estimates; None when not made.
+    verdict : Verdict
+        The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
 
     result: FitResult
@@ -155,6 +197,27 @@ class Calibration:
     residuals: ResidualTest
     innovations: ResidualAnalysis | None = None
     open_loop_residuals: ResidualAnalysis | None = None
+    checks: dict | None = None
+    identifiability: Any = None
+    verdict: Verdict = field(init=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", verdict_of(self.result, self.identifiability, self.checks))
+
+    @property
+    def data_label(self) -> str:
+        """The data's name, as the provenance records it."""
+        return str(self.model.provenance.get("data", "data"))
+
+    @property
+    def model_label(self) -> str:
+        """The model's name, as the provenance records it."""
+        return str(self.model.provenance.get("model", self.model.label))
+
+    @property
+    def exit_code(self) -> int:
+        """0 for a trustworthy fit, :data:`~rczone.results.verdict.EXIT_UNTRUSTED` for a flagged one."""
+        return 0 if self.verdict.trustworthy else EXIT_UNTRUSTED
 
     def to_frame(self) -> pd.DataFrame:
         """The parameter table (:meth:`FitResult.to_frame`)."""
@@ -167,11 +230,87 @@ class Calibration:
             (o, float(r), float(w)) for o, r, w in zip(self.model.network.outputs, rmse, worst, strict=True)
         ]
 
+    def _repr_line(self) -> str:
+        state = "trustworthy" if self.verdict.trustworthy else "flagged"
+        return (
+            f"{self.model_label} fitted to {self.data_label} by {self.result.method.upper()},"
+            f" {self.result.n_params} parameters, {state}"
+        )
+
+    def summary_lines(self) -> list:
+        """What ``rczone fit`` prints, in order (rich markup)."""
+        from rczone.results.fit_text import esc, parameter_table, residual_lines, search_line
+
+        r = self.result
+        title = f"{esc(self.model_label)} fitted to {esc(self.data_label)} by {r.method.upper()}"
+        lines: list = [parameter_table(r, title), search_line(r)]
+        lines.append(
+            f"open-loop RMSE {self.open_loop.rmse_K:.3f} K, max {self.open_loop.max_abs_K:.3f} K;"
+            f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K; {r.n_evals} evaluations"
+        )
+        per_output = self.output_errors()
+        if len(per_output) > 1:
+            lines.append(
+                "open loop per output: "
+                + "; ".join(f"{esc(o)} RMSE {rmse:.3f} K, max {worst:.3f} K" for o, rmse, worst in per_output)
+            )
+        lines += residual_lines(self.innovations or self.open_loop_residuals)
+        used = self.model.provenance.get("constants") or {}
+        if used:
+            lines.append("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in used.items()))
+        lines += [f"note: {esc(note)}" for note in (*r.notes, *self.verdict.notes)]
+        lines += [f"[yellow]warning:[/] {esc(reason)}" for reason in self.verdict.reasons]
+        if not self.verdict.trustworthy:
+            lines.append(
+                f"[red]result flagged[/] (exit code {EXIT_UNTRUSTED}): do not use these estimates without"
+                " checking the warnings above"
+            )
+        return lines
+
+    def to_dict(self) -> dict:
+        """What ``rczone fit --json`` writes: the fit, its errors, residuals, checks and verdict."""
+        from rczone.estimation.parameters import measurement_noise_names
+
+        r = self.result
+        payload = r.to_dict()
+        net = self.model.network
+        payload.update(
+            data=self.data_label,
+            model=self.model_label,
+            open_loop_rmse_K=self.open_loop.rmse_K,
+            open_loop_max_error_K=self.open_loop.max_abs_K,
+            outputs={
+                o: {
+                    "open_loop_rmse_K": rmse,
+                    "open_loop_max_error_K": worst,
+                    "sigma_v_K": r.estimates.get(noise),
+                }
+                for (o, rmse, worst), noise in zip(
+                    self.output_errors(), measurement_noise_names(net.outputs), strict=True
+                )
+            },
+            ljung_box_p=self.residuals.p_value,
+            innovations=self.innovations.to_dict() if self.innovations is not None else None,
+            open_loop_residuals=self.open_loop_residuals.to_dict() if self.open_loop_residuals else None,
+            constants=self.model.provenance.get("constants") or {},
+            identifiability={
+                k: {"verdict": v.verdict, "reason": v.reason}
+                for k, v in self.identifiability.parameters.items()
+            }
+            if self.identifiability
+            else {},
+            checks=self.checks,
+            trustworthy=self.verdict.trustworthy,
+            verdict=self.verdict.to_dict(),
+            exit_code=self.exit_code,
+        )
+        return payload
+
 
 def calibrate(
     model: ModelLike,
     frame: pd.DataFrame,
-    method: str = "ls",
+    method: str = DEFAULT_METHOD,
     free: Sequence[str] | None = None,
     optimizer: str = "auto",
     n_starts: int | None = None,
@@ -191,7 +330,8 @@ def calibrate(
     frame : DataFrame
         ``time`` (s) or a DatetimeIndex, and a column per model input and output (by name; the
         model's conventions fill inputs the data lack).
-    method : {"ls", "ml", "map"}
+    method : {"ml", "ls", "map"}
+        A method of :data:`rczone.estimation.methods.REGISTRY`; default ML, as ``rczone fit``.
     free : sequence of str, optional
         Default :func:`rczone.estimation.fit.default_free`.
     optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
@@ -239,7 +379,8 @@ def calibrate(
     )
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
-    noise = {k: v for k, v in values.items() if k.startswith("sigma_")} if method != "ls" else {}
+    kind = method_of(method)
+    noise = {k: v for k, v in values.items() if k.startswith("sigma_")} if kind.stochastic else {}
     initial = {k: v for k, v in values.items() if k.startswith("x0_")}
     fitted = zm.with_values(
         theta,
@@ -247,7 +388,8 @@ def calibrate(
         method=method,
         optimizer=optimizer,
         free=list(free),
-        cost=res.cost,
+        objective_value=res.objective_value,
+        engine=res.engine,
         rmse_K=res.rmse_K,
         std_errors={k: float(v) for k, v in res.std_errors.items()},
         initial_state=initial,
@@ -258,14 +400,14 @@ def calibrate(
         covariance=parameter_covariance(res),
         **dict(provenance or {}),
     )
-    if method != "ls":  # as LS estimates them: the unmeasured nodes start where the data say
+    if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
         initial = _estimated_start(fitted, values, data, has_noise=True).values
     ol = open_loop_error(net, {**theta, **initial}, data)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = None
     if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
         olr = open_loop_analysis(ol.error, data)
-        if method != "ls":
+        if kind.stochastic:
             inn = innovation_analysis(net, values, data, res.hold)
     return Calibration(res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr)
 
@@ -293,8 +435,8 @@ def predict(
     return open_loop_error(zm.network, dict(zm.theta), data)
 
 
-@dataclass(frozen=True, eq=False)
-class Prediction:
+@dataclass(frozen=True, eq=False, repr=False)
+class Prediction(Result):
     """An open-loop or k-step-ahead prediction with a band of plus or minus two standard deviations.
 
     Attributes
@@ -313,6 +455,10 @@ class Prediction:
     initial_state : InitialStateEstimate, optional
         Open loop: the unmeasured nodes' initial temperatures estimated from the data (None when
         they start at the steady state).
+    index : DatetimeIndex, optional
+        The samples' time stamps in the data's time zone (None when the data have no clock time).
+    model_label, data_label : str
+        Names of the model and the data, for titles.
     """
 
     t: np.ndarray
@@ -325,6 +471,9 @@ class Prediction:
     sd_parameters: np.ndarray | None = None
     steps: int | None = None
     initial_state: InitialStateEstimate | None = None
+    index: pd.DatetimeIndex | None = None
+    model_label: str = "model"
+    data_label: str = "data"
 
     @property
     def horizon(self) -> str:
@@ -353,11 +502,8 @@ class Prediction:
         inside = (e <= 2 * self.sd) & ok
         return np.where(ok.sum(axis=0) > 0, inside.sum(axis=0) / np.maximum(ok.sum(axis=0), 1), np.nan)
 
-    def to_frame(self) -> pd.DataFrame:
-        """``time`` (and ``timestamp_utc`` for epoch times), then per output measured, predicted, lower, upper."""
-        cols: dict[str, np.ndarray] = {"time": self.t}
-        if self.t.size and self.t[0] > 1e8:  # epoch seconds: also a readable UTC time stamp
-            cols["timestamp_utc"] = pd.to_datetime(self.t, unit="s", utc=True).strftime("%Y-%m-%dT%H:%M:%SZ")
+    def _columns(self) -> dict[str, np.ndarray]:
+        cols: dict[str, np.ndarray] = {}
         for j, o in enumerate(self.outputs):
             cols[f"{o}_measured"] = self.measured[:, j]
             cols[f"{o}_predicted"] = self.predicted[:, j]
@@ -367,10 +513,86 @@ class Prediction:
                 cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
             if self.sd_parameters is not None:
                 cols[f"{o}_sd_parameters"] = self.sd_parameters[:, j]
-        return pd.DataFrame(cols)
+        return cols
+
+    def to_frame(self) -> pd.DataFrame:
+        """Per output measured, predicted, lower and upper (2 sigma), indexed by the data's time stamps.
+
+        Without clock time (seconds from the start), a ``time`` column in seconds instead.
+        """
+        if self.index is not None:
+            return pd.DataFrame(self._columns(), index=self.index)
+        return pd.DataFrame({"time": self.t, **self._columns()})
+
+    def series_frame(self) -> pd.DataFrame:
+        """The layout of the series file: ``time`` (s), ``timestamp_utc`` for epoch times, then the columns."""
+        cols: dict[str, np.ndarray] = {"time": self.t}
+        if self.t.size and self.t[0] > EPOCH_SECONDS:  # epoch seconds: also a readable UTC time stamp
+            cols["timestamp_utc"] = pd.to_datetime(self.t, unit="s", utc=True).strftime("%Y-%m-%dT%H:%M:%SZ")
+        return pd.DataFrame({**cols, **self._columns()})
+
+    def _repr_line(self) -> str:
+        rmse = ", ".join(f"{o} RMSE {v:.3f} K" for o, v in zip(self.outputs, self.rmse_K))
+        return f"{self.model_label} on {self.data_label}, {self.horizon}, {len(self.t)} samples, {rmse}"
+
+    def summary_lines(self) -> list:
+        """What ``rczone predict`` prints (before the files it writes)."""
+        from rczone.results.fit_text import esc
+
+        lines = []
+        start = self.initial_state
+        if start is not None and start.sd:
+            lines.append(
+                "initial temperatures of the unmeasured nodes, estimated from the data (steady state for the"
+                " first sample in brackets): "
+                + ", ".join(
+                    f"{esc(k.removeprefix('x0_'))} {start.values[k]:.2f} ({start.steady[k]:.2f}) ± {sd:.2f} K"
+                    for k, sd in start.sd.items()
+                )
+            )
+        for j, o in enumerate(self.outputs):
+            lines.append(
+                f"{esc(self.data_label)}: {esc(o)} {self.horizon} RMSE {self.rmse_K[j]:.3f} K, max error"
+                f" {self.max_abs_K[j]:.3f} K; {self.coverage[j]:.0%} of the measurements inside the 2-sigma band"
+                f" ({esc(self.band_source)})"
+            )
+        return lines
+
+    def to_dict(self) -> dict:
+        """What ``rczone predict --json`` writes."""
+        start = self.initial_state
+        one = len(self.outputs) == 1
+        return {
+            "model": self.model_label,
+            "data": self.data_label,
+            "rmse_K": float(self.rmse_K[0]) if one else dict(zip(self.outputs, map(float, self.rmse_K))),
+            "max_error_K": float(self.max_abs_K[0])
+            if one
+            else dict(zip(self.outputs, map(float, self.max_abs_K))),
+            "band": self.band_source,
+            "horizon": self.horizon,
+            "steps": self.steps,
+            "initial_state": {
+                k.removeprefix("x0_"): {
+                    "estimate_degC": v,
+                    "steady_degC": start.steady[k],
+                    "sd_K": start.sd[k],
+                }
+                for k, v in start.values.items()
+                if k in start.sd
+            }
+            if start is not None
+            else None,
+            "coverage_2sigma": dict(zip(self.outputs, map(float, self.coverage))),
+            "mean_sd_K": {
+                part: {o: float(np.nanmean(a[:, j])) for j, o in enumerate(self.outputs)}
+                for part, a in (("noise", self.sd_noise), ("estimates", self.sd_parameters))
+                if a is not None and np.isfinite(a).any()
+            },
+        }
 
     def write(self, path: str | os.PathLike) -> None:
-        """Write :meth:`to_frame` as ``.csv`` or ``.parquet`` (atomically)."""
+        """Write :meth:`series_frame` as ``.csv`` or ``.parquet`` (atomically)."""
         import io
 
         from rczone.atomic import write_bytes_atomic, write_text_atomic
@@ -378,10 +600,10 @@ class Prediction:
         p = os.fspath(path)
         low = p.lower()
         if low.endswith(".csv"):
-            write_text_atomic(p, self.to_frame().to_csv(index=False))
+            write_text_atomic(p, self.series_frame().to_csv(index=False))
         elif low.endswith((".parquet", ".pq")):
             buf = io.BytesIO()
-            self.to_frame().to_parquet(buf, index=False)
+            self.series_frame().to_parquet(buf, index=False)
             write_bytes_atomic(p, buf.getvalue())
         else:
             raise DataError(f"the series file must end in .csv or .parquet, got {p!r}")
@@ -394,6 +616,7 @@ def prediction(
     steps: int | None = None,
     parameters: bool = True,
     initial_state: str = "estimated",
+    label: str = "data",
 ) -> Prediction:
     """Open-loop (or ``steps``-ahead) prediction of ``model`` on data with a two-sigma band.
 
@@ -417,6 +640,8 @@ def prediction(
         the model's ``sigma_x0`` or 1 K), and the band starts from the estimate's uncertainty;
         ``"steady"``: at the steady state for the first sample's inputs, which shows a slow node's
         unknown start as a bias lasting its time constant.
+    label : str
+        The data's name, for titles.
     """
     from rczone.estimation.forecast import noise_band, parameter_sd
 
@@ -444,7 +669,8 @@ def prediction(
         sources.append("the model's noise levels")
     else:
         y_hat = open_loop_error(net, {**zm.theta, **values}, data).y_hat
-        rmse = zm.provenance.get("rmse_K") if zm.provenance.get("method") == "ls" else None
+        fitted_by = REGISTRY.get(str(zm.provenance.get("method")))
+        rmse = zm.provenance.get("rmse_K") if fitted_by is not None and not fitted_by.stochastic else None
         if isinstance(rmse, (int, float)) and np.isfinite(rmse):
             sd = np.full_like(y_hat, float(rmse))
             sources.append("the open-loop RMSE of the least-squares fit")
@@ -471,7 +697,21 @@ def prediction(
     source = (
         " and ".join(sources) if sources else "none: the model has no noise levels (fit it by ML for a band)"
     )
-    return Prediction(data.t, data.y, y_hat, total, net.outputs, source, sd, sd_par, steps, start)
+    return Prediction(
+        data.t,
+        data.y,
+        y_hat,
+        total,
+        net.outputs,
+        source,
+        sd,
+        sd_par,
+        steps,
+        start,
+        index=time_index(frame, data.t),
+        model_label=zm.label,
+        data_label=label,
+    )
 
 
 #: Where an open-loop prediction starts its unmeasured nodes (:func:`prediction`).

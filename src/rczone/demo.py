@@ -278,7 +278,7 @@ def identification_study(
                     n: {
                         "estimate": cal.result.estimates[n],
                         "std_error": cal.result.std_errors[n],
-                        "construction": cal.result.construction[n],
+                        "construction": cal.result.parameters[n].construction,
                         "true_equivalent": (true_equivalent or {}).get(n),
                     }
                     for n in ("Cr", "Rw")
@@ -439,7 +439,7 @@ def closed_loop_study(report: Report, progress: Callable[[str], None]) -> dict[s
                 fits[s] = {
                     "Rw": cal.result.estimates["Rw"],
                     "Cr": cal.result.estimates["Cr"],
-                    "at_bound": [k for k, v in cal.result.at_bound.items() if v],
+                    "at_bound": [k for k, e in cal.result.parameters.items() if e.at_bound],
                     "own_rmse_K": cal.open_loop.rmse_K,
                     f"{other}_rmse_K": predict(cal.model, frames[other], const).rmse_K,
                 }

@@ -87,7 +87,7 @@ def night_outcome(regime: str, seed: int, fits: Iterable[str] = tuple(FITS)) -> 
         operating_point=rep.operating_point.source,
         estimate={f: {k: float(r.estimates[k]) for k in FREE} for f, r in res.items()},
         fit_rel_se={f: {k: float(r.std_errors[k] / r.estimates[k]) for k in FREE} for f, r in res.items()},
-        at_bound={f: {k: bool(r.at_bound[k]) for k in FREE} for f, r in res.items()},
+        at_bound={f: {k: bool(r.parameters[k].at_bound) for k in FREE} for f, r in res.items()},
         converged={f: bool(r.converged) for f, r in res.items()},
         rmse_K={f: float(r.rmse_K) for f, r in res.items()},
     )

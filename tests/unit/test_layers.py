@@ -7,8 +7,10 @@ belongs to (``rczone.estimation.costs`` -> ``estimation``, ``rczone.mpc`` -> ``m
 * ``kernels`` (compiled hot loops) import nothing of rczone but ``errors``;
 * ``network`` imports nothing of rczone but ``errors``; ``simulation`` nothing but
   ``errors``, ``network`` and ``kernels``;
+* ``results`` (the result protocol) imports nothing of rczone but ``errors``;
 * ``estimation`` reaches no ``report``, ``cli`` or ``calibrate``, not even through another
-  unit; ``diagnostics`` reaches no ``report``;
+  unit; ``diagnostics`` reaches no ``report``; ``workflow`` (what the CLI and the API share)
+  reaches no ``report`` or ``cli``;
 * the units import each other without cycles;
 * importing ``rczone.mpc`` does not load matplotlib (checked in a fresh interpreter).
 """
@@ -31,11 +33,13 @@ ALLOWED = {
     "kernels": {"errors"},
     "network": {"errors"},
     "simulation": {"errors", "network", "kernels"},
+    "results": {"errors"},
 }
 #: unit -> units it must not reach, directly or through others
 FORBIDDEN_REACH = {
     "estimation": {"report", "cli", "calibrate"},
     "diagnostics": {"report"},
+    "workflow": {"report", "cli"},
 }
 
 

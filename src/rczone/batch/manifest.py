@@ -50,6 +50,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from rczone.errors import DataError, did_you_mean
+from rczone.estimation.methods import METHODS as REGISTERED_METHODS
 from rczone.textfiles import read_toml
 
 MAX_TASKS = 200_000
@@ -57,7 +58,7 @@ MAX_TASKS = 200_000
 MAX_STARTS = 1000
 """Most optimizer starts per calibration."""
 MODEL_FILE_SUFFIXES = (".toml", ".json")
-METHODS = ("ls", "ml", "map")
+METHODS = REGISTERED_METHODS
 OPTIMIZERS = ("auto", "nelder-mead", "powell", "lbfgs")
 SEASONS = ("summer", "winter", "autumn")
 MODES = ("closed-loop", "forced")

@@ -83,18 +83,19 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
             open_loop_rmse_K=cal.open_loop.rmse_K,
             open_loop_max_K=cal.open_loop.max_abs_K,
             fit_rmse_K=r.rmse_K,
-            cost=r.cost,
+            objective_value=r.objective_value,
+            llf=r.llf,
+            engine=r.engine,
             converged=bool(r.converged),
             trustworthy=bool(r.trustworthy),
             n_evals=int(r.n_evals),
             flags="; ".join(r.flags),
         )
-        for n in r.names:
-            row[n] = r.estimates[n]
-            row[f"{n}_se"] = r.std_errors[n]
-            c = r.construction[n]
-            row[f"{n}_construction"] = c if math.isfinite(c) else None
-            row[f"{n}_at_bound"] = bool(r.at_bound[n])
+        for n, e in r.parameters.items():
+            row[n] = e.value
+            row[f"{n}_se"] = e.std_error
+            row[f"{n}_construction"] = e.construction if math.isfinite(e.construction) else None
+            row[f"{n}_at_bound"] = bool(e.at_bound)
         if task.diagnose:
             from rczone.diagnostics import diagnose
 

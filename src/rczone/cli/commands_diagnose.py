@@ -20,8 +20,6 @@ from rczone.cli.common import (
 )
 from rczone.cli.main import app
 
-VERDICT_STYLE = {"identifiable": "green", "weak": "yellow", "not identifiable": "red"}
-
 
 @app.command()
 def diagnose(
@@ -68,13 +66,13 @@ def diagnose(
     Every output of the model is used. The analysis is done where the parameters are: at the model's
     values if they reproduce DATA, else at the estimates of a quick least-squares fit (it says which).
     """
+    import dataclasses
+
     from rich.console import Console
-    from rich.table import Table
 
     from rczone.diagnostics import diagnose as run
 
     zm = model(model_name)
-    net = zm.network
     frame = read_frame(data, column_map, zm)
     label = data_label(data)
     with Console(stderr=True).status(f"diagnosing {esc(zm.label)} on {esc(label)}"):
@@ -88,33 +86,11 @@ def diagnose(
             operating_point=operating_point,
             seed=seed,
         )
-    table = Table(title=f"Can {esc(label)} identify {esc(zm.label)}?")
-    for c in ("parameter", "value", "unit", "expected ± (rel.)", "verdict", "reason"):
-        table.add_column(c, overflow="fold")
-    for name, v in rep.parameters.items():
-        style = VERDICT_STYLE[v.verdict]
-        table.add_row(
-            esc(name),
-            f"{v.value:.4g}",
-            esc(net.parameters[name].unit or ""),
-            f"{v.expected_rel_se:.0%}" if v.expected_rel_se < 10 else "> 1000%",
-            f"[{style}]{v.verdict}[/]",
-            esc(v.reason),
-        )
+    rep = dataclasses.replace(rep, data_label=label)
     console = out_console(json_out)
-    console.print(table)
-    op = rep.operating_point
-    style = "" if op.reproduces_data else "[yellow]"
-    console.print(f"{style}operating point:{'[/]' if style else ''} {esc(op.reason)}")
-    if len(rep.outputs) > 1:
-        console.print("outputs analysed together: " + ", ".join(esc(o) for o in rep.outputs))
-    held = rep.settings.get("constants") or {}
-    if held:
-        console.print("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in held.items()))
-    for name, v in rep.parameters.items():
-        if v.advice:
-            console.print(f"[bold]{esc(name)}[/]: {esc(v.advice)}")
-    write_json(json_out, {"data": label, "model": zm.label, **rep.to_dict()})
+    for line in rep.summary_lines():
+        console.print(line)
+    write_json(json_out, rep.to_dict())
     if report_dir:
         from rczone.report.diagnose import diagnose_report
 
@@ -311,12 +287,13 @@ def design(
     Every number is read, and the schedule written, in the chosen units (--units, else the column
     map's, else SI); the schedule has clock times from --start.
     """
+    import dataclasses
+
     from rich.console import Console
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-    from rich.table import Table
 
     from rczone.data.units import DEFAULT_AIR_DENSITY
-    from rczone.diagnostics.design import DesignLimits, actuatable, design_test, from_si
+    from rczone.diagnostics.design import DesignLimits, actuatable, design_test
     from rczone.errors import ParameterError
 
     zm = model(model_name)
@@ -388,27 +365,11 @@ def design(
         res = design_test(zm, free_list, hours * 3600.0, limits, conditions=conds, ti0=ti0, progress=report)
     finally:
         bar.stop()
-    setpoints = {a: unit[a] for a in res.actuated}
-    table_df = res.table(when, setpoints)
-    res.to_csv(out, when, setpoints)
+    units_shown = {k: unit[k] for k in (*res.actuated, out_name)}
+    res = dataclasses.replace(res, model_label=zm.label, start=when, display_units=units_shown)
+    res.to_csv(out, when, {a: unit[a] for a in res.actuated})
     console = out_console(json_out)
-    table = Table(title=f"Forced-response schedule for {esc(zm.label)}")
-    for c in table_df.columns:
-        table.add_column(esc(c))
-    for row in table_df.itertuples(index=False):
-        table.add_row(*(esc(f"{v:g}" if isinstance(v, float) else v) for v in row))
-    console.print(table)
-    lo, hi = from_si(res.predicted[[res.predicted.argmin(), res.predicted.argmax()]], t_unit, "temperature")
-    se = ", ".join(f"{esc(k)} ±{v:.0%}" for k, v in res.expected_se.items())
-    console.print(f"predicted {esc(out_name)} {lo:.1f}..{hi:.1f} {esc(t_unit)}; expected {se}")
+    for line in res.summary_lines():
+        console.print(line)
     console.print(f"schedule written to [bold]{esc(out)}[/]")
-    write_json(
-        json_out,
-        {
-            **res.to_dict(),
-            "model": zm.label,
-            "units": {k: unit[k] for k in (*res.actuated, out_name)},
-            "start": str(when),
-            "setpoints": table_df.to_dict(orient="list"),
-        },
-    )
+    write_json(json_out, res.to_dict())

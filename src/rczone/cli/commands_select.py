@@ -8,7 +8,6 @@ from typing import Annotated
 import typer
 
 from rczone.cli.common import (
-    EXIT_UNTRUSTED,
     MODEL_HELP,
     ColumnMapOption,
     ConstantsOption,
@@ -23,78 +22,10 @@ from rczone.cli.main import app
 
 
 def _read(data: Path, column_map: Path | None, zms: list, required: list[str] | None = None) -> object:
-    """The data with every candidate's signals (default: each candidate's required columns must be there)."""
-    from rczone.sources import read_frame
+    """The data with every candidate's signals (:func:`rczone.workflow.api.read_for_models`)."""
+    from rczone.workflow.api import read_for_models
 
-    signals: dict[str, str] = {}
-    needed: list[str] = []
-    for zm in zms:
-        signals.update(zm.signal_quantities())
-        needed += [s for s in zm.required_signals() if s not in needed]
-    outputs = list(dict.fromkeys(o for zm in zms for o in zm.network.outputs))
-    return read_frame(data, column_map, signals, needed if required is None else required, outputs)
-
-
-def _table(sel, title: str):
-    from rich.table import Table
-
-    table = Table(title=title)
-    for c in ("model", "log L", "k", "AIC", "BIC", "ΔBIC", "Ljung-Box p", "white", ""):
-        table.add_column(c)
-    for row in sel.table():
-        p = row["Ljung-Box p"]
-        white = row["white"]
-        table.add_row(
-            esc(row["model"]),
-            f"{row['log L']:.1f}",
-            str(row["k"]),
-            f"{row['AIC']:.1f}",
-            f"{row['BIC']:.1f}",
-            f"{row['dBIC']:.1f}",
-            "n/a" if p is None else f"{p:.2g}",
-            f"[green]{white}[/]" if white == "yes" else f"[red]{white}[/]",
-            "[bold]selected[/]" if row["selected"] else "",
-        )
-    return table
-
-
-def _tests_table(sel):
-    from rich.table import Table
-
-    table = Table(title="Likelihood-ratio tests between nested candidates (p: chi2(df), conservative)")
-    for c in ("simple ⊂ rich", "restriction", "LR", "df", "p", "p (chi-bar²)"):
-        table.add_column(c)
-    for t in sel.tests:
-        table.add_row(
-            f"{esc(t.simple)} ⊂ {esc(t.rich)}",
-            esc(t.nesting.describe()),
-            f"{t.statistic:.2f}",
-            str(t.df),
-            f"{t.p_value:.3g}",
-            f"{t.p_value_chi_bar:.3g}",
-        )
-    return table
-
-
-def _vuong_table(sel):
-    from rich.table import Table
-
-    table = Table(
-        title=f"Vuong tests between non-nested candidates ({esc(sel.basis.describe())}; two-sided, level {sel.alpha:g})"
-    )
-    for c in ("a vs b", "log L_a - log L_b", "Z", "p", "Z (Schwarz)", "p (Schwarz)", "closer"):
-        table.add_column(c)
-    for v in sel.vuong:
-        table.add_row(
-            f"{esc(v.a)} vs {esc(v.b)}",
-            f"{v.loglik_ratio:.1f}",
-            f"{v.statistic:.2f}",
-            f"{v.p_value:.3g}",
-            f"{v.statistic_bic:.2f}",
-            f"{v.p_value_bic:.3g}",
-            esc(v.closer(sel.alpha) or "neither (not significant)"),
-        )
-    return table
+    return read_for_models(data, column_map, zms, required)
 
 
 @app.command()
@@ -155,6 +86,8 @@ def select(
     conditional on the others' measurements, with Vuong's test between non-nested pairs. Exit code 0; 3 when the selected
     model's fit is flagged; 2 for a mistake in the input.
     """
+    import dataclasses
+
     from rczone.cli.commands_fit import _save, _starts
     from rczone.cli.console import console as make_console
     from rczone.errors import ParameterError
@@ -196,56 +129,11 @@ def select(
             progress=progress,
             noise=noise.strip().lower(),
         )
-    how = f"forward selection, alpha = {alpha:g}" if forward else criterion.upper()
-    title = f"Candidates fitted to {esc(label)} by ML ({sel.samples['n']} samples)"
-    if sel.basis is not None and sel.basis.conditional:
-        title += f"; log L of {esc(', '.join(sel.basis.targets))} {esc(sel.basis.describe())}"
-    out.print(_table(sel, title))
-    if sel.basis is not None and sel.basis.conditional:
-        out.print(
-            f"the candidates measure different outputs: compared on the likelihood of"
-            f" {esc(', '.join(sel.basis.targets))} {esc(sel.basis.describe())} (the measured"
-            f" {esc(', '.join(sel.basis.given))}, an output of some candidates and an input of the others)"
-        )
-    if sel.tests:
-        out.print(_tests_table(sel))
-    elif not sel.vuong:
-        out.print("no candidate is nested in another: no likelihood-ratio test")
-    if sel.vuong:
-        out.print(_vuong_table(sel))
-    for step in sel.steps:
-        verdict = "accepted" if step["accepted"] else "rejected: stop"
-        out.print(
-            f"forward: {esc(step['from'])} -> {esc(step['best'])} (of {', '.join(map(esc, step['tried']))}):"
-            f" LR {step['statistic']:.2f}, df {step['df']}, p = {step['p_value']:.3g}, {verdict}"
-        )
-    if sel.not_fitted:
-        out.print("not reached (not fitted): " + ", ".join(map(esc, sel.not_fitted)))
+    sel = dataclasses.replace(sel, data_label=label, source=str(data), noise=noise.strip().lower())
+    for line in sel.summary_lines():
+        out.print(line)
+    write_json(json_out, sel.to_dict())
     best = sel.best
-    out.print(f"selected: [bold]{esc(sel.selected)}[/] ({how})")
-    out.print(
-        f"the same fit alone: rczone fit {esc(data)} --model {esc(sel.selected)} --noise {esc(noise.strip().lower())};"
-        " check its open-loop prediction on held-out data (rczone predict) before using it for control:"
-        " process noise on every state raises the likelihood but can leave the deterministic part poor"
-    )
-    inn = best.calibration.innovations
-    if inn is not None and not inn.white:
-        out.print(
-            f"[yellow]warning:[/] the innovations of {esc(sel.selected)} are not white (Ljung-Box p ="
-            f" {inn.ljung_box_p:.2g}): every candidate misses some dynamics or input"
-        )
-    for f in best.calibration.result.flags:
-        out.print(f"[yellow]warning:[/] {esc(sel.selected)}: {esc(f)}")
-    trusted = best.calibration.result.trustworthy
-    if json_out:
-        write_json(
-            json_out,
-            {
-                "data": label,
-                **sel.to_dict(),
-                "exit_code": 0 if trusted else EXIT_UNTRUSTED,
-            },
-        )
     if save_model:
         _save(best.calibration.model, save_model)
         out.print(f"model written to [bold]{esc(save_model)}[/]")
@@ -254,6 +142,5 @@ def select(
 
         selection_report(sel, label).write(report_dir)
         out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
-    if not trusted:
-        out.print(f"[red]the selected model's fit is flagged[/] (exit code {EXIT_UNTRUSTED})")
-        raise typer.Exit(EXIT_UNTRUSTED)
+    if sel.exit_code:
+        raise typer.Exit(sel.exit_code)

@@ -49,6 +49,7 @@ from rczone.errors import ParameterError, did_you_mean
 from rczone.estimation.costs import auto_initial_state
 from rczone.models import ZoneModel
 from rczone.network import RCNetwork
+from rczone.results import Result
 from rczone.simulation import steady_state
 from rczone.simulation.sensitivity import output_sensitivities
 
@@ -121,8 +122,8 @@ class DesignLimits:
         }
 
 
-@dataclass(frozen=True, eq=False)
-class DesignResult:
+@dataclass(frozen=True, eq=False, repr=False)
+class DesignResult(Result):
     """A designed schedule and what it is predicted to give.
 
     Attributes
@@ -141,6 +142,12 @@ class DesignResult:
     output : str
     quantities : dict of str to str
         Quantity of each actuated input (``temperature``, ``flow``, ``power``, ``irradiance``).
+    model_label : str
+        The model's name, for titles.
+    start : Timestamp or datetime.time, optional
+        When the test starts (the schedule's clock column).
+    display_units : dict of str to str
+        Units the schedule and the predicted temperature are shown in (default SI).
     """
 
     schedule: pd.DataFrame
@@ -152,10 +159,43 @@ class DesignResult:
     limits: DesignLimits
     output: str = "Ti"
     quantities: dict[str, str] = field(default_factory=dict)
+    model_label: str = "model"
+    start: pd.Timestamp | clock_time | None = None
+    display_units: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def actuated(self) -> tuple[str, ...]:
+        """The inputs the test drives."""
         return tuple(self.limits.ranges)
+
+    def _setpoint_units(self) -> dict[str, str]:
+        return {a: self.display_units[a] for a in self.actuated if a in self.display_units}
+
+    def to_frame(self) -> pd.DataFrame:
+        """The schedule as a building management system takes it (:meth:`table` in the display units)."""
+        return self.table(self.start, self._setpoint_units())
+
+    def _repr_line(self) -> str:
+        return f"{len(self.schedule)} commands of {', '.join(self.actuated)} for {self.model_label}"
+
+    def summary_lines(self) -> list:
+        """What ``rczone design`` prints (before the file it writes)."""
+        from rich.table import Table
+
+        from rczone.results.fit_text import esc
+
+        frame = self.to_frame()
+        table = Table(title=f"Forced-response schedule for {esc(self.model_label)}")
+        for c in frame.columns:
+            table.add_column(esc(c))
+        for row in frame.itertuples(index=False):
+            table.add_row(*(esc(f"{v:g}" if isinstance(v, float) else v) for v in row))
+        t_unit = self.display_units.get(self.output, "degC")
+        lo, hi = from_si(
+            self.predicted[[self.predicted.argmin(), self.predicted.argmax()]], t_unit, "temperature"
+        )
+        se = ", ".join(f"{esc(k)} ±{v:.0%}" for k, v in self.expected_se.items())
+        return [table, f"predicted {esc(self.output)} {lo:.1f}..{hi:.1f} {esc(t_unit)}; expected {se}"]
 
     def samples(self, dt: float = 60.0) -> pd.DataFrame:
         """The commands sampled every ``dt`` seconds (what a BMS plays), SI units."""
@@ -213,6 +253,7 @@ class DesignResult:
         write_text_atomic(path, self.table(start, units).to_csv(index=False))
 
     def to_dict(self) -> dict:
+        """What ``rczone design --json`` writes."""
         return {
             "schedule": self.schedule.to_dict(orient="list"),
             "expected_rel_se": self.expected_se,
@@ -222,6 +263,10 @@ class DesignResult:
             "predicted_min_degC": float(np.min(self.predicted)),
             "predicted_max_degC": float(np.max(self.predicted)),
             "limits": self.limits.to_dict(),
+            "model": self.model_label,
+            "units": dict(self.display_units),
+            "start": str(self.start),
+            "setpoints": self.to_frame().to_dict(orient="list"),
         }
 
 
@@ -344,7 +389,15 @@ def design_test(
     ti0 : float, optional
         Zone temperature at the start (default: the middle of the band); the other nodes start in
         equilibrium with it and the first inputs.
-    sigma_K, correlation_time_s : as in :func:`~rczone.diagnostics.identifiability.diagnose`.
+    dt : float
+        Sample time of the schedule and of the final check, s.
+    sigma_K, correlation_time_s : float
+        As in :func:`~rczone.diagnostics.identifiability.diagnose`.
+    max_sweeps : int
+        Most passes of the coordinate search over the segments (it stops earlier when a pass
+        improves nothing).
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each segment of a pass.
 
     Returns
     -------

@@ -65,6 +65,7 @@ from rczone.estimation.costs import initial_state
 from rczone.models import ZoneModel
 from rczone.network import RCNetwork
 from rczone.network.parameters import expression_names
+from rczone.results import Result
 from rczone.simulation import simulate
 from rczone.simulation.sensitivity import output_sensitivities
 
@@ -191,8 +192,12 @@ class OperatingPoint:
         }
 
 
-@dataclass(frozen=True)
-class IdentifiabilityReport:
+#: Colour of each verdict in the console.
+VERDICT_STYLE = {"identifiable": "green", "weak": "yellow", "not identifiable": "red"}
+
+
+@dataclass(frozen=True, repr=False)
+class IdentifiabilityReport(Result):
     """Everything :func:`diagnose` found.
 
     Attributes
@@ -217,6 +222,11 @@ class IdentifiabilityReport:
     signals : DataFrame
         ``time`` and the model's signals over the samples analysed (SI units), for reports.
     settings : dict
+        The analysis' settings and what it held constant.
+    units : dict of str to str
+        SI unit of each free parameter.
+    model_label, data_label : str
+        Names of the model and the data, for titles (``rczone diagnose`` sets them).
     """
 
     parameters: dict[str, ParameterVerdict]
@@ -232,14 +242,68 @@ class IdentifiabilityReport:
     outputs: tuple[str, ...] = ()
     signals: pd.DataFrame | None = field(default=None, repr=False)
     settings: dict = field(default_factory=dict)
+    units: Mapping[str, str] = field(default_factory=dict)
+    model_label: str = "model"
+    data_label: str = "data"
 
     def to_frame(self) -> pd.DataFrame:
-        """One row per free parameter: verdict, value, expected relative standard error and bias, reason."""
-        rows = [{"parameter": n, **v.to_dict()} for n, v in self.parameters.items()]
+        """One row per free parameter: verdict, value and its unit, expected relative standard error and bias, reason."""
+        rows = [
+            {
+                "parameter": n,
+                "verdict": v.verdict,
+                "value": v.value,
+                "unit": self.units.get(n, ""),
+                **v.to_dict(),
+            }
+            for n, v in self.parameters.items()
+        ]
         return pd.DataFrame(rows).set_index("parameter")
 
+    def _repr_line(self) -> str:
+        counts = {}
+        for v in self.parameters.values():
+            counts[v.verdict] = counts.get(v.verdict, 0) + 1
+        return f"{self.data_label} for {self.model_label}: " + ", ".join(
+            f"{k} {c}" for k, c in counts.items()
+        )
+
+    def summary_lines(self) -> list:
+        """What ``rczone diagnose`` prints (before the files it writes)."""
+        from rich.table import Table
+
+        from rczone.results.fit_text import esc
+
+        table = Table(title=f"Can {esc(self.data_label)} identify {esc(self.model_label)}?")
+        for c in ("parameter", "value", "unit", "expected ± (rel.)", "verdict", "reason"):
+            table.add_column(c, overflow="fold")
+        for name, v in self.parameters.items():
+            table.add_row(
+                esc(name),
+                f"{v.value:.4g}",
+                esc(self.units.get(name, "")),
+                f"{v.expected_rel_se:.0%}" if v.expected_rel_se < 10 else "> 1000%",
+                f"[{VERDICT_STYLE[v.verdict]}]{v.verdict}[/]",
+                esc(v.reason),
+            )
+        lines: list = [table]
+        op = self.operating_point
+        if op is not None:
+            style = "" if op.reproduces_data else "[yellow]"
+            lines.append(f"{style}operating point:{'[/]' if style else ''} {esc(op.reason)}")
+        if len(self.outputs) > 1:
+            lines.append("outputs analysed together: " + ", ".join(esc(o) for o in self.outputs))
+        held = self.settings.get("constants") or {}
+        if held:
+            lines.append("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in held.items()))
+        lines += [f"[bold]{esc(name)}[/]: {esc(v.advice)}" for name, v in self.parameters.items() if v.advice]
+        return lines
+
     def to_dict(self) -> dict:
+        """What ``rczone diagnose --json`` writes."""
         return {
+            "data": self.data_label,
+            "model": self.model_label,
             "parameters": {k: v.to_dict() for k, v in self.parameters.items()},
             "free": list(self.names),
             "outputs": list(self.outputs),
@@ -614,6 +678,8 @@ def diagnose(
             "samples": data.n_samples,
             "model": zm.label,
         },
+        units={n: net.parameters[n].unit or "" for n in free},
+        model_label=zm.label,
     )
 
 

@@ -33,6 +33,7 @@ from scipy.special import chdtri
 from rczone.errors import ParameterError
 from rczone.estimation import FitResult
 from rczone.estimation.costs import MAP_CORRELATION_TIME, Objective, auto_initial_state
+from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.uncertainty import profile
 from rczone.models import ZoneModel
@@ -118,15 +119,15 @@ def _objective(model, frame: pd.DataFrame, res: FitResult, constants) -> tuple[O
     spec = make_spec(
         network,
         res.names,
-        bounds={n: (res.lower[n], res.upper[n]) for n in res.names},
-        start={n: _inside(res.estimates[n], res.lower[n], res.upper[n]) for n in res.names},
+        bounds={n: (e.lower, e.upper) for n, e in res.parameters.items()},
+        start={n: _inside(e.value, e.lower, e.upper) for n, e in res.parameters.items()},
         fixed=fixed,
         x0_auto=x0_auto,
     )
     dt = float(np.median(np.diff(data.t)))
     w = min(1.0, dt / MAP_CORRELATION_TIME)
     obj = Objective(
-        network, data, spec, res.method, res.hold, likelihood_weight=w if res.method == "map" else 1.0
+        network, data, spec, res.method, res.hold, likelihood_weight=w if method_of(res.method).prior else 1.0
     )
     return obj, w
 
@@ -178,14 +179,15 @@ def profile_checks(
     for name in names:
         est = res.estimates[name]
         grid = est * factor ** np.linspace(-1.0, 1.0, n_points)
-        lo, hi = res.lower[name], res.upper[name]
+        lo, hi = res.parameters[name].lower, res.parameters[name].upper
         grid = grid[(grid > lo) & (grid < hi)]
         if grid.size < 2:
             continue
         pr = profile(obj, theta_hat, name, grid, optimizer="nelder-mead")
-        if res.method == "ls":  # Gaussian errors, variance concentrated out, n_eff samples
+        kind = method_of(res.method)
+        if not kind.stochastic:  # Gaussian errors, variance concentrated out, n_eff samples
             rise = 0.5 * max(n_eff, 1.0) * np.log(pr.cost / pr.cost.min())
-        elif res.method == "ml":
+        elif not kind.prior:
             rise = w * (pr.cost - pr.cost.min())
         else:  # MAP: the objective is already tempered
             rise = pr.cost - pr.cost.min()
@@ -249,10 +251,10 @@ def compare_fits(
 def far_from_construction(res: FitResult, factor: float = 3.0) -> dict[str, float]:
     """Free R and C whose estimate is more than ``factor`` away from its construction value (the ratios)."""
     out = {}
-    for n in res.names:
-        c = res.construction[n]
+    for n, e in res.parameters.items():
+        c = e.construction
         if math.isfinite(c) and c > 0:
-            r = res.estimates[n] / c
+            r = e.value / c
             if r > factor or r < 1 / factor:
                 out[n] = r
     return out

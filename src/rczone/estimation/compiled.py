@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from rczone.estimation.methods import METHODS, method_of
 from rczone.estimation.parameters import measurement_noise_names
 from rczone.kernels.arrays import (
     ConductanceArrays,
@@ -34,8 +35,11 @@ from rczone.kernels.problem import evaluate, theta_of_z
 from rczone.network.parameters import proportional_base
 from rczone.simulation.discretize import SYMMETRY_RTOL
 
-#: Problem kinds of :mod:`rczone.kernels.problem` (``LS, ML, MAP = 0, 1, 2``).
-_KIND = {"ls": 0, "ml": 1, "map": 2}
+
+def _kind(method: str) -> int:
+    """The problem kind of :mod:`rczone.kernels.problem` (``LS, ML, MAP = 0, 1, 2``) of a registered method."""
+    m = method_of(method)
+    return 0 if m.kernel == "ls" else 2 if m.prior else 1
 
 
 def _slot(objective, name: str | float) -> tuple[int, float] | None:
@@ -98,7 +102,7 @@ def compiled_problem(objective) -> Problem | None:
     """The packed problem of an :class:`~rczone.estimation.costs.Objective` for :mod:`rczone.kernels.problem`, or None."""
     net, data, spec = objective.network, objective.data, objective.spec
     form = net.conductance_form
-    if objective.method not in _KIND or form is None or not _always_valid(objective):
+    if objective.method not in METHODS or form is None or not _always_valid(objective):
         return None
     states = net.state_names
     elements = []
@@ -114,7 +118,7 @@ def compiled_problem(objective) -> Problem | None:
         [f"sigma_w_{s}" for s in states],
         [f"sigma_x0_{s}" for s in states],
     ):
-        if objective.method == "ls":
+        if method_of(objective.method).kernel == "ls":
             noise.append((np.full(len(group), -1, dtype=np.int64), np.zeros(len(group))))
             continue
         sl = _slots(objective, group)
@@ -137,7 +141,7 @@ def compiled_problem(objective) -> Problem | None:
         return np.array(a, dtype=dtype, order="C", copy=True)
 
     return Problem(
-        _KIND[objective.method],
+        _kind(objective.method),
         ConductanceArrays(
             form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, np.array(form.output_state, dtype=np.int64)
         ),

@@ -60,6 +60,8 @@ from rczone.estimation.engines import (
     simulate_output,
     trapezoid_sse,
 )
+from rczone.estimation.methods import METHODS as _REGISTERED
+from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec
 from rczone.kernels.arrays import Problem
 from rczone.kernels.problem import evaluate
@@ -91,7 +93,7 @@ PRIOR_SPREAD = math.log(2.0)
 #: :func:`rczone.diagnostics.diagnose`.
 MAP_CORRELATION_TIME = 1800.0
 
-METHODS = ("ls", "ml", "map")
+METHODS = _REGISTERED
 
 
 def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> float:
@@ -182,8 +184,7 @@ class Objective:
     engine: str = "auto"
 
     def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise ParameterError(f"method must be one of {METHODS}, got {self.method!r}")
+        method_of(self.method)
         if not self.prior_spread > 0:
             raise ParameterError(f"prior_spread must be > 0, got {self.prior_spread!r}")
         if not 0 < self.likelihood_weight <= 1:
@@ -246,13 +247,13 @@ class Objective:
         zero = np.zeros(theta.size)
         try:
             j, g, c = general_cost(
-                self.network, values, self.data, self.hold, "ls" if self.method == "ls" else "ml", wrt
+                self.network, values, self.data, self.hold, method_of(self.method).kernel, wrt
             )
         except (ParameterError, np.linalg.LinAlgError):
             return math.inf, zero, zero
         if not want_grad:
             g = c = zero
-        if self.method == "map":
+        if method_of(self.method).prior:
             pen, dpen, cpen = _log_prior(self.spec, theta, self.prior_spread)
             j = self.likelihood_weight * j + pen
             if want_grad:

@@ -21,7 +21,6 @@ import numpy as np
 from rczone.errors import ParameterError
 from rczone.estimation.costs import (
     MAP_CORRELATION_TIME,
-    METHODS,
     PRIOR_SPREAD,
     Objective,
     auto_initial_state,
@@ -30,7 +29,9 @@ from rczone.estimation.costs import (
     trapezoid_sse,
 )
 from rczone.estimation.data import Dataset
+from rczone.estimation.engines import general_cost
 from rczone.estimation.kalman import kalman_innovations_fast
+from rczone.estimation.methods import Method, method_of
 from rczone.estimation.optimize import OPTIMIZERS
 from rczone.estimation.parameters import NOISE_DEFAULTS, make_spec, noise_parameter_names
 from rczone.estimation.resolution import noise_floor
@@ -38,12 +39,13 @@ from rczone.estimation.result import FitResult
 from rczone.estimation.search import global_search
 from rczone.estimation.uncertainty import covariance, hessian
 from rczone.network import RCNetwork
+from rczone.results import Estimate
 from rczone.simulation.simulate import HOLDS
 
 
 def rmse_of(network: RCNetwork, values: Mapping[str, float], data: Dataset, method: str, hold: str) -> float:
     """Open-loop RMSE (``"ls"``) or one-step-ahead RMSE (``"ml"``, ``"map"``), K."""
-    if method == "ls":
+    if method_of(method).kernel == "ls":
         e = data.y - simulate_output(network, values, data, hold)[1]
     else:
         e = kalman_innovations_fast(filter_arrays(network, values, data, hold))
@@ -80,7 +82,7 @@ def default_free(
         raise ParameterError(f"noise must be 'measured' or 'all', got {noise!r}")
     free = list(network.default_free)
     measured = measured_states(network)
-    if method in ("ml", "map"):
+    if method_of(method).stochastic:
         free += [n for n in noise_parameter_names(network) if n.startswith("sigma_v")]
         free += [f"sigma_w_{s}" for s in (measured if noise == "measured" else network.state_names)]
     elif initial_state == "estimate":
@@ -186,8 +188,7 @@ def fit(
     -------
     FitResult
     """
-    if method not in METHODS:
-        raise ParameterError(f"method must be one of {METHODS}, got {method!r}")
+    meth = method_of(method)
     if optimizer != "auto" and optimizer not in OPTIMIZERS:
         raise ParameterError(f"optimizer must be 'auto' or one of {OPTIMIZERS}, got {optimizer!r}")
     if hold not in HOLDS:
@@ -200,7 +201,7 @@ def fit(
         )
     data.check_against(network)
     free = tuple(free) if free else default_free(network, method, initial_state)
-    if method == "ls":
+    if not meth.stochastic:
         noisy = [n for n in free if n.startswith("sigma_")]
         if noisy:
             raise ParameterError(
@@ -220,9 +221,9 @@ def fit(
     spec = make_spec(network, free, bounds=all_bounds, start=start, fixed=fixed, x0_auto=x0_auto)
     if not correlation_time_s > 0:
         raise ParameterError(f"correlation_time_s must be > 0, got {correlation_time_s!r}")
-    weight = min(1.0, float(np.median(np.diff(data.t))) / correlation_time_s) if method == "map" else 1.0
+    weight = min(1.0, float(np.median(np.diff(data.t))) / correlation_time_s) if meth.prior else 1.0
     objective = Objective(network, data, spec, method, hold, prior_spread, weight)
-    scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if method == "ls" else 0.0
+    scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if meth.kernel == "ls" else 0.0
     if optimizer == "auto":
         optimizer = "nelder-mead" if objective.engine == "rc2-fused" else "lbfgs"
     outcomes, search = global_search(
@@ -241,7 +242,7 @@ def fit(
     if uncertainty:
         H = hessian(objective, spec.to_eta(theta))
         scale = 1.0
-        if method == "ls":
+        if meth.kernel == "ls":
             dt = np.diff(data.t)
             obs = np.isfinite(data.y).all(axis=1)
             tau = float(np.sum(dt[obs[:-1] & obs[1:]]))
@@ -284,32 +285,49 @@ def fit(
                     " the data do not determine it"
                 )
     values = spec.values(theta)
+    units = [_unit_of(network, n) for n in names]
+    parameters = {
+        n: Estimate(n, float(v), float(e), float(lo), float(hi), float(c), bool(b), u, k, bool(lg))
+        for n, v, e, lo, hi, c, b, u, k, lg in zip(
+            names, theta, se, spec.lower, spec.upper, spec.construction, near, units, spec.kinds, spec.log
+        )
+    }
     return FitResult(
-        names=names,
-        estimates=dict(zip(names, map(float, theta))),
-        std_errors=dict(zip(names, map(float, se))),
+        parameters=parameters,
         correlation=corr,
-        cost=win.cost,
+        objective_value=win.cost,
         method=method,
+        engine=objective.engine,
         optimizer=optimizer,
         hold=hold,
         converged=search.converged,
         n_evals=search.n_sampled + sum(o.n_evals for o in outcomes),
         starts=tuple(outcomes),
         best_start=best,
-        lower=dict(zip(names, map(float, spec.lower))),
-        upper=dict(zip(names, map(float, spec.upper))),
-        construction=dict(zip(names, map(float, spec.construction))),
-        at_bound=dict(zip(names, map(bool, near))),
         rmse_K=rmse_of(network, values, data, method, hold),
-        rmse_kind="open-loop" if method == "ls" else "one-step",
+        rmse_kind=meth.rmse_kind,
+        llf=log_likelihood(network, values, data, meth, hold, win.cost),
+        nobs=int(np.isfinite(data.y).sum()),
         fixed={k: v for k, v in values.items() if k not in names},
         flags=tuple(flags),
         search=search,
         notes=tuple(notes),
         issues=tuple(dict.fromkeys(issues)),
-        units=dict(zip(names, (_unit_of(network, n) for n in names))),
     )
+
+
+def log_likelihood(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, kind: Method, hold: str, objective: float
+) -> float:
+    """The log-likelihood at the estimate: ``-objective`` for ML, recomputed without prior or tempering for MAP.
+
+    NaN for a method without a noise model (least squares has no likelihood of its own).
+    """
+    if not kind.stochastic:
+        return math.nan
+    if not kind.prior:
+        return -float(objective)
+    return -float(general_cost(network, values, data, hold, "ml", ())[0])
 
 
 def _unit_of(network: RCNetwork, name: str) -> str:
@@ -318,4 +336,6 @@ def _unit_of(network: RCNetwork, name: str) -> str:
         return network.parameters[name].unit or ""
     if name.startswith("sigma_w_"):
         return "K/sqrt(s)"
-    return "K" if name.startswith(("sigma_", "x0_")) else ""
+    if name.startswith("x0_"):
+        return "degC"  # a temperature, not a difference of temperatures
+    return "K" if name.startswith("sigma_") else ""

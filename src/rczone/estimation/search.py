@@ -46,15 +46,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from rczone.errors import ParameterError
+from rczone.estimation.methods import method_of
 from rczone.estimation.optimize import StartOutcome, minimize_from
 from rczone.estimation.parameters import ParameterSpec
 
-#: Costs of two end points closer than ``ABS_TOL + REL_TOL * |cost| + SCALE_TOL * scale`` are the
-#: same optimum. For likelihood costs 0.01 is far below any difference that matters (a
-#: likelihood-ratio test needs about 2); for least squares the relative part decides, and the part
-#: relative to the data's own variation (``scale``) merges end points of a near-perfect fit.
-ABS_TOL = {"ml": 0.01, "map": 0.01, "ls": 0.0}
-REL_TOL = {"ml": 1e-9, "map": 1e-9, "ls": 1e-5}
+#: Costs of two end points closer than ``abs_tol + rel_tol * |cost| + SCALE_TOL * scale`` are the
+#: same optimum (``abs_tol``, ``rel_tol`` of the method, :data:`rczone.estimation.methods.REGISTRY`).
+#: For likelihood costs 0.01 is far below any difference that matters (a likelihood-ratio test
+#: needs about 2); for least squares the relative part decides, and the part relative to the data's
+#: own variation (``scale``) merges end points of a near-perfect fit.
 SCALE_TOL = 1e-9
 #: Sampled points closer than this (in the unit box of eta) to a better chosen start are not starts.
 LINK_RADIUS = 0.1
@@ -164,8 +164,9 @@ def _num(v: float) -> float | None:
 
 
 def cost_tolerance(method: str, cost: float, scale: float = 0.0) -> float:
-    """Largest cost difference between end points that are the same optimum (see :data:`ABS_TOL`)."""
-    return ABS_TOL.get(method, 0.0) + REL_TOL.get(method, 1e-9) * abs(cost) + SCALE_TOL * abs(scale)
+    """Largest cost difference between end points that are the same optimum (see :data:`SCALE_TOL`)."""
+    m = method_of(method)
+    return m.abs_tol + m.rel_tol * abs(cost) + SCALE_TOL * abs(scale)
 
 
 def latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:

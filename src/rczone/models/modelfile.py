@@ -441,6 +441,18 @@ def model_to_toml(model: ZoneModel | RCNetwork, header: str = "") -> str:
 
     With a :class:`ZoneModel`, its ``theta`` values are written as the parameters' values.
     :func:`read_model_file` of the result gives the same network (tested round trip).
+
+    Parameters
+    ----------
+    model : ZoneModel or RCNetwork
+        The model to write.
+    header : str
+        Comment lines at the top of the file (each prefixed with ``#``).
+
+    Returns
+    -------
+    str
+        The TOML text.
     """
     zm = model if isinstance(model, ZoneModel) else ZoneModel(model)
     net = zm.network

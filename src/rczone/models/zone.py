@@ -304,7 +304,14 @@ class ZoneModel:
         """The bilinear state space at these parameter values."""
         return self.network.state_space(self.theta)
 
-    def _flows(self, m: float | np.ndarray) -> np.ndarray:
+    def _flows(self, m: float | np.ndarray | None) -> np.ndarray:
+        if m is None:
+            if self.network.flow_names:
+                raise InputShapeError(
+                    f"model {self.name!r} has supply-air flow(s) {', '.join(self.network.flow_names)}: give the"
+                    " operating flow m in kg/s (its matrices depend on it; zero would be a closed damper)"
+                )
+            m = 0.0
         arr = np.atleast_1d(np.asarray(m, dtype=float))
         nf = len(self.network.flow_names)
         if arr.shape != (nf,) and not (nf == 0 and arr.shape == (1,) and arr[0] == 0.0):
@@ -315,13 +322,16 @@ class ZoneModel:
             raise InputShapeError(f"flow m must be finite and >= 0 kg/s, got {arr.tolist()}")
         return arr
 
-    def continuous(self, m: float | np.ndarray = 0.0) -> LinearStateSpace:
-        """Continuous-time LTI model at constant flow ``m`` (kg/s, finite, >= 0)."""
+    def continuous(self, m: float | np.ndarray | None = None) -> LinearStateSpace:
+        """Continuous-time LTI model at constant flow ``m`` (kg/s, finite, >= 0; required with a supply-air element)."""
         mm = self._flows(m)
         return self.state_space().lti(mm if self.network.flow_names else 0.0)
 
-    def discrete(self, dt: float, m: float | np.ndarray = 0.0, hold: str = "zoh") -> DiscreteModel:
-        """Exact discrete-time model for sample time ``dt`` (s, finite, > 0) at constant flow ``m``."""
+    def discrete(self, dt: float, m: float | np.ndarray | None = None, hold: str = "zoh") -> DiscreteModel:
+        """Exact discrete-time model for sample time ``dt`` (s, finite, > 0) at constant flow ``m``.
+
+        ``m`` (kg/s) is required when the model has a supply-air element, and ignored without one.
+        """
         try:
             dt = float(dt)
         except (TypeError, ValueError):
@@ -357,8 +367,26 @@ class ZoneModel:
         A, B = ss.matrices(self._flows(m)) if ss.n_flows else (ss.A, ss.B)
         return {"A": A, "B": B, "C": ss.C, "D": ss.D, "N": ss.N, "M": ss.M}
 
-    def to_control(self, m: float | np.ndarray = 0.0, dt: float | None = None) -> Any:
-        """A ``control.StateSpace`` (continuous, or discrete ZOH when ``dt`` is given)."""
+    def to_control(self, m: float | np.ndarray | None = None, dt: float | None = None) -> Any:
+        """A ``control.StateSpace`` (continuous, or discrete ZOH when ``dt`` is given).
+
+        Parameters
+        ----------
+        m : float or array, optional
+            The operating supply-air flow, kg/s, one per flow of the model: required when the model
+            has a supply-air element (the bilinear term ``m cp (Ts - T)`` makes the linear model
+            depend on it; a silent zero would be a closed damper). Ignored without one.
+        dt : float, optional
+            Sample time, s, for the exact ZOH discretization; None for continuous time.
+
+        Returns
+        -------
+        control.StateSpace
+            With the state, input and output names.
+        """
+        self._flows(
+            m
+        )  # the operating flow first: a missing one is the user's to fix, with or without control
         try:
             import control
         except ImportError:

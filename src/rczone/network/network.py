@@ -85,7 +85,15 @@ class Node:
 
 @dataclass(frozen=True)
 class Resistor:
-    """A thermal resistance (K/W) between two nodes or a node and a boundary."""
+    """A thermal resistance (K/W) between two nodes or a node and a boundary.
+
+    Parameters
+    ----------
+    a, b : str
+        The nodes (or boundary) it connects.
+    resistance : str or float
+        A parameter name, or a value in K/W.
+    """
 
     a: str
     b: str
@@ -196,6 +204,8 @@ class RCNetwork:
     supply_air : sequence of SupplyAir
     outputs : sequence of str
         Nodes that are measured; default: the first node.
+    description : str
+        What the network models, in words (for listings and reports).
 
     Examples
     --------

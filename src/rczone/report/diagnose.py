@@ -19,6 +19,7 @@ def add_verdicts(report: Report, rep: IdentifiabilityReport) -> None:
             "parameter": n,
             "value used": v.value,
             "construction value": v.construction,
+            "unit": rep.units.get(n, ""),
             "expected ± (relative)": f"{v.expected_rel_se:.0%}" if v.expected_rel_se < 10 else "> 1000%",
             "change if /10 (K RMS)": v.rms_change_tenth_K,
             "change if x10 (K RMS)": v.rms_change_tenfold_K,

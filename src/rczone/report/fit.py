@@ -18,19 +18,16 @@ def parameter_rows(cal: Calibration) -> list[dict[str, object]]:
     """One row per free parameter: estimate, unit, standard error, construction value, ratio, flags."""
     r = cal.result
     rows = []
-    for n in r.names:
-        se = r.std_errors[n]
+    for n, e in r.parameters.items():
         rows.append(
             {
                 "parameter": n,
-                "estimate": r.estimates[n],
-                "unit": r.units.get(n, ""),
-                "std. error": se if math.isfinite(se) else None,
-                "construction": r.construction[n] if math.isfinite(r.construction[n]) else None,
-                "estimate / construction": r.ratio_to_construction(n)
-                if math.isfinite(r.construction[n])
-                else None,
-                "at bound": "yes" if r.at_bound[n] else "",
+                "estimate": e.value,
+                "unit": e.unit,
+                "std. error": e.std_error if math.isfinite(e.std_error) else None,
+                "construction": e.construction if math.isfinite(e.construction) else None,
+                "estimate / construction": e.ratio_to_construction if math.isfinite(e.construction) else None,
+                "at bound": "yes" if e.at_bound else "",
             }
         )
     return rows
@@ -51,8 +48,12 @@ def fit_report(
         f"Method {html.escape(r.method.upper())}, optimizer {html.escape(r.optimizer)}, {len(r.starts)} start(s),"
         f" {r.n_evals} cost evaluations; {'converged' if r.converged else 'did NOT converge'}."
     )
-    if r.flags:
-        rep.paragraph("Warnings: " + html.escape("; ".join(r.flags)), "warn")
+    verdict = cal.verdict
+    if not verdict.trustworthy:
+        rep.paragraph(
+            f"Result flagged (exit code {cal.exit_code}): " + html.escape("; ".join(verdict.reasons)),
+            "warn",
+        )
     rep.heading("Data")
     rep.figure(
         "data_overview",
@@ -73,7 +74,11 @@ def fit_report(
     if diag is not None:
         rep.heading("Can these data identify the parameters?")
         add_verdicts(rep, diag)
-        bad = [n for n, v in diag.parameters.items() if v.verdict != "identifiable" and n in r.names]
+        bad = [
+            n
+            for n in verdict.suspect
+            if n in diag.parameters and diag.parameters[n].verdict == "not identifiable"
+        ]
         if bad:
             rep.paragraph(
                 "Do not trust the estimate(s) of "
@@ -196,7 +201,7 @@ def add_checks(rep: Report, cal: Calibration, checks: dict) -> None:
     if shown:
         rep.figure(
             "profiles",
-            figs.profile_curves(shown, dict(r.estimates), dict(r.units)),
+            figs.profile_curves(shown, r.estimates, {n: e.unit for n, e in r.parameters.items()}),
             "Profile of each parameter: the cost re-minimized over the others, its rise above the"
             " minimum (per 30 min of correlated error); dashed: the 95 % threshold; shaded: the"
             " profile interval; vertical line: the estimate",

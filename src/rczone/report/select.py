@@ -146,12 +146,12 @@ def selection_report(sel: Selection, data_name: str) -> Report:
         [
             {
                 "parameter": n,
-                "estimate": r.estimates[n],
-                "unit": r.units.get(n, ""),
-                "std. error": r.std_errors[n] if math.isfinite(r.std_errors[n]) else None,
-                "at bound": "yes" if r.at_bound[n] else "",
+                "estimate": e.value,
+                "unit": e.unit,
+                "std. error": e.std_error if math.isfinite(e.std_error) else None,
+                "at bound": "yes" if e.at_bound else "",
             }
-            for n in r.names
+            for n, e in r.parameters.items()
         ],
         f"{sel.selected} fitted by ML",
         digits=4,

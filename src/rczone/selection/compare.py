@@ -58,6 +58,8 @@ from rczone.calibrate import Calibration, ModelLike, as_model, calibrate, comple
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.fit import default_free
 from rczone.models import ZoneModel
+from rczone.results import Result
+from rczone.results.verdict import EXIT_UNTRUSTED
 from rczone.selection.coupling import (
     Basis,
     VuongTest,
@@ -102,8 +104,8 @@ class Candidate:
 
     @property
     def fit_loglik(self) -> float:
-        """``log L`` of the fit at the estimate (the fit's cost is ``-log L``), of all the model's outputs."""
-        return -float(self.calibration.result.cost)
+        """``log L`` of the fit at the estimate, of all the model's outputs."""
+        return float(self.calibration.result.llf)
 
     @property
     def loglik(self) -> float:
@@ -138,7 +140,7 @@ class Candidate:
             "innovations": inn.to_dict() if inn is not None else None,
             "parameters": {n: r.estimates[n] for n in r.names},
             "std_errors": {n: r.std_errors[n] for n in r.names},
-            "units": dict(r.units),
+            "units": {n: e.unit for n, e in r.parameters.items()},
             "trustworthy": r.trustworthy,
             "flags": list(r.flags),
             "retried_from_simpler": self.retried,
@@ -218,8 +220,8 @@ def likelihood_ratio_test(simple: Candidate, rich: Candidate, nest: Nesting) -> 
     )
 
 
-@dataclass(frozen=True, eq=False)
-class Selection:
+@dataclass(frozen=True, eq=False, repr=False)
+class Selection(Result):
     """The candidates, the tests between nested pairs, and the chosen model.
 
     Attributes
@@ -246,6 +248,12 @@ class Selection:
         common outputs conditional on the neighbours' measurements (:mod:`rczone.selection.coupling`).
     vuong : tuple of VuongTest
         With a conditional basis: Vuong's test of every pair of candidates not nested in each other.
+    data_label : str
+        The data's name, for titles.
+    source : str
+        The data as the user named them (a path), for the command line printed to refit.
+    noise : str
+        The process-noise placement the candidates were fitted with.
     """
 
     candidates: Mapping[str, Candidate]
@@ -259,10 +267,28 @@ class Selection:
     samples: Mapping[str, float] = field(default_factory=dict)
     basis: Basis | None = None
     vuong: tuple[VuongTest, ...] = ()
+    data_label: str = "data"
+    source: str = ""
+    noise: str = "all"
 
     @property
     def best(self) -> Candidate:
+        """The selected candidate."""
         return self.candidates[self.selected]
+
+    @property
+    def exit_code(self) -> int:
+        """0, or 3 when the selected model's fit is flagged (its verdict)."""
+        return 0 if self.best.calibration.verdict.trustworthy else EXIT_UNTRUSTED
+
+    def _repr_line(self) -> str:
+        return f"{self.selected} selected of {len(self.candidates)} candidates on {self.data_label} ({self.rule})"
+
+    def summary_lines(self) -> list:
+        """What ``rczone select`` prints after fitting the candidates."""
+        from rczone.selection.text import selection_lines
+
+        return selection_lines(self)
 
     def table(self) -> list[dict]:
         """One row per fitted candidate: log L, k, AIC, BIC and their differences to the best, whiteness."""
@@ -292,7 +318,9 @@ class Selection:
         return pd.DataFrame(self.table()).set_index("model")
 
     def to_dict(self) -> dict:
+        """What ``rczone select --json`` writes."""
         return {
+            "data": self.data_label,
             "selected": self.selected,
             "rule": self.rule,
             "alpha": self.alpha,
@@ -309,6 +337,7 @@ class Selection:
             "selected_white": bool(self.best.calibration.innovations.white)
             if self.best.calibration.innovations is not None
             else None,
+            "exit_code": self.exit_code,
         }
 
 
@@ -439,11 +468,11 @@ def select_models(
         retried = False
         if simpler:
             best = max(simpler, key=lambda c: c.fit_loglik)
-            if -cal.result.cost < best.fit_loglik - LOGLIK_TOLERANCE:
+            if cal.result.llf < best.fit_loglik - LOGLIK_TOLERANCE:
                 # below a special case of itself: the search missed the optimum; start where the simpler one is
                 again = run(_warm_start(by_name[name], best, nests[(best.name, name)]))
                 retried = True
-                if again.result.cost < cal.result.cost:
+                if again.result.llf > cal.result.llf:
                     cal = again
         fitted[name] = Candidate(name, cal, int(np.isfinite(cal.open_loop.error).sum()), retried)
         return fitted[name]
@@ -528,6 +557,7 @@ def select_models(
         },
         basis,
         vuong,
+        noise=noise,
     )
 
 

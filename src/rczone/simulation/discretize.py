@@ -49,6 +49,17 @@ def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray
     -------
     Phi : ndarray, shape (n, n)
     Gamma : ndarray, shape (n, p)
+
+    Examples
+    --------
+    A room of time constant ``tau = R C`` driven by the outdoor temperature: one step is the
+    exact exponential, ``Phi = exp(-dt / tau)``, ``Gamma = 1 - Phi`` (the DC gain is one).
+
+    >>> import numpy as np
+    >>> tau = 1e6 * 0.01
+    >>> Phi, Gamma = zoh(np.array([[-1 / tau]]), np.array([[1 / tau]]), 600.0)
+    >>> bool(np.isclose(Phi[0, 0], np.exp(-600.0 / tau)) and np.isclose(Gamma[0, 0], 1 - Phi[0, 0]))
+    True
     """
     n = A.shape[0]
     E = expm(_zoh_block(A, B, dt))

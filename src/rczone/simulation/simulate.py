@@ -225,6 +225,21 @@ def simulate(
     Returns
     -------
     SimulationResult
+
+    Examples
+    --------
+    A room (``C = 1 MJ/K``) cooling through ``R = 0.01 K/W`` to 10 degC outdoors from 20 degC follows
+    ``10 + 10 exp(-t / RC)`` exactly at the samples:
+
+    >>> import numpy as np
+    >>> from rczone.network import Node, Parameter, RCNetwork, Resistor
+    >>> net = RCNetwork(
+    ...     "room", nodes=[Node("Ti", "C")], boundaries=["To"], resistors=[Resistor("Ti", "To", "R")],
+    ...     parameters=[Parameter("C", "capacitance", 1e6), Parameter("R", "resistance", 0.01)])
+    >>> t = np.arange(0.0, 36000.0, 600.0)
+    >>> res = simulate(net.state_space(), t, np.full((t.size, 1), 10.0), x0=np.array([20.0]))
+    >>> bool(np.allclose(res.y[:, 0], 10 + 10 * np.exp(-t / (1e6 * 0.01))))
+    True
     """
     t = check_time(t)
     u = check_inputs(u, t.size, ss.input_names, "u")

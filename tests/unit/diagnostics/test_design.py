@@ -1,3 +1,4 @@
+import dataclasses
 import datetime
 
 import numpy as np
@@ -215,3 +216,42 @@ def test_steady_state_check_is_exact_for_a_first_order_zone():
             conditions={"To": 5.0},
         )
     assert steady_state(zm.state_space(), np.array([5.0, 1000.0]), 0.0)[0] == pytest.approx(top)
+
+
+def test_a_design_prints_and_serializes_as_the_command(tmp_path, capsys, monkeypatch):
+    """The schedule the command prints and writes is the result's summary() and to_dict()."""
+    import json
+
+    from rczone.atomic import _jsonable
+    from rczone.cli.main import main
+
+    monkeypatch.setenv("COLUMNS", "100")
+    args = ["design", "--actuate", "Ts=13,35", "--actuate", "m=0.02,0.12", "--condition", "To=16"]
+    args += [
+        "--condition",
+        "Tsd=22",
+        "--hours",
+        "2",
+        "-o",
+        str(tmp_path / "s.csv"),
+        "--json",
+        str(tmp_path / "d.json"),
+    ]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    written = json.loads((tmp_path / "d.json").read_text())
+    limits = DesignLimits(
+        {"Ts": (13.0, 35.0), "m": (0.02, 0.12)}, (17.0, 28.0), 30 * 60.0
+    )  # the CLI defaults
+    res = design_test(
+        "second-order-paper", ["Cr", "Rw"], 2 * 3600.0, limits, conditions={"To": 16.0, "Tsd": 22.0}
+    )
+    res = dataclasses.replace(
+        res,
+        model_label="second-order-paper",
+        start=datetime.time(18, 0),  # the command's default start
+        display_units={"Ts": "degC", "m": "kg/s", "Ti": "degC"},
+    )
+    assert json.loads(json.dumps(_jsonable(res.to_dict()))) == written
+    assert printed == res.summary(width=100) + f"schedule written to {tmp_path / 's.csv'}\n"
+    assert "commands of Ts, m" in repr(res) and len(repr(res)) < 200

@@ -49,7 +49,10 @@ def test_fits_to_two_forced_nights_agree_and_a_shifted_one_does_not(net, forced_
     _, cal = forced_fit
     other = calibrate(net, night("forced", seed=4, hours=6, theta=TRUE), method="ls").result
     assert not any(d.disagree for d in compare_fits({"a": cal.result, "b": other}))
-    shifted = dataclasses.replace(other, estimates={**other.estimates, "Rw": 3 * other.estimates["Rw"]})
+    rw = other.parameters["Rw"]
+    shifted = dataclasses.replace(
+        other, parameters={**other.parameters, "Rw": rw._replace(value=3 * rw.value)}
+    )
     verdict = {d.name: d.disagree for d in compare_fits({"a": cal.result, "b": shifted})}
     assert verdict == {"Cr": False, "Rw": True}
 
@@ -57,7 +60,9 @@ def test_fits_to_two_forced_nights_agree_and_a_shifted_one_does_not(net, forced_
 def test_far_from_construction_reports_the_ratio(forced_fit):
     _, cal = forced_fit
     ratios = far_from_construction(cal.result, factor=1.2)  # truth Rw 0.012 vs construction 0.0084
-    assert ratios["Rw"] == pytest.approx(cal.result.estimates["Rw"] / cal.result.construction["Rw"])
+    assert ratios["Rw"] == pytest.approx(
+        cal.result.estimates["Rw"] / cal.result.parameters["Rw"].construction
+    )
     assert far_from_construction(cal.result, factor=3.0) == {}
 
 
@@ -88,10 +93,12 @@ def test_cli_fit_check_on_other_data_writes_checks(tmp_path, capsys):
             str(tmp_path / "rep"),
         ]
     )
-    assert rc == 0
-    checks = json.loads(out.read_text())["checks"]
+    written = json.loads(out.read_text())
+    checks = written["checks"]
     rw = [d for d in checks["disagreements"] if d["name"] == "Rw"]
     assert rw and rw[0]["disagree"]  # Rw 0.012 vs 0.004: a real difference is caught
+    # ... and it is the one verdict: the exit code, the JSON and the console agree
+    assert rc == 3 and written["trustworthy"] is False and "Rw" in written["verdict"]["suspect"]
     assert set(checks["profiles"]) == {"Cr", "Rw"} and str(tmp_path / "b.csv") in checks["validation"]
     assert "disagree beyond their standard errors" in capsys.readouterr().out
     assert "can the estimates be trusted?" in (tmp_path / "rep" / "report.html").read_text()

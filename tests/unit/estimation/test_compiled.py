@@ -90,7 +90,7 @@ def test_compiled_search_ends_where_scipy_ends(method, monkeypatch) -> None:
     assert compiled.converged and python.converged
     for n in compiled.names:
         assert compiled.estimates[n] == pytest.approx(python.estimates[n], rel=2e-5)
-    assert compiled.cost == pytest.approx(python.cost, rel=1e-10, abs=1e-10)
+    assert compiled.objective_value == pytest.approx(python.objective_value, rel=1e-10, abs=1e-10)
     # a few hundred evaluations, like SciPy's (rounding makes the paths differ slightly)
     assert abs(compiled.n_evals - python.n_evals) <= 0.2 * python.n_evals
 

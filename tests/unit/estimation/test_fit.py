@@ -35,6 +35,7 @@ def test_fit_result_to_dict_is_json_ready_and_complete() -> None:
         "ratio_to_construction",
         "at_bound",
         "unit",
+        "interval_95",
     }
     assert p["construction"] == 0.01 and p["ratio_to_construction"] == pytest.approx(p["estimate"] / 0.01)
     assert p["std_error"] > 0 and p["at_bound"] is False
@@ -52,7 +53,7 @@ def test_multistart_keeps_every_start_and_reports_the_winner() -> None:
     assert len(res.starts) == 4 and res.search.n_local == 4 and res.search.strategy == "global"
     assert res.n_evals == res.search.n_sampled + sum(s.n_evals for s in res.starts)
     costs = [s.cost for s in res.starts]
-    assert res.cost == min(costs) == costs[res.best_start]
+    assert res.objective_value == min(costs) == costs[res.best_start]
     np.testing.assert_allclose(res.starts[0].start, [1e6, 0.01])  # first start: construction values
     rows = res.starts_table()
     assert sum(r["winner"] for r in rows) == 1 and "end_Cr" in rows[0]
@@ -78,7 +79,7 @@ def test_estimate_at_a_bound_is_flagged() -> None:
         optimizer="lbfgs",
         uncertainty=False,
     )
-    assert res.at_bound["R"] and not res.at_bound["Cr"]
+    assert res.parameters["R"].at_bound and not res.parameters["Cr"].at_bound
     assert any("R is at a bound" in f for f in res.flags)
     assert res.estimates["R"] == pytest.approx(5e-3, rel=1e-12)
 

@@ -58,7 +58,7 @@ def test_profile_likelihood_interval_agrees_with_wald_interval() -> None:
     r, se = res.estimates["R"], res.std_errors["R"]
     grid = r + se * np.linspace(-3, 3, 13)
     prof = profile(obj, theta, "R", grid, optimizer="lbfgs")
-    assert prof.cost.min() == pytest.approx(res.cost, abs=1e-6)  # the optimum lies on the profile
+    assert prof.cost.min() == pytest.approx(res.objective_value, abs=1e-6)  # the optimum lies on the profile
     assert int(np.argmin(prof.cost)) == 6
     lo, hi = prof.interval
     assert lo == pytest.approx(r - 1.96 * se, abs=0.15 * se)

@@ -111,3 +111,19 @@ def test_a_model_with_a_non_finite_element_is_refused():
     assert np.all(np.isfinite(ZoneModel(bad).discrete(60.0, 0.1).Ad))
     with pytest.raises(ParameterError, match="not finite"):
         ZoneModel(bad, {"g": float("nan")})
+
+
+def test_a_model_with_supply_air_needs_its_operating_flow_and_one_without_does_not():
+    from rczone.errors import InputShapeError
+    from rczone.models import load_model
+
+    paper = load_model("second-order-paper")  # a supply-air element m cp (Ts - Ti)
+    for call in (paper.continuous, lambda: paper.discrete(300.0), paper.to_control):
+        with pytest.raises(InputShapeError, match="give the operating flow m in kg/s"):
+            call()
+    # with the flow, the matrices are those at that flow: A changes by -m cp / Cr on the room's diagonal
+    a0, a1 = paper.continuous(0.0).A, paper.continuous(0.1).A
+    i = list(paper.network.state_names).index("Ti")
+    assert a1[i, i] - a0[i, i] == pytest.approx(-0.1 * 1005.0 / paper.theta["Cr"], rel=1e-9)
+    heated = load_model("TiTe+heater")  # no flow: nothing to give
+    assert heated.discrete(300.0).Ad.shape == (2, 2)

@@ -1,0 +1,133 @@
+"""The console text of a fit: the parameter table, the search line, the residual verdicts.
+
+Shared by :meth:`rczone.estimation.result.FitResult.summary` and
+:meth:`rczone.calibrate.Calibration.summary` (what ``rczone fit`` prints). Plain functions over a
+result's attributes; rich renders them (``[red]...[/]`` is rich markup, and every user string
+goes through :func:`esc`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from rich.markup import escape
+
+
+def esc(text: object) -> str:
+    """``text`` as rich markup that prints literally (``[vav-3]`` stays ``[vav-3]``).
+
+    Parameters
+    ----------
+    text : object
+        Any text a user could have written (a name, a file name).
+
+    Returns
+    -------
+    str
+    """
+    return escape(str(text))
+
+
+def parameter_table(r, title: str):
+    """The estimates with units, standard errors, construction values and a flag per parameter.
+
+    Parameters
+    ----------
+    r : FitResult
+        The fit.
+    title : str
+        Title of the table (rich markup).
+
+    Returns
+    -------
+    rich.table.Table
+    """
+    from rich.table import Table
+
+    table = Table(title=title)
+    table.add_column("parameter", no_wrap=True)
+    for c in ("estimate", "unit", "std. error", "construction", "ratio", "flag"):
+        table.add_column(c, overflow="fold")
+    search = r.search
+    for n, e in r.parameters.items():
+        flags = []
+        if e.at_bound and not any(n in note for note in r.notes):
+            flags.append("[red]at bound[/]")
+        elif e.at_bound:
+            flags.append("[dim]at floor[/]")
+        if not math.isfinite(e.std_error) and not e.at_bound:
+            flags.append("[red]no std. error[/]")
+        if search is not None and search.n_best >= 2 and n in search.spread:
+            lo, hi = search.spread[n]
+            if lo > 0 and hi / lo > 1.1 and e.unit in ("K/W", "J/K"):
+                flags.append(f"[yellow]starts: x{hi / lo:.2g}[/]")
+        c, ratio = e.construction, e.ratio_to_construction
+        table.add_row(
+            esc(n),
+            f"{e.value:.4g}",
+            esc(e.unit),
+            f"{e.std_error:.2g}" if math.isfinite(e.std_error) else "n/a",
+            f"{c:.4g}" if math.isfinite(c) else "",
+            f"{ratio:.2f}" if math.isfinite(ratio) else "",
+            " ".join(flags),
+        )
+    return table
+
+
+def search_line(r) -> str:
+    """How the optimum was found, in one line.
+
+    Parameters
+    ----------
+    r : FitResult
+        The fit.
+
+    Returns
+    -------
+    str
+    """
+    s = r.search
+    if s is None:
+        return f"{r.n_evals} evaluations"
+    head = (
+        f"{s.strategy} search: {s.n_sampled} sampled points, {s.n_local} local searches,"
+        f" {len(s.optima)} distinct optim{'um' if len(s.optima) == 1 else 'a'}; {s.reason}"
+    )
+    if len(s.optima) > 1:
+        head += f" (next best optimum {s.optima[1].cost - s.optima[0].cost:+.3g} in cost)"
+    return head
+
+
+def residual_lines(analysis) -> list[str]:
+    """What the residuals say: the innovations of an ML fit, or the labelled open-loop error of LS.
+
+    Parameters
+    ----------
+    analysis : ResidualAnalysis or None
+        Innovations (preferred) or open-loop residuals.
+
+    Returns
+    -------
+    list of str
+    """
+    an = analysis
+    if an is None:
+        return []
+    lines = []
+    for o in an.outputs:
+        lag = f"{an.lags_h[1] * 60:.0f} min" if an.lags_h[1] < 1 else f"{an.lags_h[1]:.2g} h"
+        if an.kind == "innovations":
+            verdict = "[green]white[/]" if o.white else "[red]not white[/]"
+            head = f"innovations of {esc(o.output)} (one-step, standardized): {verdict},"
+        else:
+            head = f"open-loop residuals of {esc(o.output)} (not expected to be white: fit by ML to test):"
+        text = (
+            f"{head} Ljung-Box p = {o.p_value:.2g} over {o.lb_lags} lags, ACF at {lag} {o.acf[1]:.2f},"
+            f" cumulative periodogram {'inside' if o.periodogram.inside_band else 'outside'} its band"
+        )
+        worst = o.worst_input()
+        if worst is not None and an.kind == "innovations":
+            name, value, k = worst
+            text += f"; largest input cross-correlation {esc(name)} {value:.2f} at {k * an.dt_s / 3600:.2g} h"
+        lines.append(text)
+    return lines

@@ -1,0 +1,110 @@
+"""One verdict on a fit, computed once, shown the same in the console, the JSON and the report.
+
+A fit can be untrustworthy for reasons of its own (an estimate at a bound, no standard error, an
+indefinite Hessian, a search that has not settled) and for reasons the checks after it find: the
+identifiability analysis says the data cannot pin a parameter down, a profile is flat over a
+factor of ten, or fits to other data disagree beyond their standard errors. Before, the report
+said "do not trust" from the second kind while the command exited 0 from the first; here both
+enter one :class:`Verdict`, and the exit code, the console's last line, the JSON's
+``trustworthy`` and the report's warning all read it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, NamedTuple
+
+#: Exit code of a command whose result is flagged untrustworthy.
+EXIT_UNTRUSTED = 3
+
+
+class Verdict(NamedTuple):
+    """Whether a fit's estimates can be used, and why not.
+
+    Attributes
+    ----------
+    trustworthy : bool
+        No reason below.
+    reasons : tuple of str
+        Each reason, one sentence.
+    suspect : tuple of str
+        Parameters not to trust (empty when only the search itself is flagged).
+    checked : tuple of str
+        What the verdict rests on: ``"fit"`` always; ``"identifiability"``, ``"profiles"``,
+        ``"other data"`` when those checks ran.
+    notes : tuple of str
+        Findings that do not make the fit untrustworthy (a parameter identified only weakly).
+    """
+
+    trustworthy: bool
+    reasons: tuple[str, ...]
+    suspect: tuple[str, ...]
+    checked: tuple[str, ...]
+    notes: tuple[str, ...] = ()
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready fields."""
+        return {
+            "trustworthy": self.trustworthy,
+            "reasons": list(self.reasons),
+            "suspect": list(self.suspect),
+            "checked": list(self.checked),
+            "notes": list(self.notes),
+        }
+
+
+def verdict_of(result, identifiability=None, checks: Mapping[str, Any] | None = None) -> Verdict:
+    """The one verdict on a fit from its own flags and the checks made after it.
+
+    Parameters
+    ----------
+    result : FitResult
+        The fit (its ``flags`` and ``parameters``).
+    identifiability : IdentifiabilityReport, optional
+        The identifiability analysis at the estimates: a free parameter it calls
+        ``"not identifiable"`` is not to be trusted from these data (Lin et al. 2012, sec. V:
+        closed-loop data give grossly wrong R and C that still fit); one it calls ``"weak"`` is a
+        note.
+    checks : mapping, optional
+        The JSON-ready post-fit checks (``profiles``, ``disagreements``): a profile flat over a
+        factor of ten, or fits to other data that disagree, make the estimate untrustworthy.
+
+    Returns
+    -------
+    Verdict
+    """
+    reasons = list(result.flags)
+    suspect = [n for n, e in result.parameters.items() if e.at_bound and result.issues]
+    checked = ["fit"]
+    notes: list[str] = []
+    if checks:
+        if checks.get("other_fits"):
+            checked.append("other data")
+        for d in checks.get("disagreements") or ():
+            if d["disagree"]:
+                reasons.append(
+                    f"{d['name']} fitted to {d['data_a']} ({d['estimate_a']:.3g}) and to {d['data_b']}"
+                    f" ({d['estimate_b']:.3g}) disagree beyond their standard errors"
+                )
+                suspect.append(d["name"])
+        if checks.get("profiles"):
+            checked.append("profiles")
+        for name, p in (checks.get("profiles") or {}).items():
+            if p["flat_low"] or p["flat_high"]:
+                side = "ten times smaller" if p["flat_low"] else "ten times larger"
+                reasons.append(f"a value of {name} {side} fits these data about as well")
+                suspect.append(name)
+    if identifiability is not None:
+        checked.append("identifiability")
+        verdicts = {n: v.verdict for n, v in identifiability.parameters.items() if n in result.parameters}
+        lost = [n for n, v in verdicts.items() if v == "not identifiable"]
+        if lost:
+            reasons.append(
+                f"these data cannot identify {', '.join(lost)}: a grossly different value would fit about"
+                " as well (rczone diagnose says why)"
+            )
+            suspect += lost
+        weak = [n for n, v in verdicts.items() if v == "weak"]
+        if weak:
+            notes.append(f"these data identify {', '.join(weak)} only weakly (rczone diagnose says why)")
+    return Verdict(not reasons, tuple(reasons), tuple(dict.fromkeys(suspect)), tuple(checked), tuple(notes))

@@ -1,0 +1,359 @@
+"""The functions :mod:`rczone` exports: load, fit, predict, with the command line's defaults.
+
+Each takes the data first and its options by keyword only, builds the same settings as the
+command (:class:`~rczone.workflow.settings.FitSettings`) and returns a result that prints what the
+command prints (``summary()``) and serializes to what its ``--json`` writes (``to_dict()``).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from rczone.calibrate import Calibration, Prediction, as_model, prediction
+from rczone.errors import ParameterError
+from rczone.estimation.methods import DEFAULT_METHOD
+from rczone.models import ZoneModel
+from rczone.workflow.checks import fit_and_check
+from rczone.workflow.datasource import DataSource, data_source
+from rczone.workflow.settings import FitSettings
+
+PathLike = str | os.PathLike
+ModelLike = ZoneModel | PathLike
+
+
+def load_data(
+    source: PathLike | DataSource, *, columns: PathLike | None = None, model: ModelLike | None = None
+) -> pd.DataFrame:
+    """A zone's data as a frame, read exactly as the command line reads them.
+
+    Parameters
+    ----------
+    source : str, path or DataSource
+        A CSV or Parquet trend log, a built-in data set's name (``"A"``, ``"B"``, ``"C"``) or a
+        :class:`~rczone.workflow.datasource.DataSource` (a virtual night, for one).
+    columns : str or path, optional
+        A TOML column map (``--columns``; ``docs/data.md``).
+    model : ZoneModel, str or path, optional
+        The model the data are for: its signal names are read from a file without a map, and a
+        map may name them (a heater ``Ph``).
+
+    Returns
+    -------
+    DataFrame
+        SI units, a column per signal and ``time`` (s). A trend log is indexed by its time stamps
+        in the column map's time zone (UTC without a map); a built-in set by sample number.
+        ``attrs["name"]`` is the file's (or set's) name, which :func:`fit` and :func:`predict`
+        use as the data's name.
+    """
+    zm = as_model(model) if model is not None else None
+    return data_source(source, columns).frame(zm)
+
+
+def _frame(
+    data: pd.DataFrame | PathLike | DataSource, columns: PathLike | None, zm: ZoneModel
+) -> tuple[pd.DataFrame, str]:
+    """A frame and its name from a frame, a source or what names one."""
+    if isinstance(data, pd.DataFrame):
+        return data, str(data.attrs.get("name", "data"))
+    source = data_source(data, columns)
+    return source.frame(zm), source.label
+
+
+def fit(
+    model: ModelLike,
+    data: pd.DataFrame | PathLike,
+    *,
+    method: str = DEFAULT_METHOD,
+    free: Sequence[str] | None = None,
+    optimizer: str = "auto",
+    n_starts: int | None = None,
+    seed: int = 0,
+    noise: str = "measured",
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    check_on: Sequence[pd.DataFrame | PathLike] = (),
+    checks: bool = True,
+    profiles: bool = True,
+    label: str | None = None,
+) -> Calibration:
+    """Fit a model to data: ``rczone fit`` in Python.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        A built-in name, a model file, a saved model (its values are the start) or a model.
+    data : DataFrame, str or path
+        A frame (``time`` in s or a DatetimeIndex, a column per signal), a trend log or a built-in
+        data set's name.
+    method : str
+        ``"ml"`` (default, as the command line), ``"ls"`` or ``"map"``
+        (:data:`rczone.estimation.methods.REGISTRY`).
+    free : sequence of str, optional
+        Free parameters; default the model's, plus noise levels for ML and MAP.
+    optimizer : str
+        ``"auto"``, ``"nelder-mead"``, ``"powell"`` or ``"lbfgs"``.
+    n_starts : int, optional
+        Local searches; default the global search, 1 for one local search.
+    seed : int
+        Seed of the global search.
+    noise : {"measured", "all"}
+        ML and MAP: process noise on the measured states or on every state.
+    constants : mapping, optional
+        Inputs held constant (SI units), e.g. ``{"Q": 50}``.
+    columns : str or path, optional
+        A column map for ``data`` and ``check_on`` given as files.
+    check_on : sequence, optional
+        Other data: fitted too, their estimates compared, and predicted with this fit.
+    checks : bool
+        Make the checks after the fit (identifiability at the estimates, profiles), as
+        ``rczone fit --json`` does; they enter the one verdict.
+    profiles : bool
+        With ``checks``: profile each R and C over a factor of ten.
+    label : str, optional
+        The data's name in titles and the JSON; default the file name (or ``"data"``).
+
+    Returns
+    -------
+    Calibration
+        ``summary()`` is what ``rczone fit`` prints, ``to_dict()`` what ``--json`` writes.
+    """
+    zm = as_model(model)
+    settings = FitSettings(
+        method=method,
+        free=free,
+        optimizer=optimizer,
+        n_starts=n_starts,
+        seed=seed,
+        noise=noise,
+        constants=dict(constants or {}),
+        checks=checks,
+        profiles=profiles,
+    )
+    frame, name = _frame(data, columns, zm)
+    others = {}
+    for k, other in enumerate(check_on):
+        f, other_name = _frame(other, columns, zm)
+        others[other_name if other_name not in others and other_name != "data" else f"data {k + 1}"] = f
+    return fit_and_check(zm, frame, settings, label=label or name, others=others)
+
+
+def predict(
+    model: ModelLike,
+    data: pd.DataFrame | PathLike,
+    *,
+    steps: int | None = None,
+    initial_state: str = "estimated",
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    parameters: bool = True,
+    label: str | None = None,
+) -> Prediction:
+    """Predict data with a model, open loop or ``steps`` ahead, with a 2-sigma band: ``rczone predict``.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        A fitted model (or any model: its values are used).
+    data : DataFrame, str or path
+        As for :func:`fit`.
+    steps : int, optional
+        Steps ahead from the Kalman filter (a model fitted by ML); default open loop.
+    initial_state : {"estimated", "steady"}
+        Open loop: where the unmeasured nodes start.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    columns : str or path, optional
+        A column map for ``data`` given as a file.
+    parameters : bool
+        Include the estimates' uncertainty in the band.
+    label : str, optional
+        The data's name in titles and the JSON.
+
+    Returns
+    -------
+    Prediction
+        ``to_frame()`` is indexed by the data's time stamps.
+    """
+    if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or steps < 1):
+        raise ParameterError(f"steps must be a positive integer, got {steps!r}")
+    zm = as_model(model)
+    frame, name = _frame(data, columns, zm)
+    return prediction(
+        zm,
+        frame,
+        dict(constants) if constants else None,
+        steps=steps,
+        parameters=parameters,
+        initial_state=initial_state,
+        label=label or name,
+    )
+
+
+def diagnose(
+    model: ModelLike,
+    data: pd.DataFrame | PathLike,
+    *,
+    free: Sequence[str] | None = None,
+    sigma: float = 0.1,
+    model_error: float = 0.2,
+    operating_point: str = "auto",
+    seed: int = 0,
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    label: str | None = None,
+):
+    """Can these data identify the model's parameters, and why: ``rczone diagnose`` in Python.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        The model; the analysis is made at its values if they reproduce the data, else at a quick
+        least-squares fit's (:func:`rczone.diagnostics.diagnose`).
+    data : DataFrame, str or path
+        As for :func:`fit`.
+    free : sequence of str, optional
+        Parameters to diagnose; default the model's free R, C and gains.
+    sigma : float
+        Error level a fit must see through (sensor noise and model error), K.
+    model_error : float
+        Structural model error the verdicts allow for, K RMS (0: none).
+    operating_point : {"auto", "model", "fit"}
+        Where the analysis is made.
+    seed : int
+        Seed of the quick fit's global search.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    columns : str or path, optional
+        A column map for ``data`` given as a file.
+    label : str, optional
+        The data's name in titles and the JSON.
+
+    Returns
+    -------
+    IdentifiabilityReport
+        ``summary()`` is what ``rczone diagnose`` prints, ``to_dict()`` what its ``--json`` writes.
+    """
+    import dataclasses
+
+    from rczone.diagnostics import diagnose as run
+
+    zm = as_model(model)
+    frame, name = _frame(data, columns, zm)
+    rep = run(
+        zm,
+        frame,
+        free=list(free) if free else None,
+        sigma_K=sigma,
+        model_error_K=model_error,
+        constants=dict(constants) if constants else None,
+        operating_point=operating_point,
+        seed=seed,
+    )
+    return dataclasses.replace(rep, data_label=label or name)
+
+
+def read_for_models(
+    source: PathLike,
+    columns: PathLike | None,
+    models: Sequence[ZoneModel],
+    required: Sequence[str] | None = None,
+) -> pd.DataFrame:
+    """Data with every candidate's signals, read as ``rczone select`` reads them.
+
+    Parameters
+    ----------
+    source : str or path
+        A trend log or a built-in data set's name.
+    columns : str or path, optional
+        A column map.
+    models : sequence of ZoneModel
+        The candidates: the union of their signals is read.
+    required : sequence of str, optional
+        Columns that must exist; default every candidate's required signals.
+
+    Returns
+    -------
+    DataFrame
+    """
+    from rczone.sources import read_frame
+
+    signals: dict[str, str] = {}
+    needed: list[str] = []
+    for zm in models:
+        signals.update(zm.signal_quantities())
+        needed += [s for s in zm.required_signals() if s not in needed]
+    outputs = list(dict.fromkeys(o for zm in models for o in zm.network.outputs))
+    return read_frame(source, columns, signals, needed if required is None else list(required), outputs)
+
+
+def select_models(
+    models: Sequence[ModelLike],
+    data: pd.DataFrame | PathLike,
+    *,
+    criterion: str = "bic",
+    forward: bool = False,
+    alpha: float = 0.05,
+    noise: str = "all",
+    n_starts: int | None = None,
+    seed: int = 0,
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    label: str | None = None,
+):
+    """Fit candidate models to the same data by ML and choose one: ``rczone select`` in Python.
+
+    Parameters
+    ----------
+    models : sequence of ZoneModel, str or path
+        At least two candidates.
+    data : DataFrame, str or path
+        As for :func:`fit`; a file is read with every candidate's signals.
+    criterion : {"bic", "aic"}
+        Without ``forward``: the criterion to minimize.
+    forward : bool
+        Forward selection by likelihood-ratio tests along the nesting of the candidates.
+    alpha : float
+        Level of the tests.
+    noise : {"all", "measured"}
+        Process noise on every state (default, as the command) or on the measured ones.
+    n_starts : int, optional
+        Local searches per fit; default the global search.
+    seed : int
+        Seed of the global searches.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    columns : str or path, optional
+        A column map for ``data`` given as a file.
+    label : str, optional
+        The data's name in titles and the JSON.
+
+    Returns
+    -------
+    Selection
+        ``summary()`` is what ``rczone select`` prints, ``to_dict()`` what its ``--json`` writes.
+    """
+    import dataclasses
+
+    from rczone.selection import select_models as run
+
+    zms = [as_model(m) for m in models]
+    if isinstance(data, pd.DataFrame):
+        frame, name, source = data, str(data.attrs.get("name", "data")), ""
+    else:
+        frame, name, source = read_for_models(data, columns, zms), Path(str(data)).name, str(data)
+    sel = run(
+        zms,
+        frame,
+        dict(constants) if constants else None,
+        rule=criterion.strip().lower(),
+        forward=forward,
+        alpha=alpha,
+        n_starts=n_starts,
+        seed=seed,
+        noise=noise,
+    )
+    return dataclasses.replace(sel, data_label=label or name, source=source, noise=noise)

@@ -1,0 +1,146 @@
+"""The checks after a fit, and the fit that makes them: what ``rczone fit`` and :func:`rczone.fit` run.
+
+After the estimates, :func:`check_fit` asks whether they can be trusted: the identifiability
+analysis at the estimates (:func:`rczone.diagnostics.diagnose`), each R and C profiled over a
+factor of ten, the estimates at a bound or far from the construction values, and the same model
+fitted to other data (their estimates compared, and this fit predicting them). The answers enter
+the one verdict of the returned :class:`~rczone.calibrate.Calibration`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+
+import pandas as pd
+
+from rczone.calibrate import Calibration, calibrate, predict
+from rczone.models import ZoneModel
+from rczone.workflow.settings import FitSettings
+
+
+def _quiet(_: str) -> None:
+    """No progress messages."""
+
+
+def fit_and_check(
+    model: ZoneModel,
+    frame: pd.DataFrame,
+    settings: FitSettings,
+    *,
+    label: str = "data",
+    others: Mapping[str, pd.DataFrame] | None = None,
+    progress: Callable[[str], None] = _quiet,
+) -> Calibration:
+    """Fit ``model`` to ``frame`` with ``settings``, then (``settings.checks``) check the fit.
+
+    Parameters
+    ----------
+    model : ZoneModel
+        The model; its values are the start.
+    frame : DataFrame
+        The data (``time`` in s or a DatetimeIndex, a column per signal).
+    settings : FitSettings
+        How to fit and what to check.
+    label : str
+        The data's name, recorded in the fitted model's provenance.
+    others : mapping of name to DataFrame, optional
+        Other data to fit and predict in the checks.
+    progress : callable
+        Called with a short message before each long step.
+
+    Returns
+    -------
+    Calibration
+    """
+    progress(f"fitting {model.label} to {label} ({settings.method})")
+    cal = calibrate(
+        model,
+        frame,
+        settings.method,
+        settings.free,
+        settings.optimizer,
+        settings.n_starts,
+        settings.seed,
+        constants=settings.constants or None,
+        provenance={"data": label, "model": model.label},
+        noise=settings.noise,
+    )
+    if settings.checks or others:
+        cal = check_fit(cal, frame, settings, others=others, progress=progress)
+    return cal
+
+
+def check_fit(
+    cal: Calibration,
+    frame: pd.DataFrame,
+    settings: FitSettings,
+    *,
+    others: Mapping[str, pd.DataFrame] | None = None,
+    progress: Callable[[str], None] = _quiet,
+) -> Calibration:
+    """The calibration with its post-fit checks, identifiability analysis and verdict.
+
+    Parameters
+    ----------
+    cal : Calibration
+        A fit of :func:`rczone.calibrate.calibrate`.
+    frame : DataFrame
+        The data it was fitted to.
+    settings : FitSettings
+        The fit's settings (the other data are fitted with them; ``profiles`` says whether to
+        profile).
+    others : mapping of name to DataFrame, optional
+        Other data: fitted too (the estimates compared) and predicted with this fit.
+    progress : callable
+        Called with a short message before each long step.
+
+    Returns
+    -------
+    Calibration
+        A new calibration; its model's provenance carries the verdict.
+    """
+    from rczone.diagnostics import diagnose
+    from rczone.diagnostics.postfit import compare_fits, far_from_construction, profile_checks
+
+    r, zm = cal.result, cal.model
+    used = zm.provenance.get("constants") or {}
+    label = cal.data_label
+    prof = {}
+    if settings.profiles and len(zm.network.outputs) == 1:
+        progress("profiling the estimates")
+        prof = {k: v.to_dict() for k, v in profile_checks(zm, frame, r, constants=used).items()}
+    fits = {label: r}
+    validation = {}
+    for name, f in (others or {}).items():
+        progress(f"fitting {name} for comparison")
+        fits[name] = calibrate(
+            zm,
+            f,
+            settings.method,
+            settings.free,
+            settings.optimizer,
+            constants=settings.constants or None,
+            noise=settings.noise,
+        ).result
+        ol = predict(zm, f, settings.constants or None)
+        validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}
+    checks = {
+        "profiles": prof,
+        "at_bound": [n for n, e in r.parameters.items() if e.at_bound],
+        "far_from_construction": far_from_construction(r),
+        "other_fits": {k: dict(v.estimates) for k, v in fits.items() if k != label},
+        "disagreements": [{"name": d.name, **d.to_dict()} for d in compare_fits(fits)],
+        "validation": validation,
+    }
+    rc = [n for n in r.names if n in zm.network.parameters and zm.theta[n] > 0]
+    diag = None
+    if rc:
+        progress("diagnosing identifiability at the estimates")
+        diag = diagnose(zm, frame, free=rc, constants=used, heat_input=None, operating_point="model")
+    checked = dataclasses.replace(cal, checks=checks, identifiability=diag)
+    v = checked.verdict
+    model = dataclasses.replace(
+        zm, provenance={**zm.provenance, "trustworthy": v.trustworthy, "flags": list(v.reasons)}
+    )
+    return dataclasses.replace(checked, model=model)
