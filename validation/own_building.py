@@ -133,7 +133,7 @@ def run_case(data: Path, model: Path, column_map: Path | None, out: Path) -> dic
         d = json.loads(js.read_text())
         res[label] = {
             "exit_code": code,
-            "neg_log_likelihood": d["cost"],
+            "neg_log_likelihood": d["objective_value"],
             "estimates": {k: v["estimate"] for k, v in d["parameters"].items()},
             "issues": d["issues"],
             "search": d["search"]["reason"],
