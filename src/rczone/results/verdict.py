@@ -107,6 +107,7 @@ def verdict_of(result, identifiability=None, checks: Mapping[str, Any] | None = 
                 notes.append(
                     f"the identifiability analysis at the estimates calls {', '.join(names)} {word}"
                     f" (allowing {error_K:g} K of model error):"
-                    " confirm them on other data (--check-on) before relying on them"
+                    f" confirm {'it' if len(names) == 1 else 'them'} on other data (--check-on) before relying on"
+                    f" {'it' if len(names) == 1 else 'them'}"
                 )
     return Verdict(not reasons, tuple(reasons), tuple(dict.fromkeys(suspect)), tuple(checked), tuple(notes))
