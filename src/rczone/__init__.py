@@ -42,7 +42,7 @@ _EXPORTS = {
     "VirtualNight": "rczone.workflow.datasource",
     "simulate": "rczone.simulation",
     "diagnose": "rczone.workflow.api",
-    "design_test": "rczone.diagnostics.design",
+    "design_test": "rczone.workflow.api",
     "select_models": "rczone.workflow.api",
     # results
     "Calibration": "rczone.calibrate",

@@ -74,19 +74,8 @@ def fit_report(
     if diag is not None:
         rep.heading("Can these data identify the parameters?")
         add_verdicts(rep, diag)
-        bad = [
-            n
-            for n in verdict.suspect
-            if n in diag.parameters and diag.parameters[n].verdict == "not identifiable"
-        ]
-        if bad:
-            rep.paragraph(
-                "Do not trust the estimate(s) of "
-                + html.escape(", ".join(bad))
-                + " from these data, however well the"
-                " model fits: a grossly different value would fit about as well.",
-                "warn",
-            )
+        for note in verdict.notes:
+            rep.paragraph(html.escape(note[0].upper() + note[1:]) + ".", "warn")
     if checks:
         add_checks(rep, cal, checks)
     return rep

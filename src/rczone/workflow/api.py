@@ -7,6 +7,7 @@ command prints (``summary()``) and serializes to what its ``--json`` writes (``t
 
 from __future__ import annotations
 
+import datetime
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -357,3 +358,64 @@ def select_models(
         noise=noise,
     )
     return dataclasses.replace(sel, data_label=label or name, source=source, noise=noise)
+
+
+def design_test(
+    model: ModelLike,
+    *,
+    actuate: Mapping[str, tuple[float, float]],
+    conditions: Mapping[str, float] | None = None,
+    free: Sequence[str] | None = None,
+    hours: float = 12.0,
+    band: tuple[float, float] = (17.0, 28.0),
+    min_hold: float = 30.0,
+    initial: float | None = None,
+    start: datetime.time | pd.Timestamp | None = datetime.time(18, 0),
+):
+    """A D-optimal forced-response test the building can run: ``rczone design`` in Python, SI units.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        The zone's model; its values are the prior.
+    actuate : mapping of str to (float, float)
+        The inputs the test may drive and their ranges, SI units, e.g.
+        ``{"Ts": (12, 35), "m": (0.02, 0.12)}`` or ``{"Ph": (0, 2000)}``.
+    conditions : mapping of str to float, optional
+        Expected values of the other inputs during the test, e.g. ``{"To": 18, "Tsd": 22}``.
+    free : sequence of str, optional
+        Parameters the test should identify; default the model's free R and C.
+    hours : float
+        Length of the test, h.
+    band : (float, float)
+        Allowed zone temperature, degC.
+    min_hold : float
+        Shortest hold of a command, min.
+    initial : float, optional
+        Zone temperature at the start, degC (default: the middle of the band).
+    start : datetime.time or Timestamp, optional
+        When the test starts (the schedule's clock column); default 18:00.
+
+    Returns
+    -------
+    DesignResult
+        ``summary()`` is what ``rczone design`` prints, ``to_frame()`` the schedule for the BMS.
+    """
+    import dataclasses
+
+    from rczone.diagnostics.design import SI_UNIT, DesignLimits
+    from rczone.diagnostics.design import design_test as run
+
+    zm = as_model(model)
+    net = zm.network
+    names = (
+        list(free)
+        if free
+        else [n for n in net.default_free if net.parameters[n].kind in ("resistance", "capacitance")]
+    )
+    limits = DesignLimits(dict(actuate), tuple(band), min_hold * 60.0)
+    res = run(zm, names, hours * 3600.0, limits, conditions=dict(conditions or {}), ti0=initial)
+    units = {a: SI_UNIT[res.quantities.get(a, "temperature")] for a in res.actuated}
+    return dataclasses.replace(
+        res, model_label=zm.label, start=start, display_units={**units, res.output: "degC"}
+    )

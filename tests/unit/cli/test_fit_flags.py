@@ -72,15 +72,8 @@ def _fit(zone, capsys, model_text: str, *extra: str):
     return rc, captured.out, json.loads(out.read_text())
 
 
-#: The parameters the heater test cannot identify (rczone diagnose: the wall's capacity and the
-#: resistance to Tx, whose effects a 0.2 K model error could mimic) held at their values.
-IDENTIFIABLE = MODEL.replace(
-    'Ce = { value = 20.0, unit = "MJ/K" }', 'Ce = { value = 20.0, unit = "MJ/K", fixed = true }'
-).replace('Rx = { value = 50.0, unit = "K/kW" }', 'Rx = { value = 50.0, unit = "K/kW", fixed = true }')
-
-
 def test_a_trustworthy_fit_exits_0_and_recovers_the_truth(zone, capsys) -> None:
-    rc, out, d = _fit(zone, capsys, IDENTIFIABLE)
+    rc, out, d = _fit(zone, capsys, MODEL)
     assert rc == 0, out
     assert d["trustworthy"] and d["issues"] == [] and d["exit_code"] == 0
     assert d["verdict"]["checked"] == ["fit", "identifiability"]
@@ -163,17 +156,17 @@ def test_fit_many_exits_3_when_a_finished_fit_is_flagged(zone, capsys) -> None:
     assert json.loads((zone / "batch" / "summary.json").read_text())["flagged"] == 1
 
 
-def test_what_the_data_cannot_identify_flags_the_fit_in_console_json_and_report(zone, capsys) -> None:
-    # the full model: the fit's own statistics are fine, but the identifiability analysis says the
-    # heater test cannot pin Ce and Rx down; one verdict says so everywhere (it used to be only the report)
+def test_identifiability_doubts_are_one_note_in_console_json_and_report(zone, capsys) -> None:
+    # the analysis (allowing 0.2 K of model error) doubts Ce and Rx, which this fit recovers to 1 %
+    # (the truth test above): a note, the same everywhere, not a flag; the report no longer says
+    # "do not trust" while the command exits 0
     rc, out, d = _fit(zone, capsys, MODEL, "--report", str(zone / "rep"))
-    assert d["issues"] == []  # nothing of the fit's own
-    assert rc == 3 and d["exit_code"] == 3 and d["trustworthy"] is False
-    lost = [n for n, v in d["identifiability"].items() if v["verdict"] == "not identifiable"]
-    assert lost and set(lost) <= set(d["verdict"]["suspect"])
-    assert f"cannot identify {', '.join(lost)}" in " ".join(out.split())
+    assert rc == 0 and d["trustworthy"] is True and d["exit_code"] == 0
+    doubted = [n for n, v in d["identifiability"].items() if v["verdict"] == "not identifiable"]
+    assert doubted and d["verdict"]["suspect"] == []
+    note = next(n for n in d["verdict"]["notes"] if "not identifiable" in n)
+    assert ", ".join(doubted) in note
+    assert f"note: {note}" in " ".join(out.split())
     html = (zone / "rep" / "report.html").read_text()
-    assert (
-        "Result flagged (exit code 3)" in html
-        and f"Do not trust the estimate(s) of {', '.join(lost)}" in html
-    )
+    assert "Do not trust" not in html and "Result flagged" not in html
+    assert ", ".join(doubted) + " not identifiable" in html

@@ -44,7 +44,7 @@ def _report(**verdicts):
         (None, None, True, ()),
         (_report(Rw="identifiable"), None, True, ()),
         (_report(Rw="weak"), None, True, ()),  # a note, not a flag
-        (_report(Rw="not identifiable"), None, False, ("Rw",)),
+        (_report(Rw="not identifiable"), None, True, ()),  # a note too: other data decide
         (None, {"profiles": {"Rw": {"flat_low": True, "flat_high": False}}}, False, ("Rw",)),
         (
             None,
@@ -70,6 +70,8 @@ def test_the_verdict_counts_every_check(identifiability, checks, trustworthy, su
     v = verdict_of(_fit(), identifiability, checks)
     assert v.trustworthy is trustworthy and v.suspect == suspect
     assert bool(v.reasons) is not trustworthy
+    doubted = identifiability is not None and identifiability.parameters["Rw"].verdict != "identifiable"
+    assert bool(v.notes) is doubted and all("Rw" in n for n in v.notes)
 
 
 def test_the_fit_own_flags_are_part_of_the_verdict() -> None:

@@ -201,3 +201,22 @@ def test_data_sources_are_one_protocol(tmp_path) -> None:
     assert by_source.attrs["name"] == "c.csv"
     with pytest.raises(rczone.DataError, match="built-in data sets: A, B, C"):
         data_source("D")
+
+
+def test_design_test_is_the_command_in_si_units(tmp_path, capsys, monkeypatch) -> None:
+    monkeypatch.setenv("COLUMNS", str(WIDTH))
+    out, schedule = tmp_path / "d.json", tmp_path / "s.csv"
+    args = ["design", "--actuate", "Ts=13,35", "--actuate", "m=0.02,0.12", "--condition", "To=16"]
+    assert (
+        main([*args, "--condition", "Tsd=22", "--hours", "2", "-o", str(schedule), "--json", str(out)]) == 0
+    )
+    printed = capsys.readouterr().out
+    res = rczone.design_test(
+        "second-order-paper",
+        actuate={"Ts": (13, 35), "m": (0.02, 0.12)},
+        conditions={"To": 16, "Tsd": 22},
+        hours=2,
+    )
+    assert json.loads(out.read_text()) == _as_written(res.to_dict())
+    assert printed == res.summary(width=WIDTH) + f"schedule written to {schedule}\n"
+    pd.testing.assert_frame_equal(res.to_frame(), pd.read_csv(schedule), check_dtype=False)
