@@ -71,8 +71,10 @@ def diagnose(
     from rich.console import Console
     from rich.table import Table
 
+    from rczone.cli.common import check_seed
     from rczone.diagnostics import diagnose as run
 
+    check_seed(seed)
     zm = model(model_name)
     net = zm.network
     frame = read_frame(data, column_map, zm)
@@ -387,7 +389,8 @@ def design(
     try:
         res = design_test(zm, free_list, hours * 3600.0, limits, conditions=conds, ti0=ti0, progress=report)
     finally:
-        bar.stop()
+        if task is not None:  # a bar never shown leaves no blank line before the error
+            bar.stop()
     setpoints = {a: unit[a] for a in res.actuated}
     table_df = res.table(when, setpoints)
     res.to_csv(out, when, setpoints)

@@ -11,6 +11,7 @@ import typer
 from rczone.cli.common import (
     EXIT_UNTRUSTED,
     MODEL_HELP,
+    check_seed,
     constants,
     data_label,
     esc,
@@ -170,6 +171,7 @@ def fit(
     from rczone.calibrate import calibrate
     from rczone.estimation.parameters import measurement_noise_names
 
+    check_seed(seed)
     zm = model(model_name)
     n_starts = _starts(starts)
     frame = read_frame(data, column_map, zm)
@@ -197,6 +199,12 @@ def fit(
         f"open-loop RMSE {cal.open_loop.rmse_K:.3f} K, max {cal.open_loop.max_abs_K:.3f} K;"
         f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K; {r.n_evals} evaluations"
     )
+    stretch = cal.model.provenance.get("stretch") or {}
+    if stretch.get("samples", 0) < stretch.get("of", 0):
+        out.print(
+            f"[yellow]note:[/] fitted on {stretch['samples']} of {stretch['of']} samples"
+            f" ({stretch['fraction']:.0%}), the longest stretch where every input is known"
+        )
     per_output = cal.output_errors()
     if len(per_output) > 1:
         out.print(
@@ -242,6 +250,7 @@ def fit(
         payload.update(
             data=label,
             model=zm.label,
+            data_used=stretch,
             open_loop_rmse_K=cal.open_loop.rmse_K,
             open_loop_max_error_K=cal.open_loop.max_abs_K,
             outputs={

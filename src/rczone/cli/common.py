@@ -6,6 +6,7 @@ Everything heavy is imported inside the functions, so that ``rczone --help`` sta
 from __future__ import annotations
 
 import json
+import math
 import sys
 from collections.abc import Iterable
 from pathlib import Path
@@ -64,6 +65,15 @@ def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None 
     return read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
 
 
+def check_seed(value: int) -> int:
+    """A ``--seed``: an integer from 0 to 2**63 - 1 (NumPy's generators take no negative seed)."""
+    from rczone.errors import ParameterError
+
+    if not 0 <= value < 2**63:
+        raise ParameterError(f"--seed must be an integer from 0 to 2**63 - 1, got {value}")
+    return value
+
+
 def split(text: str | None) -> list[str] | None:
     """``"a, b,c"`` -> ``["a", "b", "c"]``; None or empty -> None."""
     return [s.strip() for s in text.split(",") if s.strip()] if text else None
@@ -79,9 +89,14 @@ def constants(items: Iterable[str] | None) -> dict[str, float] | None:
         try:
             if not sep or not name.strip():
                 raise ValueError
-            out[name.strip()] = float(value)
+            v = float(value)
+            if not math.isfinite(v):
+                raise ValueError
+            out[name.strip()] = v
         except ValueError:
-            raise ParameterError(f"--const must be NAME=VALUE in SI units, e.g. Q=50; got {item!r}") from None
+            raise ParameterError(
+                f"--const must be NAME=VALUE with a finite number in SI units, e.g. Q=50; got {item!r}"
+            ) from None
     return out or None
 
 

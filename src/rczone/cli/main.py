@@ -102,6 +102,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         typer.echo("aborted", err=True)
         return 130
+    except MemoryError:
+        return _error(
+            "out of memory: the input is too large for the memory this process may use"
+            " (see the size limits in docs/data.md); use a shorter record or a coarser log"
+        )
     except typer.Exit as exc:
         return exc.exit_code
     except Exception as exc:  # usage errors (typer's vendored click) carry their own exit code
