@@ -20,6 +20,7 @@ import json
 import os
 import stat
 import tomllib
+import unicodedata
 from typing import Any
 
 from rczone.errors import DataError
@@ -152,6 +153,22 @@ def read_text(path: str | os.PathLike, what: str) -> str:
 INT_LIMIT = 2**63
 """Integers in a file must lie in [-2**63, 2**63) (64-bit, as the TOML standard requires): a
 larger one (``10**400``) cannot become a float and is an error naming its key."""
+
+
+def nfkc(obj: Any) -> Any:
+    """``obj`` with every string (and dict key) in Unicode NFKC form: the one form of a name.
+
+    Python reads identifiers in NFKC (a tie ``"µ*2"`` names ``μ``), so names are normalized once,
+    where they enter (model files, column maps, data headers, names on the command line and in a
+    manifest): ``µ`` (micro sign) and ``μ`` (Greek mu) are one name, never two parameters.
+    """
+    if isinstance(obj, str):
+        return unicodedata.normalize("NFKC", obj)
+    if isinstance(obj, dict):
+        return {nfkc(k): nfkc(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [nfkc(v) for v in obj]
+    return obj
 
 
 def _depth(obj: Any) -> tuple[int, str | None]:

@@ -51,7 +51,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from rczone.errors import DataError, did_you_mean
-from rczone.textfiles import read_toml, regular_file
+from rczone.textfiles import nfkc, read_toml, regular_file
 
 MAX_TASKS = 200_000
 """Most calibrations (zones x methods) one manifest may ask for."""
@@ -198,6 +198,10 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
         )
     if not isinstance(out["diagnose"], bool):
         raise _err(where, f"diagnose must be true or false, got {out['diagnose']!r}")
+    if isinstance(out["free"], list):
+        out["free"] = nfkc(out["free"])  # names in one Unicode form (as model files)
+    if isinstance(out["constants"], dict):
+        out["constants"] = {nfkc(k): v for k, v in out["constants"].items()}
     free = out["free"]
     if free is not None and (not isinstance(free, list) or not all(isinstance(x, str) for x in free)):
         raise _err(where, f"free must be a list of parameter names, got {free!r}")

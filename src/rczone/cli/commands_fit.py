@@ -421,6 +421,11 @@ def predict(
         raise ParameterError(f"--steps must be a positive integer, got {steps}")
     zm = model(model_file)
     frame = read_frame(data, column_map, zm)
+    if steps is not None and steps >= len(frame):
+        raise ParameterError(
+            f"--steps {steps} is not less than the {len(frame)} samples of {data_label(data)}: no sample would"
+            " be predicted; give fewer steps"
+        )
     label = data_label(data)
     pred = prediction(zm, frame, constants(const), steps=steps, initial_state=initial_state)
     console = out_console(json_out)

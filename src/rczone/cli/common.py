@@ -5,9 +5,7 @@ Everything heavy is imported inside the functions, so that ``rczone --help`` sta
 
 from __future__ import annotations
 
-import json
 import math
-import sys
 from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -76,12 +74,15 @@ def check_seed(value: int) -> int:
 
 def split(text: str | None) -> list[str] | None:
     """``"a, b,c"`` -> ``["a", "b", "c"]``; None or empty -> None."""
-    return [s.strip() for s in text.split(",") if s.strip()] if text else None
+    from rczone.textfiles import nfkc
+
+    return [nfkc(s.strip()) for s in text.split(",") if s.strip()] if text else None
 
 
 def constants(items: Iterable[str] | None) -> dict[str, float] | None:
     """``["Q=50", "Ts=20"]`` -> ``{"Q": 50.0, "Ts": 20.0}`` (SI units); None when none given."""
     from rczone.errors import ParameterError
+    from rczone.textfiles import nfkc
 
     out: dict[str, float] = {}
     for item in items or ():
@@ -92,7 +93,7 @@ def constants(items: Iterable[str] | None) -> dict[str, float] | None:
             v = float(value)
             if not math.isfinite(v):
                 raise ValueError
-            out[name.strip()] = v
+            out[nfkc(name.strip())] = v
         except ValueError:
             raise ParameterError(
                 f"--const must be NAME=VALUE with a finite number in SI units, e.g. Q=50; got {item!r}"
@@ -114,11 +115,10 @@ def write_json(json_out: Path | None, payload: Any) -> None:
     """Write ``payload`` to ``json_out`` atomically, or to stdout for ``-``."""
     if json_out is None:
         return
-    from rczone.atomic import _jsonable, write_json_atomic
+    from rczone.atomic import json_text, write_json_atomic, write_stdout
 
     if str(json_out) == "-":
-        sys.stdout.write(json.dumps(_jsonable(payload), indent=2, allow_nan=False) + "\n")
-        sys.stdout.flush()
+        write_stdout(json_text(payload))
     else:
         write_json_atomic(json_out, payload)
 

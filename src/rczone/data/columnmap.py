@@ -75,7 +75,7 @@ from pathlib import Path
 
 from rczone.data.units import DEFAULT_AIR_DENSITY, SI_UNITS, canonical_unit
 from rczone.errors import DataError, did_you_mean
-from rczone.textfiles import read_toml
+from rczone.textfiles import nfkc, read_toml
 
 KNOWN_CHANNELS = {
     "Ti": ("temperature", "room"),
@@ -208,7 +208,7 @@ def read_column_map(path: str | Path, signals: Mapping[str, str] | None = None) 
         For invalid TOML or any invalid setting (the message names the key).
     """
     path = Path(path)
-    return parse_column_map(read_toml(path, "column map"), source=str(path), signals=signals)
+    return parse_column_map(nfkc(read_toml(path, "column map")), source=str(path), signals=signals)
 
 
 def _check_keys(table: Mapping, allowed: Sequence[str], where: str, source: str) -> None:

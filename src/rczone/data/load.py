@@ -121,7 +121,7 @@ def _check_header(frame: pd.DataFrame, header: list[str], path: Path, sep: str) 
 
 def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFrame:
     """Read a CSV or Parquet trend log into a DataFrame, turning reader failures into DataError."""
-    from rczone.textfiles import _too_large, regular_file
+    from rczone.textfiles import _too_large, nfkc, regular_file
 
     path = Path(path)
     name = path.name.lower()
@@ -134,7 +134,8 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
 
             _check_rows(pq.ParquetFile(path).metadata.num_rows, path)
             frame = pd.read_parquet(path)
-            _check_header(frame, [str(c) for c in frame.columns], path, ",")
+            frame.columns = [nfkc(str(c)) for c in frame.columns]  # names in one Unicode form
+            _check_header(frame, list(frame.columns), path, ",")
             return frame
         if name.endswith(CSV_SUFFIXES):
             sep = "\t" if name.endswith(".tsv") else ","
@@ -144,7 +145,9 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
                 source.seek(0)
             frame = pd.read_csv(source, sep=sep, na_values=list(na_values) or None)
             _check_rows(len(frame), path)
-            _check_header(frame, [str(c) for c in header.iloc[0]], path, sep)
+            names = [nfkc(str(c)) for c in header.iloc[0]]  # names in one Unicode form
+            _check_header(frame, names, path, sep)
+            frame.columns = [nfkc(str(c)) for c in frame.columns]
             return frame
     except DataError:
         raise

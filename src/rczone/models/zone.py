@@ -499,10 +499,11 @@ def read_model_document(path: Path, kind: str) -> object:
     The checks of :mod:`rczone.textfiles` (a folder in place of the file, not UTF-8, too large,
     nested too deeply, not valid TOML or JSON) become :class:`ModelFileError`.
     """
-    from rczone.textfiles import read_json, read_toml
+    from rczone.textfiles import nfkc, read_json, read_toml
 
     try:
-        return read_toml(path, "model file") if kind == "TOML" else read_json(path, "model file")
+        # names in one Unicode form (NFKC), as Python reads the ties' identifiers
+        return nfkc(read_toml(path, "model file") if kind == "TOML" else read_json(path, "model file"))
     except FileNotFoundError:
         raise ModelFileError(f"model file {str(path)!r} does not exist") from None
     except ModelFileError:

@@ -179,9 +179,9 @@ class ConductanceForm:
 
 RESERVED_NAMES = frozenset({"time"})
 """Names no node or signal may take: ``time`` is the data's time-stamp column."""
-MAX_STATES = 100
-"""Most capacitive nodes (states) of a network: a zone's models have 1 to 15, a building's coupled
-zones a few dozen. Simulation, filtering and fitting grow with the cube of the states; a
+MAX_STATES = 200
+"""Most capacitive nodes (states) of a network: a zone's models have 1 to 15, the virtual
+building's emulator 152. Simulation, filtering and fitting grow with the cube of the states; a
 thousand-node chain would run for hours."""
 
 

@@ -314,5 +314,5 @@ def test_a_2000_node_chain_in_predict_is_refused_at_once(tmp_path, data, capsys)
     one_line_exit_2(
         ["predict", str(tmp_path / "chain.toml"), str(data)],
         capsys,
-        r"2000 capacitive nodes .*limit of 100 \(rczone.network.network.MAX_STATES\)",
+        r"2000 capacitive nodes .*limit of 200 \(rczone.network.network.MAX_STATES\)",
     )
