@@ -50,9 +50,9 @@ def test_big_integers_in_a_column_map(n, where):
             read_column_map(p)
 
 
-mathtext = st.lists(
-    st.sampled_from([*"$\\{}^_ab", "\\frac", "\\sqrt", "$$"]), min_size=1, max_size=12
-).map("".join)
+mathtext = st.lists(st.sampled_from([*"$\\{}^_ab", "\\frac", "\\sqrt", "$$"]), min_size=1, max_size=12).map(
+    "".join
+)
 
 
 @FAST
