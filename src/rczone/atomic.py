@@ -109,7 +109,19 @@ def _batch() -> _Batch | None:
 
 
 @contextlib.contextmanager
-def all_or_nothing() -> Iterator[None]:
+def immediate() -> Iterator[None]:
+    """Write at once inside the block, even within :func:`all_or_nothing` (a batch's results are
+    kept as they arrive, so an interrupted run resumes)."""
+    saved = _batch()
+    _STATE.batch = None
+    try:
+        yield
+    finally:
+        _STATE.batch = saved
+
+
+@contextlib.contextmanager
+def all_or_nothing(success: Callable[[BaseException], bool] | None = None) -> Iterator[None]:
     """Stage every output written inside the block; make them appear only if the block succeeds.
 
     Each file is written in full (to a temporary file beside its name) when it is asked for,
@@ -126,13 +138,20 @@ def all_or_nothing() -> Iterator[None]:
     _STATE.batch = batch
     try:
         yield
-    except BaseException:
+    except BaseException as exc:
         _STATE.batch = None
+        if success is not None and success(exc):  # an exit that still means "outputs written"
+            _commit(batch)
+            raise
         for undo in reversed(batch.rollbacks):
             with contextlib.suppress(OSError):
                 undo()
         raise
     _STATE.batch = None
+    _commit(batch)
+
+
+def _commit(batch: _Batch) -> None:
     try:
         for commit in batch.commits:
             commit()
@@ -446,6 +465,11 @@ def _follow(path: Path) -> tuple[Path, int | None]:
     raise OutputError(
         f"cannot write {os.fspath(path)!r}: more than {MAX_LINKS} symbolic links (a loop?); give a file name"
     )
+
+
+def write_stdout(text: str) -> None:
+    """``text`` to standard output (``--json -``): at the end of the :func:`all_or_nothing` block."""
+    _defer(lambda: _write_stream(1, text.encode("utf-8"), Path("-")))
 
 
 def is_stream(path: str | os.PathLike) -> bool:

@@ -121,6 +121,12 @@ def complete_stretch(u: np.ndarray, m: np.ndarray, y: np.ndarray) -> slice:
     return slice(*best)
 
 
+MIN_USED_FRACTION = 0.5
+"""Where inputs have gaps, the longest complete stretch is used only if it holds at least this
+fraction of the samples; below, the data are refused (exit code 2) rather than silently cut to a
+small part. The fraction used is in the fitted model's provenance (``stretch``) and in fit's JSON."""
+
+
 def dataset(
     model: ModelLike,
     frame: pd.DataFrame,
@@ -150,6 +156,14 @@ def dataset(
                 "no stretch of at least 2 samples where every input is known"
                 + (f" ({', '.join(bad)} never are)" if bad else "")
                 + "; check the column map and the data's gaps"
+            )
+        if (sl.stop - sl.start) < MIN_USED_FRACTION * len(t):
+            raise DataError(
+                f"only {sl.stop - sl.start} of {len(t)} samples ({(sl.stop - sl.start) / len(t):.0%}) form the"
+                " longest stretch where every input is known, less than the"
+                f" {MIN_USED_FRACTION:.0%} rczone uses without asking (rczone.calibrate.MIN_USED_FRACTION):"
+                " fill the inputs' gaps, hold a missing input constant (--const), or select the stretch"
+                " with the column map's [time] start and end"
             )
         t, u, m, y = t[sl], u[sl], m[sl], y[sl]
     elif stretch != "all":
@@ -248,6 +262,12 @@ class Calibration(Result):
             f"open-loop RMSE {self.open_loop.rmse_K:.3f} K, max {self.open_loop.max_abs_K:.3f} K;"
             f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K; {r.n_evals} evaluations"
         )
+        stretch = self.model.provenance.get("stretch") or {}
+        if stretch.get("samples", 0) < stretch.get("of", 0):
+            lines.append(
+                f"[yellow]note:[/] fitted on {stretch['samples']} of {stretch['of']} samples"
+                f" ({stretch['fraction']:.0%}), the longest stretch where every input is known"
+            )
         per_output = self.output_errors()
         if len(per_output) > 1:
             lines.append(
@@ -277,6 +297,7 @@ class Calibration(Result):
         payload.update(
             data=self.data_label,
             model=self.model_label,
+            data_used=dict(self.model.provenance.get("stretch") or {}),
             open_loop_rmse_K=self.open_loop.rmse_K,
             open_loop_max_error_K=self.open_loop.max_abs_K,
             outputs={
@@ -359,6 +380,7 @@ def calibrate(
     stretch = {
         "samples": int(data.n_samples),
         "of": len(frame),
+        "fraction": data.n_samples / max(len(frame), 1),
         "start_s": float(data.t[0]),
         "end_s": float(data.t[-1]),
     }

@@ -44,6 +44,7 @@ import json
 import math
 import os
 import re
+import stat
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 from functools import lru_cache
@@ -51,7 +52,7 @@ from pathlib import Path
 
 from rczone.errors import DataError, did_you_mean
 from rczone.estimation.methods import METHODS as REGISTERED_METHODS
-from rczone.textfiles import read_toml
+from rczone.textfiles import nfkc, read_toml, regular_file
 
 MAX_TASKS = 200_000
 """Most calibrations (zones x methods) one manifest may ask for."""
@@ -126,11 +127,14 @@ def file_digest(path: str) -> str:
         st = os.stat(path)
     except (OSError, ValueError):
         return "absent"
-    return _digest(path, st.st_size, st.st_mtime_ns)
+    if not stat.S_ISREG(st.st_mode):  # a pipe or a device is never opened (it could wait forever)
+        return "not a regular file"
+    # size, times and inode: a file edited in any way (even with its size and mtime restored) is read again
+    return _digest(path, st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
 
 
 @lru_cache(maxsize=4096)
-def _digest(path: str, size: int, mtime_ns: int) -> str:  # size, mtime: a changed file is read again
+def _digest(path: str, size: int, mtime_ns: int, ctime_ns: int, inode: int) -> str:
     h = hashlib.sha256()
     try:
         with open(path, "rb") as fh:
@@ -195,6 +199,10 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
         )
     if not isinstance(out["diagnose"], bool):
         raise _err(where, f"diagnose must be true or false, got {out['diagnose']!r}")
+    if isinstance(out["free"], list):
+        out["free"] = nfkc(out["free"])  # names in one Unicode form (as model files)
+    if isinstance(out["constants"], dict):
+        out["constants"] = {nfkc(k): v for k, v in out["constants"].items()}
     free = out["free"]
     if free is not None and (not isinstance(free, list) or not all(isinstance(x, str) for x in free)):
         raise _err(where, f"free must be a list of parameter names, got {free!r}")
@@ -208,7 +216,22 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
     if out["columns"] is not None:
         _text(out["columns"], "columns", where)
     out["model"] = _model(out["model"], folder, where)
+    if const:
+        spec = str(out["model"])
+        problem = _constants_problem(
+            spec, file_digest(spec) if Path(spec).is_absolute() else "", tuple(sorted(const))
+        )
+        if problem:
+            raise _err(where, problem)
     return out
+
+
+def _resolve(path: Path, what: str, where: str) -> Path:
+    """``path`` with its links resolved; a link loop is one line (pathlib raises RuntimeError)."""
+    try:
+        return path.resolve()
+    except (RuntimeError, OSError) as exc:
+        raise _err(where, f"{what} {str(path)!r} cannot be resolved: a symbolic link loop? ({exc})") from None
 
 
 def _text(value: object, what: str, where: str) -> str:
@@ -221,9 +244,13 @@ def _model(spec: object, folder: Path, where: str) -> str:
     """A built-in model name, or a model file resolved against the manifest's folder."""
     spec = _text(spec, "model", where)
     if Path(spec).suffix.lower() in MODEL_FILE_SUFFIXES:
-        path = (folder / spec).resolve()
-        if not path.is_file():
-            raise _err(where, f"model file {spec!r} does not exist (looked for {str(path)!r})")
+        path = _resolve(folder / spec, "model file", where)
+        try:
+            regular_file(path, "model file")
+        except FileNotFoundError:
+            raise _err(where, f"model file {spec!r} does not exist (looked for {str(path)!r})") from None
+        except DataError as exc:
+            raise _err(where, str(exc)) from None
         spec = str(path)
     problem = _model_problem(spec, file_digest(spec) if Path(spec).is_absolute() else "")
     if problem:
@@ -239,6 +266,19 @@ def _model_problem(spec: str, digest: str) -> str:  # digest: an edited model fi
 
     try:
         load_model(spec)
+    except RczoneError as exc:
+        return str(exc)
+    return ""
+
+
+@lru_cache(maxsize=256)
+def _constants_problem(spec: str, digest: str, names: tuple[str, ...]) -> str:
+    """Why the constants ``names`` do not fit the model ``spec`` ("" if they do): each must be an input."""
+    from rczone.errors import RczoneError
+    from rczone.models import load_model
+
+    try:
+        load_model(spec).check_constants(dict.fromkeys(names, 0.0))
     except RczoneError as exc:
         return str(exc)
     return ""
@@ -302,7 +342,7 @@ def _data_path(folder: Path, data: str) -> str:
     """A data file relative to the manifest's folder, or a built-in data set name (A, B, C)."""
     from rczone import datasets
 
-    p = Path(data) if Path(data).is_absolute() else (folder / data).resolve()
+    p = Path(data) if Path(data).is_absolute() else _resolve(folder / data, "data file", str(folder))
     return data if not p.exists() and data in datasets.names() else str(p)
 
 
@@ -354,7 +394,7 @@ def parse_manifest(doc: Mapping, path: Path) -> Manifest:
             source = (
                 "file",
                 _data_path(folder, _text(z["data"], "data", f"{w} ({zid})")),
-                str((folder / str(cols)).resolve()) if cols else None,
+                str(_resolve(folder / str(cols), "column map", f"{w} ({zid})")) if cols else None,
             )
         else:
             source = _virtual(z["virtual"], f"{w} ({zid})")
@@ -381,6 +421,8 @@ def parse_manifest(doc: Mapping, path: Path) -> Manifest:
 def read_manifest(path: str | Path) -> Manifest:
     """Read and check a manifest file."""
     path = Path(path)
-    if not path.exists():
-        raise DataError(f"manifest {str(path)!r} does not exist")
-    return parse_manifest(read_toml(path, "manifest"), path)
+    try:
+        doc = read_toml(path, "manifest")
+    except FileNotFoundError:
+        raise DataError(f"manifest {str(path)!r} does not exist") from None
+    return parse_manifest(doc, path)

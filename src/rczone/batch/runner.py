@@ -22,6 +22,7 @@ from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, Future, ProcessP
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from rczone.atomic import immediate
 from rczone.batch.manifest import Manifest, Task
 from rczone.batch.store import ResultStore
 from rczone.batch.summary import write_summary
@@ -257,12 +258,12 @@ def run_batch(
             "a Dask scheduler needs dask.distributed: pip install 'rczone[dask]'"
             " (or run without --scheduler to use local processes)"
         )
-    workers = workers or os.cpu_count() or 1
+    workers = (os.cpu_count() or 1) if workers is None else workers
     if workers < 1:
         raise RczoneError(f"workers must be >= 1, got {workers}")
     store = ResultStore(out)
     t0 = time.perf_counter()
-    with store.locked():
+    with store.locked(), immediate():  # results stored as they arrive, whatever the caller stages
         fingerprints = {t.key: t.fingerprint for t in manifest.tasks}
         done = store.done(manifest.tasks)
         todo = [t for t in manifest.tasks if t.key not in done]

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 
 from rczone.atomic import write_json_in
 from rczone.report import Report
+from rczone.report.html import ReportFigure as Figure
 
 VERDICTS = ("identifiable", "weak", "not identifiable")
 

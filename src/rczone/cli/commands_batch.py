@@ -35,6 +35,10 @@ def fit_many(
     from rczone.batch import read_manifest, run_batch
     from rczone.cli.console import console, escape
 
+    if workers is not None and workers < 1:
+        from rczone.errors import ParameterError
+
+        raise ParameterError(f"--workers must be at least 1, got {workers}")
     m = read_manifest(manifest)
     folder = out or manifest.with_suffix("").with_name(manifest.stem + "-results")
     err = console(stderr=True)
@@ -72,9 +76,13 @@ def fit_many(
             on_start=on_start,
             title=f"rczone fit-many {manifest.name}",
         )
-    finally:
+    except BaseException:
         if state.get("started"):
+            progress.live.transient = True  # the bar goes: the error is the one line left
             progress.stop()
+        raise
+    if state.get("started"):
+        progress.stop()
     summary = run.summary
     say = console()
     say.print(

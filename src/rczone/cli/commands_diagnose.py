@@ -70,8 +70,10 @@ def diagnose(
 
     from rich.console import Console
 
+    from rczone.cli.common import check_seed
     from rczone.diagnostics import diagnose as run
 
+    check_seed(seed)
     zm = model(model_name)
     frame = read_frame(data, column_map, zm)
     label = data_label(data)
@@ -364,7 +366,8 @@ def design(
     try:
         res = design_test(zm, free_list, hours * 3600.0, limits, conditions=conds, ti0=ti0, progress=report)
     finally:
-        bar.stop()
+        if task is not None:  # a bar never shown leaves no blank line before the error
+            bar.stop()
     units_shown = {k: unit[k] for k in (*res.actuated, out_name)}
     res = dataclasses.replace(res, model_label=zm.label, start=when, display_units=units_shown)
     res.to_csv(out, when, {a: unit[a] for a in res.actuated})

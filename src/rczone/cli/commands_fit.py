@@ -9,6 +9,7 @@ import typer
 
 from rczone.cli.common import (
     MODEL_HELP,
+    check_seed,
     constants,
     data_label,
     esc,
@@ -118,6 +119,7 @@ def fit(
 
     from rczone.workflow import FitSettings, fit_and_check
 
+    check_seed(seed)
     zm = model(model_name)
     n_starts = _starts(starts)
     frame = read_frame(data, column_map, zm)
@@ -227,6 +229,11 @@ def predict(
         raise ParameterError(f"--steps must be a positive integer, got {steps}")
     zm = model(model_file)
     frame = read_frame(data, column_map, zm)
+    if steps is not None and steps >= len(frame):
+        raise ParameterError(
+            f"--steps {steps} is not less than the {len(frame)} samples of {data_label(data)}: no sample would"
+            " be predicted; give fewer steps"
+        )
     label = data_label(data)
     pred = prediction(zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label)
     console = out_console(json_out)

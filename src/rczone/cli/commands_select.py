@@ -89,8 +89,11 @@ def select(
     import dataclasses
 
     from rczone.cli.commands_fit import _save, _starts
+    from rczone.cli.common import check_seed
     from rczone.cli.console import console as make_console
     from rczone.errors import ParameterError
+
+    check_seed(seed)
     from rczone.selection.compare import family_candidates, select_models
 
     n_starts = _starts(starts)

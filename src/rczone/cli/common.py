@@ -5,8 +5,7 @@ Everything heavy is imported inside the functions, so that ``rczone --help`` sta
 
 from __future__ import annotations
 
-import json
-import sys
+import math
 from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -64,14 +63,26 @@ def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None 
     return read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
 
 
+def check_seed(value: int) -> int:
+    """A ``--seed``: an integer from 0 to 2**63 - 1 (NumPy's generators take no negative seed)."""
+    from rczone.errors import ParameterError
+
+    if not 0 <= value < 2**63:
+        raise ParameterError(f"--seed must be an integer from 0 to 2**63 - 1, got {value}")
+    return value
+
+
 def split(text: str | None) -> list[str] | None:
     """``"a, b,c"`` -> ``["a", "b", "c"]``; None or empty -> None."""
-    return [s.strip() for s in text.split(",") if s.strip()] if text else None
+    from rczone.textfiles import nfkc
+
+    return [nfkc(s.strip()) for s in text.split(",") if s.strip()] if text else None
 
 
 def constants(items: Iterable[str] | None) -> dict[str, float] | None:
     """``["Q=50", "Ts=20"]`` -> ``{"Q": 50.0, "Ts": 20.0}`` (SI units); None when none given."""
     from rczone.errors import ParameterError
+    from rczone.textfiles import nfkc
 
     out: dict[str, float] = {}
     for item in items or ():
@@ -79,9 +90,14 @@ def constants(items: Iterable[str] | None) -> dict[str, float] | None:
         try:
             if not sep or not name.strip():
                 raise ValueError
-            out[name.strip()] = float(value)
+            v = float(value)
+            if not math.isfinite(v):
+                raise ValueError
+            out[nfkc(name.strip())] = v
         except ValueError:
-            raise ParameterError(f"--const must be NAME=VALUE in SI units, e.g. Q=50; got {item!r}") from None
+            raise ParameterError(
+                f"--const must be NAME=VALUE with a finite number in SI units, e.g. Q=50; got {item!r}"
+            ) from None
     return out or None
 
 
@@ -99,11 +115,10 @@ def write_json(json_out: Path | None, payload: Any) -> None:
     """Write ``payload`` to ``json_out`` atomically, or to stdout for ``-``."""
     if json_out is None:
         return
-    from rczone.atomic import _jsonable, write_json_atomic
+    from rczone.atomic import json_text, write_json_atomic, write_stdout
 
     if str(json_out) == "-":
-        sys.stdout.write(json.dumps(_jsonable(payload), indent=2, allow_nan=False) + "\n")
-        sys.stdout.flush()
+        write_stdout(json_text(payload))
     else:
         write_json_atomic(json_out, payload)
 

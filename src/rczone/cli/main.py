@@ -72,6 +72,11 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     typer.echo(f"warning: {one_line(message)}", err=True)
 
 
+def _writes_outputs(exc: BaseException) -> bool:
+    """An exit that ends a command with its outputs written (see the exit codes of :func:`main`)."""
+    return isinstance(exc, typer.Exit) and exc.exit_code in (0, 3, 4, 5)
+
+
 def _error(message: object) -> int:
     typer.echo(f"error: {one_line(message)}", err=True)
     return 2
@@ -97,9 +102,13 @@ def main(argv: list[str] | None = None) -> int:
     no traceback), 3 a fit flagged untrustworthy, 4 ``fit-many`` stored failed zones, 5
     ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
     """
+    from rczone.atomic import all_or_nothing
+
     argv = sys.argv[1:] if argv is None else list(argv)
     try:
-        with warnings.catch_warnings(), _notice_for(argv):
+        # every output of a command appears only if it succeeds (exit 0, or 3..5 that still write
+        # them): a failing --report leaves no --json behind (fit-many keeps its results as they come)
+        with warnings.catch_warnings(), _notice_for(argv), all_or_nothing(_writes_outputs):
             warnings.showwarning = _show_warning
             code = app(args=argv, standalone_mode=False)  # returns typer.Exit's code in this mode
     except RczoneError as exc:
@@ -118,6 +127,11 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         typer.echo("aborted", err=True)
         return 130
+    except MemoryError:
+        return _error(
+            "out of memory: the input is too large for the memory this process may use"
+            " (see the size limits in docs/data.md); use a shorter record or a coarser log"
+        )
     except typer.Exit as exc:
         return exc.exit_code
     except Exception as exc:  # usage errors (typer's vendored click) carry their own exit code

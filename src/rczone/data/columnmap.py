@@ -75,7 +75,7 @@ from pathlib import Path
 
 from rczone.data.units import DEFAULT_AIR_DENSITY, SI_UNITS, canonical_unit
 from rczone.errors import DataError, did_you_mean
-from rczone.textfiles import read_toml
+from rczone.textfiles import nfkc, read_toml
 
 KNOWN_CHANNELS = {
     "Ti": ("temperature", "room"),
@@ -208,7 +208,7 @@ def read_column_map(path: str | Path, signals: Mapping[str, str] | None = None) 
         For invalid TOML or any invalid setting (the message names the key).
     """
     path = Path(path)
-    return parse_column_map(read_toml(path, "column map"), source=str(path), signals=signals)
+    return parse_column_map(nfkc(read_toml(path, "column map")), source=str(path), signals=signals)
 
 
 def _check_keys(table: Mapping, allowed: Sequence[str], where: str, source: str) -> None:
@@ -264,7 +264,27 @@ def _instant(time: Mapping, key: str, tz: str, source: str) -> float | None:
         ) from None
     if ts is pd.NaT:
         raise DataError(f"column map {source}: [time] {key} = {text!r} is not a date")
-    ts = ts.tz_localize(tz) if ts.tzinfo is None else ts
+    if ts.tzinfo is None:
+        try:
+            ts = ts.tz_localize(tz)
+        except (ValueError, OverflowError) as exc:  # pytz/pandas: NonExistentTimeError, AmbiguousTimeError
+            what = "does not exist" if "nonexistent" in str(exc).lower() else "is ambiguous"
+            why = "clocks skip that hour" if what == "does not exist" else "that hour occurs twice"
+            raise DataError(
+                f"column map {source}: [time] {key} = {text!r} {what} in {tz} ({why} at a daylight-saving"
+                " change); give a time outside the change, or with its UTC offset (e.g."
+                ' "2014-11-02T01:30-05:00")'
+            ) from None
+    lo, hi = pd.Timestamp.min.tz_localize("UTC"), pd.Timestamp.max.tz_localize("UTC")
+    try:
+        inside = lo <= ts <= hi
+    except (OverflowError, ValueError):
+        inside = False
+    if not inside:
+        raise DataError(
+            f"column map {source}: [time] {key} = {text!r} is outside the dates rczone handles"
+            f" ({lo:%Y-%m-%d} to {hi:%Y-%m-%d}, nanosecond time stamps)"
+        )
     return float(ts.value) / 1e9
 
 

@@ -31,6 +31,8 @@ the column, row or key and what was expected -- never a traceback from pandas.
 
 from __future__ import annotations
 
+import gzip
+import io
 import warnings
 import zlib
 from collections.abc import Mapping, Sequence
@@ -52,6 +54,42 @@ CSV_SUFFIXES = (".csv", ".csv.gz", ".txt", ".tsv")
 LONG_STEP = 3 * 3600.0
 """A median time step longer than this (s) is reported: a room's dynamics are hours."""
 PARQUET_SUFFIXES = (".parquet", ".pq")
+MAX_DATA_BYTES = 100_000_000
+"""Largest trend log read (bytes, after decompression for ``.csv.gz``): a year of 1-minute samples
+of a dozen columns is about 60 MB. A larger file (or a gzip bomb) is refused before it is parsed."""
+MAX_ROWS = 2_000_000
+"""Most rows of a trend log (a year at 15-second samples); the same as the resampled grid's limit
+(:data:`rczone.data.resample.MAX_SAMPLES`)."""
+
+
+def _csv_source(path: Path) -> Path | io.BytesIO:
+    """A CSV file as pandas reads it: the file, or a ``.gz`` decompressed here within the limit."""
+    from rczone.textfiles import _too_large
+
+    if not path.name.lower().endswith(".gz"):
+        return path
+    out = io.BytesIO()
+    with gzip.open(path, "rb") as fh:
+        while block := fh.read(1 << 20):
+            out.write(block)
+            if out.tell() > MAX_DATA_BYTES:
+                raise _too_large(
+                    path,
+                    "data file (decompressed)",
+                    out.tell(),
+                    MAX_DATA_BYTES,
+                    "rczone.data.load.MAX_DATA_BYTES",
+                )
+    out.seek(0)
+    return out
+
+
+def _check_rows(n: int, path: Path) -> None:
+    if n > MAX_ROWS:
+        raise DataError(
+            f"{path}: {n:,} rows, more than the limit of {MAX_ROWS:,} (rczone.data.load.MAX_ROWS);"
+            " use a shorter record (the column map's [time] start and end) or a coarser log"
+        )
 
 
 def _first_line(exc: BaseException) -> str:
@@ -83,22 +121,33 @@ def _check_header(frame: pd.DataFrame, header: list[str], path: Path, sep: str) 
 
 def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFrame:
     """Read a CSV or Parquet trend log into a DataFrame, turning reader failures into DataError."""
+    from rczone.textfiles import _too_large, nfkc, regular_file
+
     path = Path(path)
     name = path.name.lower()
-    if not path.exists():
-        raise FileNotFoundError(2, "No such file", str(path))
-    if path.is_dir():
-        raise DataError(f"data file {str(path)!r} is a folder, not a file")
+    st = regular_file(path, "data file")  # before opening: a pipe or /dev/zero is one line, not a hang
+    if st.st_size > MAX_DATA_BYTES:
+        raise _too_large(path, "data file", st.st_size, MAX_DATA_BYTES, "rczone.data.load.MAX_DATA_BYTES")
     try:
         if name.endswith(PARQUET_SUFFIXES):
+            import pyarrow.parquet as pq
+
+            _check_rows(pq.ParquetFile(path).metadata.num_rows, path)
             frame = pd.read_parquet(path)
-            _check_header(frame, [str(c) for c in frame.columns], path, ",")
+            frame.columns = [nfkc(str(c)) for c in frame.columns]  # names in one Unicode form
+            _check_header(frame, list(frame.columns), path, ",")
             return frame
         if name.endswith(CSV_SUFFIXES):
             sep = "\t" if name.endswith(".tsv") else ","
-            header = pd.read_csv(path, sep=sep, header=None, nrows=1, dtype=str, keep_default_na=False)
-            frame = pd.read_csv(path, sep=sep, na_values=list(na_values) or None)
-            _check_header(frame, [str(c) for c in header.iloc[0]], path, sep)
+            source = _csv_source(path)
+            header = pd.read_csv(source, sep=sep, header=None, nrows=1, dtype=str, keep_default_na=False)
+            if isinstance(source, io.BytesIO):
+                source.seek(0)
+            frame = pd.read_csv(source, sep=sep, na_values=list(na_values) or None)
+            _check_rows(len(frame), path)
+            names = [nfkc(str(c)) for c in header.iloc[0]]  # names in one Unicode form
+            _check_header(frame, names, path, sep)
+            frame.columns = [nfkc(str(c)) for c in frame.columns]
             return frame
     except DataError:
         raise
@@ -107,7 +156,7 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
             f"{path}: cannot read the table: not UTF-8 text (byte 0x{exc.object[exc.start]:02x});"
             " save it as UTF-8"
         ) from None
-    except (EOFError, zlib.error) as exc:
+    except (EOFError, zlib.error, gzip.BadGzipFile) as exc:
         raise DataError(
             f"{path}: cannot read the table: the file ends early or is damaged ({_first_line(exc)})"
         ) from None

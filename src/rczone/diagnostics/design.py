@@ -58,6 +58,15 @@ DEFAULT_LEVELS = 5
 DEFAULT_FLOW_LEVELS = 3
 
 
+MIN_HOLD_S = 60.0
+"""Shortest hold of a command (s): a BMS holds a set point at least a minute."""
+MAX_SEGMENTS = 400
+"""Most held commands in one test (duration / hold), a week at 30-minute holds; each is chosen by
+searching the grid, so the search time grows with their number (a few seconds per hundred)."""
+MAX_DURATION_S = 7 * 24 * 3600.0
+"""Longest test (s): a week."""
+
+
 @dataclass(frozen=True)
 class DesignLimits:
     """What the test may do.
@@ -99,9 +108,12 @@ class DesignLimits:
         if not (
             isinstance(self.min_hold_s, (int, float))
             and math.isfinite(self.min_hold_s)
-            and self.min_hold_s > 0
+            and self.min_hold_s >= MIN_HOLD_S
         ):
-            raise ParameterError(f"min_hold_s must be > 0, got {self.min_hold_s!r}")
+            raise ParameterError(
+                f"min_hold_s (the shortest hold) must be at least {MIN_HOLD_S:g} s (one minute,"
+                f" rczone.diagnostics.design.MIN_HOLD_S) and finite, got {self.min_hold_s!r} s"
+            )
         for k, n in dict(self.levels).items():
             if k not in ranges:
                 raise ParameterError(
@@ -420,6 +432,17 @@ def design_test(
     conditions = _check_request(zm, free, limits, dict(conditions or {}))
     if not (math.isfinite(duration_s) and duration_s >= limits.min_hold_s):
         raise ParameterError("the test must last at least one minimum hold time")
+    if duration_s > MAX_DURATION_S:
+        raise ParameterError(
+            f"the test would last {duration_s / 3600:.4g} h, more than the limit of {MAX_DURATION_S / 3600:g} h"
+            " (rczone.diagnostics.design.MAX_DURATION_S); design a shorter test and repeat it"
+        )
+    if duration_s // limits.min_hold_s > MAX_SEGMENTS:
+        raise ParameterError(
+            f"the test would hold {duration_s // limits.min_hold_s:,.0f} commands, more than the limit of"
+            f" {MAX_SEGMENTS} (rczone.diagnostics.design.MAX_SEGMENTS); use a longer minimum hold or a"
+            " shorter test"
+        )
     lo, hi = limits.band
     ti0 = 0.5 * (lo + hi) if ti0 is None else float(ti0)
     if not lo <= ti0 <= hi:

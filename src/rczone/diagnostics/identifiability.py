@@ -497,6 +497,12 @@ def _indicator_frame(zm: ZoneModel, frame: pd.DataFrame, data: Dataset) -> pd.Da
     return out
 
 
+SIGMA_RANGE_K = (1e-6, 100.0)
+"""Error levels (``sigma_K``, and ``model_error_K`` when not 0) accepted, K: from a microkelvin
+(far below any sensor's resolution) to 100 K (far above any room's range). Outside, the weights
+``1/sigma^2`` overflow or vanish and the verdicts mean nothing."""
+
+
 def _check_settings(sigma_K: float, correlation_time_s: float, model_error_K: float, mode: str) -> None:
     if not (sigma_K > 0 and correlation_time_s > 0 and model_error_K >= 0) or not all(
         map(math.isfinite, (sigma_K, correlation_time_s, model_error_K))
@@ -505,6 +511,15 @@ def _check_settings(sigma_K: float, correlation_time_s: float, model_error_K: fl
             f"sigma_K and correlation_time_s must be > 0 and model_error_K >= 0 (finite), got {sigma_K},"
             f" {correlation_time_s}, {model_error_K}"
         )
+    lo, hi = SIGMA_RANGE_K
+    for name, v in (("sigma", sigma_K), ("model error", model_error_K)):
+        if v != 0 and not lo <= v <= hi:
+            raise ParameterError(
+                f"the {name} must be from {lo:g} to {hi:g} K (rczone.diagnostics.identifiability.SIGMA_RANGE_K),"
+                f" got {v:g} K"
+            )
+    if not 1.0 <= correlation_time_s <= 1e7:
+        raise ParameterError(f"correlation_time_s must be from 1 s to 1e7 s, got {correlation_time_s:g}")
     if mode not in OPERATING_POINTS:
         raise ParameterError(
             f"operating_point must be one of {', '.join(OPERATING_POINTS)}, got {mode!r}; "

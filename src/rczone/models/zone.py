@@ -35,7 +35,14 @@ import pandas as pd
 
 from rczone import __version__
 from rczone.atomic import write_json_atomic
-from rczone.errors import DataError, InputShapeError, ModelFileError, RczoneError, did_you_mean
+from rczone.errors import (
+    DataError,
+    InputShapeError,
+    ModelFileError,
+    ParameterError,
+    RczoneError,
+    did_you_mean,
+)
 from rczone.network import BilinearStateSpace, LinearStateSpace, RCNetwork
 from rczone.network.serialize import network_from_dict, network_to_dict
 from rczone.simulation import SimulationResult, foh, simulate, zoh
@@ -229,7 +236,7 @@ class ZoneModel:
         y : ndarray, shape (N, ny)
         """
         net = self.network
-        constants = dict(constants or {})
+        constants = self.check_constants(constants)
         if "time" not in frame:
             raise DataError(
                 "the data have no 'time' column (seconds); " + did_you_mean("time", frame.columns)
@@ -282,11 +289,32 @@ class ZoneModel:
         optional = {*self.inputs.defaults, *self.inputs.mean_of}
         return (*net.outputs, *(n for n in inputs if n not in optional))
 
+    def check_constants(self, constants: Mapping[str, float] | None) -> dict[str, float]:
+        """``constants`` if each names an input of the model; else one line naming the first that does not.
+
+        A constant of an unknown name (a typo) or of an output would otherwise be ignored in silence.
+        """
+        constants = dict(constants or {})
+        inputs = (*self.network.input_names, *self.network.flow_names)
+        for name in constants:
+            if name in inputs:
+                continue
+            if name in self.network.outputs or name in self.network.state_names:
+                raise ParameterError(
+                    f"cannot hold {name!r} constant: it is a node or output of the model {self.label!r};"
+                    f" constants are inputs ({', '.join(inputs) or 'none'})"
+                )
+            raise ParameterError(
+                f"constant {name!r} is not an input of the model {self.label!r}; "
+                + did_you_mean(name, inputs)
+            )
+        return constants
+
     def constants_used(
         self, frame: pd.DataFrame, constants: Mapping[str, float] | None = None
     ) -> dict[str, float]:
         """The inputs :meth:`signals` holds constant on ``frame`` (given or defaults), with their values."""
-        constants = dict(constants or {})
+        constants = self.check_constants(constants)
         out = {}
         for name in (*self.network.input_names, *self.network.flow_names):
             if name in constants:
@@ -499,12 +527,13 @@ def read_model_document(path: Path, kind: str) -> object:
     The checks of :mod:`rczone.textfiles` (a folder in place of the file, not UTF-8, too large,
     nested too deeply, not valid TOML or JSON) become :class:`ModelFileError`.
     """
-    from rczone.textfiles import read_json, read_toml
+    from rczone.textfiles import nfkc, read_json, read_toml
 
-    if not path.exists():
-        raise ModelFileError(f"model file {str(path)!r} does not exist")
     try:
-        return read_toml(path, "model file") if kind == "TOML" else read_json(path, "model file")
+        # names in one Unicode form (NFKC), as Python reads the ties' identifiers
+        return nfkc(read_toml(path, "model file") if kind == "TOML" else read_json(path, "model file"))
+    except FileNotFoundError:
+        raise ModelFileError(f"model file {str(path)!r} does not exist") from None
     except ModelFileError:
         raise
     except DataError as exc:

@@ -185,6 +185,14 @@ class ConductanceForm:
     output_state: tuple[int, ...]
 
 
+RESERVED_NAMES = frozenset({"time"})
+"""Names no node or signal may take: ``time`` is the data's time-stamp column."""
+MAX_STATES = 200
+"""Most capacitive nodes (states) of a network: a zone's models have 1 to 15, the virtual
+building's emulator 152. Simulation, filtering and fitting grow with the cube of the states; a
+thousand-node chain would run for hours."""
+
+
 @dataclass(frozen=True)
 class RCNetwork:
     """A frozen RC-network description from which state spaces are built.
@@ -326,13 +334,33 @@ class RCNetwork:
                     f"network {self.name!r}: {nm!r} is not a usable node or signal name"
                     " (a non-empty string without control characters)"
                 )
+        for nm in signals:
+            if nm in RESERVED_NAMES:
+                raise NetworkError(
+                    f"network {self.name!r}: {nm!r} is reserved for the data's time stamps; rename the node or"
+                    " signal (rczone.network.network.RESERVED_NAMES)"
+                )
         seen: set[str] = set()
         for nm in (*node_names, *self.boundaries):
             if nm in seen:
                 raise NetworkError(f"network {self.name!r}: name {nm!r} is declared twice")
             seen.add(nm)
+        if len(set(self.outputs)) < len(self.outputs):
+            dup = next(o for o in self.outputs if self.outputs.count(o) > 1)
+            raise NetworkError(f"network {self.name!r}: output {dup!r} is listed twice")
+        for sa in self.supply_air:
+            if sa.temperature == sa.flow:
+                raise NetworkError(
+                    f"network {self.name!r}: supply air at {sa.node!r} uses {sa.flow!r} as both its flow and"
+                    " its temperature; give them different names"
+                )
         if not self.state_names:
             raise NetworkError(f"network {self.name!r} has no capacitive node, so no states")
+        if len(self.state_names) > MAX_STATES:
+            raise NetworkError(
+                f"network {self.name!r} has {len(self.state_names)} capacitive nodes (states), more than the"
+                f" limit of {MAX_STATES} (rczone.network.network.MAX_STATES); lump thin layers into fewer nodes"
+            )
         known = set(node_names) | set(self.boundaries)
         params = self.parameters
 

@@ -322,15 +322,23 @@ def proportional_base(params: Mapping[str, Parameter], name: str) -> tuple[float
     expressions.
     """
 
+    memo: dict[str, tuple[float, str | None] | None] = {}
+
+    def of(name: str) -> tuple[float, str | None] | None:
+        # once per parameter: a chain of ties that each use the previous one twice (S1 = S0*S0,
+        # S2 = S1*S1, ...) would otherwise be walked 2**n times
+        if name not in memo:
+            p = params[name]
+            memo[name] = walk(ast.parse(p.expr, mode="eval").body) if p.is_tied else (1.0, name)
+        return memo[name]
+
     def walk(node: ast.AST) -> tuple[float, str | None] | None:
-        # the expressions were validated (and so bounded) when the parameters were declared
+        # the expressions were validated (and so bounded, and their chains by MAX_TIE_CHAIN) when
+        # the parameters were declared
         if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
             return float(node.value), None
         if isinstance(node, ast.Name):
-            p = params.get(node.id)
-            if p is None:
-                return None
-            return walk(ast.parse(p.expr, mode="eval").body) if p.is_tied else (1.0, node.id)
+            return of(node.id) if node.id in params else None
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
             inner = walk(node.operand)
             if inner is None:
@@ -347,39 +355,72 @@ def proportional_base(params: Mapping[str, Parameter], name: str) -> tuple[float
             return a[0] / b[0], a[1]
         return None
 
-    p = params[name]
-    return walk(ast.parse(p.expr, mode="eval").body) if p.is_tied else (1.0, name)
+    return of(name)
+
+
+MAX_TIE_CHAIN = 32
+"""Longest chain of ties (a tie of a tie of ...) accepted; real models chain two or three."""
 
 
 def check_declarations(params: Mapping[str, Parameter]) -> tuple[str, ...]:
     """Validate tied expressions and return an evaluation order of the tied parameters.
 
-    Raises :class:`ParameterError` for an expression naming an undeclared parameter or
-    for a cycle of ties.
+    Raises :class:`ParameterError` for an expression naming an undeclared parameter, for a
+    cycle of ties, or for a chain of ties longer than :data:`MAX_TIE_CHAIN`. No recursion: a
+    hostile file's chain of thousands of ties is one line, not a ``RecursionError``.
     """
     order: list[str] = []
     state: dict[str, int] = {}
+    depth: dict[str, int] = {}
 
-    def visit(name: str, chain: tuple[str, ...]) -> None:
-        if state.get(name) == 2:
-            return
-        if state.get(name) == 1:
-            raise ParameterError("tied parameters form a cycle: " + " -> ".join((*chain, name)))
-        state[name] = 1
+    def deps(name: str) -> tuple[str, ...]:
         p = params[name]
-        if p.expr is not None:
-            for dep in expression_names(p.expr):
-                if dep not in params:
-                    raise ParameterError(
-                        f"parameter {name!r} = {p.expr!r} names unknown parameter {dep!r}; "
-                        + did_you_mean(dep, params)
-                    )
-                visit(dep, (*chain, name))
-            order.append(name)
-        state[name] = 2
+        if p.expr is None:
+            return ()
+        out = expression_names(p.expr)
+        for dep in out:
+            if dep not in params:
+                raise ParameterError(
+                    f"parameter {name!r} = {p.expr!r} names unknown parameter {dep!r}; "
+                    + did_you_mean(dep, params)
+                )
+        return out
 
-    for name in params:
-        visit(name, ())
+    for root in params:
+        if state.get(root) == 2:
+            continue
+        stack: list[tuple[str, int]] = [(root, 0)]
+        state[root] = 1
+        while stack:
+            name, i = stack[-1]
+            ds = deps(name)
+            if i < len(ds):
+                stack[-1] = (name, i + 1)
+                dep = ds[i]
+                if state.get(dep) == 1:
+                    chain = [n for n, _ in stack]
+                    chain = chain[chain.index(dep) :]
+                    raise ParameterError("tied parameters form a cycle: " + " -> ".join((*chain, dep)))
+                if state.get(dep) != 2:
+                    if len(stack) > MAX_TIE_CHAIN:
+                        raise ParameterError(
+                            f"parameter {root!r} is a chain of more than {MAX_TIE_CHAIN} ties"
+                            " (rczone.network.parameters.MAX_TIE_CHAIN); tie parameters to base ones directly"
+                        )
+                    state[dep] = 1
+                    stack.append((dep, 0))
+                continue
+            stack.pop()
+            d = 1 + max((depth[x] for x in ds), default=-1) if params[name].expr is not None else 0
+            if d > MAX_TIE_CHAIN:
+                raise ParameterError(
+                    f"parameter {name!r} is a chain of more than {MAX_TIE_CHAIN} ties"
+                    " (rczone.network.parameters.MAX_TIE_CHAIN); tie parameters to base ones directly"
+                )
+            depth[name] = d
+            if params[name].expr is not None:
+                order.append(name)
+            state[name] = 2
     return tuple(order)
 
 

@@ -11,10 +11,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
-from matplotlib.figure import Figure
 
 from rczone.comparison import FrequencyComparison, TimeComparison
 from rczone.models.reduction import F_PER_K
+from rczone.report.html import ReportFigure as Figure
 
 if TYPE_CHECKING:  # pragma: no cover
     from rczone.estimation.innovations import ResidualAnalysis

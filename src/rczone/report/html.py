@@ -11,7 +11,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import matplotlib
 from matplotlib.figure import Figure
+from matplotlib.text import Text
 
 from rczone.atomic import write_bytes_in, write_text_in
 
@@ -27,6 +29,33 @@ figcaption{font-size:.9em;color:#555}.note{background:#f6f8fa;border-left:4px so
 .warn{background:#fff8e6;border-left:4px solid #d69e2e;padding:.6em 1em}
 .bad{color:#c53030;font-weight:600}.good{color:#2f855a;font-weight:600}
 """
+
+
+def plain_text(fig: Figure) -> Figure:
+    """Every text of ``fig`` printed as written: no mathtext, so a user's ``$`` in a zone, file,
+    model or node name is a dollar sign, not a formula that fails to parse (``a$\\frac{$b``).
+
+    rczone's own labels use no mathtext; this is the figures' counterpart of the escaping of user
+    strings for rich (:func:`rczone.cli.console.escape`) and for HTML (``html.escape``).
+    """
+    for text in fig.findobj(Text):
+        text.set_parse_math(False)
+    return fig
+
+
+class ReportFigure(Figure):
+    """The figures of rczone's reports: every text printed as written (:func:`plain_text`),
+    whenever the figure is laid out or drawn, so no user string is ever parsed as mathtext."""
+
+    def draw(self, renderer):
+        plain_text(self)
+        with matplotlib.rc_context({"text.parse_math": False}):
+            return super().draw(renderer)
+
+    def tight_layout(self, *args, **kwargs):
+        plain_text(self)
+        with matplotlib.rc_context({"text.parse_math": False}):
+            return super().tight_layout(*args, **kwargs)
 
 
 def file_stem(name: str) -> str:
@@ -80,7 +109,9 @@ class Report:
     def figure(self, name: str, fig: Figure, caption: str = "") -> None:
         """Embed a matplotlib figure; it is also written as ``<name>.png``."""
         buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+        plain_text(fig)
+        with matplotlib.rc_context({"text.parse_math": False}):  # tick labels made while drawing too
+            fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
         png = buf.getvalue()
         self.figures[file_stem(name)] = png
         b64 = base64.b64encode(png).decode("ascii")

@@ -5,10 +5,10 @@ from __future__ import annotations
 import html
 
 import numpy as np
-from matplotlib.figure import Figure
 
 from rczone.calibrate import Prediction
 from rczone.report.html import Report
+from rczone.report.html import ReportFigure as Figure
 
 
 def prediction_figure(pred: Prediction, title: str = "") -> Figure:

@@ -1,0 +1,241 @@
+"""Issue 25, the wrong successes: what was accepted in silence is now said, or refused with exit 2.
+
+Data dropped without a word, ``--steps`` past the data, names that collide with reserved columns or
+name nothing, two Unicode forms of one name, partial outputs on exit 2, and Ctrl-C.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rczone.cli.main import main
+from tests.unit.cli.test_hostile_tracebacks import model_text, one_line_exit_2, zone_frame
+
+
+@pytest.fixture
+def data(tmp_path: Path) -> Path:
+    zone_frame().to_csv(tmp_path / "z.csv", index=False)
+    return tmp_path / "z.csv"
+
+
+# ---- data silently dropped -------------------------------------------------------------------------
+
+
+def test_inputs_with_a_nan_every_50_rows_are_refused_naming_the_fraction(tmp_path, capsys):
+    frame = zone_frame(700)
+    frame.loc[frame.index % 50 == 25, "To"] = np.nan
+    frame.to_csv(tmp_path / "z.csv", index=False)
+    one_line_exit_2(
+        ["fit", str(tmp_path / "z.csv"), "--model", "TiTe", "--method", "ls", "--starts", "1"],
+        capsys,
+        r"only 49 of 700 samples \(7%\) .* less than the 50% .*MIN_USED_FRACTION",
+    )
+
+
+def test_a_fit_on_part_of_the_data_says_how_much_in_console_and_json(tmp_path, capsys):
+    frame = zone_frame(200)
+    frame.loc[frame.index < 40, "To"] = np.nan
+    frame.to_csv(tmp_path / "z.csv", index=False)
+    out = tmp_path / "fit.json"
+    code = main(
+        [
+            "fit",
+            str(tmp_path / "z.csv"),
+            "--model",
+            "TiTe",
+            "--method",
+            "ls",
+            "--starts",
+            "1",
+            "--json",
+            str(out),
+        ]
+    )
+    assert code in (0, 3)
+    assert "fitted on 160 of 200 samples (80%)" in capsys.readouterr().out
+    used = json.loads(out.read_text())["data_used"]
+    assert (used["samples"], used["of"]) == (160, 200) and used["fraction"] == pytest.approx(0.8)
+
+
+# ---- predict --steps --------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("steps", ["120", "1000000000"])
+def test_predict_steps_at_or_past_the_samples(tmp_path, data, capsys, steps):
+    from rczone.models import load_model
+
+    load_model("TiTe").with_values({}, {"sigma_v": 0.1}, method="ml").save(tmp_path / "m.json")
+    one_line_exit_2(
+        ["predict", str(tmp_path / "m.json"), str(data), "--steps", steps],
+        capsys,
+        r"--steps .* not less than the 120 samples",
+    )
+
+
+# ---- names ---------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("edit", "pattern"),
+    [
+        (lambda t: t.replace('"Te"', '"time"').replace("Te = ", "time = "), r"'time' is reserved"),
+        (
+            lambda t: t.replace('boundaries = ["To"]', 'boundaries = ["time"]').replace(
+                '"To", "Rea"', '"time", "Rea"'
+            ),
+            r"'time' is reserved",
+        ),
+        (lambda t: t.replace('outputs = ["Ti"]', 'outputs = ["Ti", "Ti"]'), r"output 'Ti' is listed twice"),
+        (lambda t: t + '\n[heat_inputs]\ntime = "Ti"\n', r"'time' is reserved"),
+        (
+            lambda t: t + '\n[[supply_air]]\nnode = "Ti"\nflow = "m"\ntemperature = "m"\n',
+            r"uses 'm' as both its flow and its temperature",
+        ),
+    ],
+    ids=["node", "boundary", "duplicate-output", "heat-input", "supply-is-flow"],
+)
+def test_reserved_and_colliding_names(tmp_path, data, capsys, edit, pattern):
+    (tmp_path / "m.toml").write_text(edit(model_text()))
+    one_line_exit_2(["diagnose", str(data), "--model", str(tmp_path / "m.toml")], capsys, pattern)
+
+
+@pytest.mark.parametrize(
+    ("const", "pattern"),
+    [("Qx=50", r"constant 'Qx' is not an input of the model"), ("Ti=20", r"cannot hold 'Ti' constant")],
+)
+def test_const_of_an_unknown_name_or_an_output(data, capsys, const, pattern):
+    one_line_exit_2(["diagnose", str(data), "--model", "TiTe", "--const", const], capsys, pattern)
+
+
+def test_manifest_constants_must_name_inputs(tmp_path, data, capsys):
+    (tmp_path / "m.toml").write_text(
+        'model = "TiTe"\nconstants = { Qx = 1.0 }\n[[zone]]\nid = "z"\ndata = "z.csv"\n'
+    )
+    one_line_exit_2(["fit-many", str(tmp_path / "m.toml")], capsys, r"constant 'Qx' is not an input")
+
+
+def test_workers_zero(tmp_path, data, capsys):
+    (tmp_path / "m.toml").write_text('model = "TiTe"\n[[zone]]\nid = "z"\ndata = "z.csv"\n')
+    one_line_exit_2(
+        ["fit-many", str(tmp_path / "m.toml"), "--workers", "0"], capsys, r"--workers must be at least 1"
+    )
+    assert not (tmp_path / "m-results").exists()
+
+
+def test_nfkc_equivalent_names_are_one_name(tmp_path, data, capsys):
+    """A parameter declared with the micro sign and tied with the Greek mu: one parameter."""
+    micro, mu = "\u00b5", "\u03bc"
+    text = model_text(f'"{micro}" = {{ value = 0.02, unit = "K/W" }}\n').replace(
+        'Rea = { value = 0.02, unit = "K/W" }', f'Rea = {{ expr = "{mu}*1" }}'
+    )
+    (tmp_path / "nfkc.toml").write_text(text)
+    (tmp_path / "plain.toml").write_text(model_text())
+    rmse = []
+    for m in ("nfkc.toml", "plain.toml"):
+        assert main(["predict", str(tmp_path / m), str(data), "--json", str(tmp_path / f"{m}.json")]) == 0
+        rmse.append(json.loads((tmp_path / f"{m}.json").read_text())["rmse_K"])
+    assert rmse[0] == pytest.approx(rmse[1])
+    assert (
+        main(["diagnose", str(data), "--model", str(tmp_path / "nfkc.toml"), "--const", f"T{micro}=1"]) == 2
+    )
+
+
+def test_the_unicode_forms_of_a_column_are_one(tmp_path, capsys):
+    frame = zone_frame().rename(columns={"To": "T\u00b5"})
+    frame.to_csv(tmp_path / "z.csv", index=False)
+    (tmp_path / "map.toml").write_text('[columns]\nTi = "Ti"\nTo = "T\u03bc"\n')
+    assert main(["predict", "TiTe", str(tmp_path / "z.csv"), "--columns", str(tmp_path / "map.toml")]) == 0
+
+
+# ---- outputs: all or nothing -----------------------------------------------------------------------
+
+
+def test_json_then_a_failing_save_model_leaves_nothing(tmp_path, capsys):
+    out = tmp_path / "fit.json"
+    args = ["fit", "C", "--model", "TiTe", "--method", "ls", "--starts", "1", "--no-profiles"]
+    one_line_exit_2(
+        [*args, "--json", str(out), "--save-model", str(tmp_path / "m.txt")], capsys, r"--save-model must end"
+    )
+    assert not out.exists()
+    (tmp_path / "rep").write_text("a file where the report folder should be")
+    one_line_exit_2(
+        [*args, "--json", str(out), "--report", str(tmp_path / "rep")], capsys, r"is a file, not a folder"
+    )
+    assert not out.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["rep"]
+
+
+def test_json_then_a_failing_report_leaves_no_report_folder(tmp_path, capsys, monkeypatch):
+    import rczone.report.predict as predict_report
+    from rczone.errors import OutputError
+
+    def fail(*args, **kwargs):
+        raise OutputError("cannot write the report")
+
+    monkeypatch.setattr(predict_report, "prediction_report", fail)
+    out, rep = tmp_path / "p.json", tmp_path / "rep"
+    one_line_exit_2(
+        ["predict", "TiTe", "C", "--json", str(out), "-o", str(tmp_path / "s.csv"), "--report", str(rep)],
+        capsys,
+        r"cannot write the report",
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+# ---- Ctrl-C ------------------------------------------------------------------------------------------
+
+
+def _interrupt(args: list[str], wait_for: str, tmp_path: Path, delay: float = 0.5) -> tuple[int, str]:
+    err = tmp_path / "err.txt"
+    with open(err, "w") as fh:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "rczone.cli", *args],
+            stdout=subprocess.DEVNULL,
+            stderr=fh,
+            start_new_session=True,
+        )
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and wait_for not in err.read_text() and proc.poll() is None:
+        time.sleep(0.1)
+    time.sleep(delay)
+    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+    return proc.wait(timeout=120), err.read_text()
+
+
+@pytest.mark.skipif(os.name == "nt", reason="process groups")
+def test_ctrl_c_in_fit_exits_130_and_writes_nothing(tmp_path):
+    out = tmp_path / "fit.json"
+    code, err = _interrupt(["fit", "C", "--starts", "60", "--json", str(out)], "", tmp_path, delay=3.0)
+    assert code == 130 and "Traceback" not in err, err
+    assert not out.exists()
+
+
+@pytest.mark.skipif(os.name == "nt", reason="process groups")
+def test_ctrl_c_in_fit_many_exits_130(tmp_path):
+    (tmp_path / "m.toml").write_text(
+        'methods = ["ls"]\nn_starts = 1\ndiagnose = false\n[[generate]]\nseasons = ["autumn"]\nseeds = "0..30"\n'
+    )
+    code, err = _interrupt(
+        [
+            "fit-many",
+            str(tmp_path / "m.toml"),
+            "--out",
+            str(tmp_path / "out"),
+            "--backend",
+            "processes",
+            "--workers",
+            "1",
+        ],
+        "already done",
+        tmp_path,
+    )
+    assert code == 130 and "Traceback" not in err, err
