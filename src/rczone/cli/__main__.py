@@ -2,6 +2,6 @@
 
 import sys
 
-from rczone.cli.main import main
+from rczone.cli import run
 
-sys.exit(main())
+sys.exit(run())

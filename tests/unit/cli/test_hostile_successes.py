@@ -214,7 +214,10 @@ def _interrupt(args: list[str], wait_for: str, tmp_path: Path, delay: float = 0.
 @pytest.mark.skipif(os.name == "nt", reason="process groups")
 def test_ctrl_c_in_fit_exits_130_and_writes_nothing(tmp_path):
     out = tmp_path / "fit.json"
-    code, err = _interrupt(["fit", "C", "--starts", "60", "--json", str(out)], "", tmp_path, delay=3.0)
+    # the 13-state model's fit runs for minutes: the interrupt lands mid-work (loading or compiling
+    # kernels, or fitting), never after a fit that already finished
+    args = ["fit", "C", "--model", "full-scale", "--starts", "1", "--json", str(out)]
+    code, err = _interrupt(args, "", tmp_path, delay=3.0)
     assert code == 130 and "Traceback" not in err, err
     assert not out.exists()
 
@@ -239,3 +242,29 @@ def test_ctrl_c_in_fit_many_exits_130(tmp_path):
         tmp_path,
     )
     assert code == 130 and "Traceback" not in err, err
+
+
+def test_an_interrupt_wrapped_by_a_library_is_still_ctrl_c(monkeypatch, capsys):
+    """numba turns a Ctrl-C while it loads its cache into another exception caused by the interrupt."""
+    import rczone.cli.main as cli_main
+
+    def wrapped(**kwargs):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise RuntimeError("failed to unpickle a compiled kernel") from exc
+
+    monkeypatch.setattr(cli_main, "app", wrapped)
+    assert cli_main.main(["models"]) == 130
+    assert "aborted" in capsys.readouterr().err
+
+
+def test_an_unrelated_error_is_not_taken_for_ctrl_c(monkeypatch):
+    import rczone.cli.main as cli_main
+
+    def broken(**kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(cli_main, "app", broken)
+    with pytest.raises(RuntimeError, match="a bug"):
+        cli_main.main(["models"])

@@ -187,7 +187,7 @@ def test_select_cli_reports_the_basis_and_vuong(paths, capsys, tmp_path):
     [
         (["--model", "alone"], "neither measures 'T2' nor takes it as a boundary"),
         (["--forward"], "forward selection moves between nested models"),
-        (["--const", "T2=20"], "not from the data's 'T2' column"),
+        (["--const", "T2=20"], "cannot hold 'T2' constant: it is a node or output"),
     ],
 )
 def test_select_cli_refuses_incomparable_candidates_with_one_line(paths, capsys, extra, message):
