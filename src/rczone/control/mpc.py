@@ -206,6 +206,13 @@ class QPData(NamedTuple):
     qx: np.ndarray
 
 
+def _shifted(z: np.ndarray, n: int, H: int) -> np.ndarray:
+    """A solution ``[x_1..x_H, m, P, s]`` moved one step on (the last step repeated)."""
+    x = z[: n * H].reshape(H, n)
+    rest = [z[n * H + i * H : n * H + (i + 1) * H] for i in range(3)]
+    return np.concatenate([np.vstack([x[1:], x[-1:]]).ravel(), *(np.r_[v[1:], v[-1]] for v in rest)])
+
+
 class _Triplets:
     """A sparse matrix assembled block by block (rows grow as constraints are added)."""
 
@@ -408,7 +415,8 @@ class MPC:
         m_prev = mem.action.m if mem.action else lim.m_min
         p_prev = mem.action.reheat if mem.action else 0.0
         m, reheat = nominal if nominal is not None else (np.full(H, lim.m_min), np.zeros(H))
-        elapsed, status, z = 0.0, "", None
+        elapsed, status = 0.0, ""
+        z = _shifted(mem.z, len(x0), H) if mem.z is not None and len(mem.z) == (len(x0) + 3) * H else None
         n = len(x0)
         for _ in range(self.settings.linearizations):
             q = self.linearize(x0, u, forecast, m, reheat)
@@ -417,8 +425,8 @@ class MPC:
             solver.setup(
                 P, qv, A, lo, hi, verbose=False, eps_abs=1e-5, eps_rel=1e-5, max_iter=20000, polishing=True
             )
-            if mem.z is not None and len(mem.z) == len(qv):
-                solver.warm_start(x=mem.z)
+            if z is not None:  # the last step's solution shifted, then the last pass's
+                solver.warm_start(x=z)
             t0 = _time.perf_counter()
             res = solver.solve(raise_error=False)
             elapsed += _time.perf_counter() - t0
