@@ -139,7 +139,7 @@ def figure(rows: list[dict], path: Path) -> None:
     from matplotlib.figure import Figure
 
     variants = [v for v in dict.fromkeys((r["variant"], r["disturbance"]) for r in rows)]
-    fig = Figure(figsize=(10, 4.5))
+    fig = Figure(figsize=(10, 5.2))
     axes = fig.subplots(1, len(SCENARIOS), sharey=True)
     for ax, scen in zip(axes, SCENARIOS):
         for i, (v, d) in enumerate(variants):
@@ -152,8 +152,9 @@ def figure(rows: list[dict], path: Path) -> None:
         ax.set_xlabel("cost (kWh, price-weighted)")
         ax.grid(alpha=0.3)
     axes[0].set_ylabel("discomfort (K h, occupied)")
-    axes[-1].legend(fontsize=6.5, loc="upper right")
-    fig.tight_layout()
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.tight_layout(rect=(0, 0.16, 1, 1))
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
 
