@@ -12,8 +12,8 @@ runs ``rczone control-test`` for each model x estimator (with and without the di
 estimate) x scenario (summer, winter, summer under a time-of-use price) x seed, against the
 building's own thermostat on the same days. Every run is appended to
 ``<out>/runs.jsonl`` as it finishes (a rerun skips those already there); prints the table of
-docs/paper.md section 3 as Markdown and draws ``closed_loop_study.png``. About 25 minutes on one
-core with the defaults (the 13-state MPC takes a minute per day).
+docs/paper.md section 3 as Markdown and draws ``closed_loop_study.png``. About 45 minutes on one
+core with the defaults (the 13-state MPC takes a minute or more per day).
 """
 
 from __future__ import annotations
