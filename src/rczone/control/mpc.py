@@ -60,7 +60,7 @@ from rczone.control.energy import FAN_W_PER_KG_S
 from rczone.control.model import ControlModel
 from rczone.control.observer import Estimate, KalmanObserver
 from rczone.data.units import to_si
-from rczone.errors import InputShapeError, ParameterError, RczoneError
+from rczone.errors import InputShapeError, ParameterError, RczoneError, did_you_mean
 from rczone.models.zone import ZoneModel
 from rczone.network import CP_AIR
 
@@ -285,6 +285,12 @@ class MPC:
     # ------------------------------------------------------------ inputs
     def _input_matrix(self, fc: Forecast, H: int) -> np.ndarray:
         """Model inputs over the horizon, shape (H + 1, p); the supply temperature is ``t_ahu``."""
+        known = [n for i, n in enumerate(self.cm.input_names) if i != self._ts]
+        for name in fc.inputs:
+            if name not in known:
+                raise InputShapeError(
+                    f"the forecast has an input {name!r} the model does not use; " + did_you_mean(name, known)
+                )
         cols = []
         for i, name in enumerate(self.cm.input_names):
             if i == self._ts:
@@ -466,6 +472,12 @@ class MPC:
         H = self._check(forecast)
         mem = self._mem
         u_now = self._input_matrix(forecast, H)[0]
+        for name in measurements:
+            if name not in self.cm.output_names:
+                raise InputShapeError(
+                    f"measurement {name!r}: the model measures {list(self.cm.output_names)}; "
+                    + did_you_mean(name, self.cm.output_names)
+                )
         y = np.array([float(measurements.get(o, np.nan)) for o in self.cm.output_names])
         if mem.est is None:
             mem.est = self.observer.prior(y)
