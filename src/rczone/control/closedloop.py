@@ -119,9 +119,9 @@ class MPCZoneController:
         held = {c: np.full(times.size, r[c]) for c in SURROUNDINGS}
         held["Tsd"] = np.full(times.size, float(np.mean([r[c] for c in SURROUNDINGS])))
         lower, upper, _ = band(self.cfg, times)
-        return Forecast(
-            {"To": to, **held}, np.full(times.size, t_ahu), lower, upper, price_signal(self.price, times)
-        )
+        used = set(self.mpc.cm.input_names)
+        inputs = {k: v for k, v in {"To": to, **held}.items() if k in used}
+        return Forecast(inputs, np.full(times.size, t_ahu), lower, upper, price_signal(self.price, times))
 
     def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
         if self.next_time is None or t >= self.next_time - 1e-9:

@@ -60,7 +60,7 @@ from rczone.control.energy import FAN_W_PER_KG_S
 from rczone.control.model import ControlModel
 from rczone.control.observer import Estimate, KalmanObserver
 from rczone.data.units import to_si
-from rczone.errors import InputShapeError, ParameterError, RczoneError
+from rczone.errors import InputShapeError, ParameterError, RczoneError, did_you_mean
 from rczone.models.zone import ZoneModel
 from rczone.network import CP_AIR
 
@@ -206,6 +206,13 @@ class QPData(NamedTuple):
     qx: np.ndarray
 
 
+def _shifted(z: np.ndarray, n: int, H: int) -> np.ndarray:
+    """A solution ``[x_1..x_H, m, P, s]`` moved one step on (the last step repeated)."""
+    x = z[: n * H].reshape(H, n)
+    rest = [z[n * H + i * H : n * H + (i + 1) * H] for i in range(3)]
+    return np.concatenate([np.vstack([x[1:], x[-1:]]).ravel(), *(np.r_[v[1:], v[-1]] for v in rest)])
+
+
 class _Triplets:
     """A sparse matrix assembled block by block (rows grow as constraints are added)."""
 
@@ -278,6 +285,12 @@ class MPC:
     # ------------------------------------------------------------ inputs
     def _input_matrix(self, fc: Forecast, H: int) -> np.ndarray:
         """Model inputs over the horizon, shape (H + 1, p); the supply temperature is ``t_ahu``."""
+        known = [n for i, n in enumerate(self.cm.input_names) if i != self._ts]
+        for name in fc.inputs:
+            if name not in known:
+                raise InputShapeError(
+                    f"the forecast has an input {name!r} the model does not use; " + did_you_mean(name, known)
+                )
         cols = []
         for i, name in enumerate(self.cm.input_names):
             if i == self._ts:
@@ -408,7 +421,8 @@ class MPC:
         m_prev = mem.action.m if mem.action else lim.m_min
         p_prev = mem.action.reheat if mem.action else 0.0
         m, reheat = nominal if nominal is not None else (np.full(H, lim.m_min), np.zeros(H))
-        elapsed, status, z = 0.0, "", None
+        elapsed, status = 0.0, ""
+        z = _shifted(mem.z, len(x0), H) if mem.z is not None and len(mem.z) == (len(x0) + 3) * H else None
         n = len(x0)
         for _ in range(self.settings.linearizations):
             q = self.linearize(x0, u, forecast, m, reheat)
@@ -417,8 +431,8 @@ class MPC:
             solver.setup(
                 P, qv, A, lo, hi, verbose=False, eps_abs=1e-5, eps_rel=1e-5, max_iter=20000, polishing=True
             )
-            if mem.z is not None and len(mem.z) == len(qv):
-                solver.warm_start(x=mem.z)
+            if z is not None:  # the last step's solution shifted, then the last pass's
+                solver.warm_start(x=z)
             t0 = _time.perf_counter()
             res = solver.solve(raise_error=False)
             elapsed += _time.perf_counter() - t0
@@ -458,6 +472,12 @@ class MPC:
         H = self._check(forecast)
         mem = self._mem
         u_now = self._input_matrix(forecast, H)[0]
+        for name in measurements:
+            if name not in self.cm.output_names:
+                raise InputShapeError(
+                    f"measurement {name!r}: the model measures {list(self.cm.output_names)}; "
+                    + did_you_mean(name, self.cm.output_names)
+                )
         y = np.array([float(measurements.get(o, np.nan)) for o in self.cm.output_names])
         if mem.est is None:
             mem.est = self.observer.prior(y)

@@ -155,6 +155,18 @@ def test_bounds_are_given_in_the_users_units(zm):
             InputShapeError,
             "band",
         ),
+        (
+            lambda zm: MPC(zm, MPCSettings(horizon=3)).step(0.0, {"Tii": 22.0}, forecast(3)),
+            InputShapeError,
+            "Tii",
+        ),
+        (
+            lambda zm: MPC(zm, MPCSettings(horizon=3)).plan(
+                np.zeros(3), Forecast({"Tf": np.zeros(4)}, np.zeros(4), np.zeros(4), np.ones(4))
+            ),
+            InputShapeError,
+            "Tf",
+        ),
     ],
 )
 def test_bad_settings_and_forecasts_raise_one_line_errors(zm, make, error, match):

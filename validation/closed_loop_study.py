@@ -1,0 +1,175 @@
+"""The paper's question in closed loop: which model, from which data, with which estimator, is good enough for MPC.
+
+Usage::
+
+    python validation/closed_loop_study.py [--out validation-output/closed_loop] [--days 1] [--seeds 1,2,3]
+                                           [--figures docs/figures]
+
+Fits the paper's models on the virtual building's nights (the 2-state reduced model of the paper,
+free ``Cr`` and ``Rw``, by ML and LS on the forced night C and on the closed-loop night A; the
+1-state model by ML on C), takes the construction values of the 13-state and 2-state models, and
+runs ``rczone control-test`` for each model x estimator (with and without the disturbance
+estimate) x scenario (summer, winter, summer under a time-of-use price) x seed, against the
+building's own thermostat on the same days. Every run is appended to
+``<out>/runs.jsonl`` as it finishes (a rerun skips those already there); prints the table of
+docs/paper.md section 3 as Markdown and draws ``closed_loop_study.png``. About 45 minutes on one
+core with the defaults (the 13-state MPC takes a minute or more per day).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rczone import datasets
+from rczone.calibrate import calibrate
+from rczone.control.closedloop import closed_loop_test
+from rczone.models import load_model
+
+SCENARIOS = {
+    "summer": ("summer", "flat"),
+    "winter": ("winter", "flat"),
+    "summer, time-of-use": ("summer", "tou"),
+}
+
+
+def models() -> dict[str, object]:
+    """The models compared: construction values and fits (n_starts=1 from the construction values)."""
+    c, a = datasets.load("C"), datasets.load("A")
+
+    def fit(name, frame, method):
+        return calibrate(name, frame, method=method, n_starts=1, uncertainty=False).model
+
+    return {
+        "13-state, construction": load_model("full-scale"),
+        "2-state, construction": load_model("second-order-paper"),
+        "2-state, ML on C (forced)": fit("second-order-paper", c, "ml"),
+        "2-state, LS on C (forced)": fit("second-order-paper", c, "ls"),
+        "2-state, ML on A (closed loop)": fit("second-order-paper", a, "ml"),
+        "2-state, LS on A (closed loop)": fit("second-order-paper", a, "ls"),
+        "1-state, ML on C (forced)": fit("first-order", c, "ml"),
+    }
+
+
+#: Variants run without the disturbance estimate too (the others only with it).
+WITHOUT_DISTURBANCE = ("2-state, ML on C (forced)", "13-state, construction")
+
+
+def runs(names, seeds):
+    """Every (model or "thermostat", disturbance, scenario, seed) of the study."""
+    for scen in SCENARIOS:
+        for seed in seeds:
+            yield "thermostat", None, scen, seed
+            for name in names:
+                yield name, True, scen, seed
+                if name in WITHOUT_DISTURBANCE:
+                    yield name, False, scen, seed
+
+
+def key(row) -> str:
+    return f"{row['variant']}|{row['disturbance']}|{row['scenario']}|{row['seed']}"
+
+
+def run_all(out: Path, days: float, seeds: list[int]) -> list[dict]:
+    out.mkdir(parents=True, exist_ok=True)
+    log = out / "runs.jsonl"
+    done = {key(r): r for r in map(json.loads, log.read_text().splitlines())} if log.exists() else {}
+    zms = models()
+    thermostat_model = zms["2-state, ML on C (forced)"]
+    for variant, dist, scen, seed in runs(list(zms), seeds):
+        row = {"variant": variant, "disturbance": dist, "scenario": scen, "seed": seed}
+        if key(row) in done:
+            continue
+        season, price = SCENARIOS[scen]
+        t0 = time.perf_counter()
+        r = closed_loop_test(
+            thermostat_model if variant == "thermostat" else zms[variant],
+            season=season,
+            days=days,
+            seed=seed,
+            controller="thermostat" if variant == "thermostat" else "mpc",
+            disturbance=bool(dist),
+            price=price,
+        )
+        row.update(r.scores, wall_s=time.perf_counter() - t0, days=days)
+        with log.open("a") as f:
+            f.write(json.dumps(row) + "\n")
+        done[key(row)] = row
+        print(
+            f"{variant:32s} dist={dist!s:5s} {scen:20s} seed {seed}: E {row['energy_kWh']:.2f} kWh,"
+            f" cost {row['cost']:.2f}, comfort {row['comfort_Kh']:.2f} K h",
+            flush=True,
+        )
+    return list(done.values())
+
+
+def table(rows: list[dict]) -> str:
+    """Markdown: per variant and scenario, mean and spread over seeds, savings against the thermostat."""
+    seeds = sorted({r["seed"] for r in rows})
+    lines = [
+        f"| variant | disturbance estimate | {' | '.join(f'{s}: cost (saving) / comfort K h' for s in SCENARIOS)} |",
+        "|---|---|" + "---|" * len(SCENARIOS),
+    ]
+    variants = list(dict.fromkeys((r["variant"], r["disturbance"]) for r in rows))
+    for v, d in variants:
+        cells = []
+        for scen in SCENARIOS:
+            sel = [r for r in rows if (r["variant"], r["disturbance"], r["scenario"]) == (v, d, scen)]
+            ref = {r["seed"]: r for r in rows if r["variant"] == "thermostat" and r["scenario"] == scen}
+            if len(sel) < len(seeds):
+                cells.append("-")
+                continue
+            cost = np.array([r["cost"] for r in sel])
+            save = np.array([1 - r["cost"] / ref[r["seed"]]["cost"] for r in sel])
+            comfort = np.array([r["comfort_Kh"] for r in sel])
+            cells.append(
+                f"{cost.mean():.2f} ({100 * save.mean():+.0f} % ± {100 * save.std():.0f}) /"
+                f" {comfort.mean():.2f} ± {comfort.std():.2f}"
+            )
+        dist = "" if d is None else ("yes" if d else "no")
+        lines.append(f"| {v} | {dist} | {' | '.join(cells)} |")
+    return "\n".join(lines)
+
+
+def figure(rows: list[dict], path: Path) -> None:
+    from matplotlib.figure import Figure
+
+    variants = [v for v in dict.fromkeys((r["variant"], r["disturbance"]) for r in rows)]
+    fig = Figure(figsize=(10, 5.2))
+    axes = fig.subplots(1, len(SCENARIOS), sharey=True)
+    for ax, scen in zip(axes, SCENARIOS):
+        for i, (v, d) in enumerate(variants):
+            sel = [r for r in rows if (r["variant"], r["disturbance"], r["scenario"]) == (v, d, scen)]
+            x = [r["cost"] for r in sel]
+            y = [r["comfort_Kh"] for r in sel]
+            label = v + ("" if d in (None, True) else ", no disturbance")
+            ax.scatter(x, y, s=18, marker="os^vD<>p*h"[i % 10], label=label)
+        ax.set_title(scen, fontsize=10)
+        ax.set_xlabel("cost (kWh, price-weighted)")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("discomfort (K h, occupied)")
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.tight_layout(rect=(0, 0.16, 1, 1))
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=7)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("validation-output") / "closed_loop")
+    ap.add_argument("--figures", type=Path, default=Path("docs") / "figures")
+    ap.add_argument("--days", type=float, default=1.0)
+    ap.add_argument("--seeds", default="1,2,3")
+    args = ap.parse_args()
+    rows = run_all(args.out, args.days, [int(s) for s in args.seeds.split(",")])
+    print(table(rows))
+    figure(rows, args.figures / "closed_loop_study.png")
+
+
+if __name__ == "__main__":
+    main()
