@@ -547,7 +547,7 @@ def summary_findings(results: dict[str, Any]) -> list[str]:
     mo, ident, cl = results["model_order"], results["identification"], results["closed_loop"]
     td = mo["time_domain"]
     pw = mo["frequency_domain"]["paper_weights"]
-    worst = {k: max(pw["max_error_F"][k].values()) for k in ("second-order", "second-order-paper-band")}
+    worst = {k: max(pw["max_error_F"][k].values()) for k in ("second-order", "second-order-band")}
     rmse = {k: [td[s][k]["rmse_K"] for s in SCENARIOS] for k in ORDERS}
     verdicts = ", ".join(f"<b>{d['Rw']['verdict']}</b> on {s}" for s, d in ident["diagnose"].items())
     a = ident["attempts"]["1"]["methods"]
@@ -562,7 +562,7 @@ def summary_findings(results: dict[str, Any]) -> list[str]:
         f"is {_range(rmse['full-scale'])} K, the 2nd-order model's {_range(rmse['second-order'])} K and the "
         f"1st-order model's {_range(rmse['first-order'])} K. At the paper's weights the 2nd-order model's "
         f"largest eq.-7 error is {worst['second-order']:.1f} F with parallel values and "
-        f"{worst['second-order-paper-band']:.1f} F with band-matched values (paper: within 1 F).",
+        f"{worst['second-order-band']:.1f} F with band-matched values (paper: within 1 F).",
         f"<b>Can the data identify R and C (IV).</b> Before any fit, rczone diagnose finds Rw {verdicts}.",
         f"<b>Closed-loop data mislead.</b> LS on night A gives Rw = {rw_a['estimate']:.3g} K/W, "
         f"{rw_a['estimate'] / rw_a['construction']:.2f} times the construction value; it matches A "
