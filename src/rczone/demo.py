@@ -276,6 +276,7 @@ def identification_study(
             entry = {
                 "parameters": {
                     n: {
+                        "unit": net.parameters[n].unit,
                         "estimate": cal.result.estimates[n],
                         "std_error": cal.result.std_errors[n],
                         "construction": cal.result.parameters[n].construction,
@@ -324,7 +325,7 @@ def identification_study(
         report.heading(f"Attempt {att}: calibrate on {cal_set}", 3)
         trows = []
         for n in ("Cr", "Rw"):
-            row: dict[str, object] = {"parameter": n}
+            row: dict[str, object] = {"parameter": n, "unit": res["methods"]["ls"]["parameters"][n]["unit"]}
             for meth in METHODS:
                 row[meth.upper()] = res["methods"][meth]["parameters"][n]["estimate"]
             row["construction"] = res["methods"]["ls"]["parameters"][n]["construction"]
@@ -535,11 +536,70 @@ def _identification_summary(out: dict[str, Any]) -> str:
     return text
 
 
-def run_demo(out: str | os.PathLike, progress: Callable[[str], None] | None = None) -> Path:
-    """Run the demo and write ``report.html``, PNG figures and ``results.json`` into ``out``."""
-    progress = progress or (lambda _msg: None)
-    out = Path(out)
-    report = Report("rczone demo: the paper's study on the virtual building")
+def _range(values: list[float]) -> str:
+    """``"a-b"`` K of a list of errors, or one value when they agree to the shown digits."""
+    lo, hi = f"{min(values):.2f}", f"{max(values):.2f}"
+    return lo if lo == hi else f"{lo}-{hi}"
+
+
+def summary_findings(results: dict[str, Any]) -> list[str]:
+    """The study's findings in a few sentences, every number taken from ``results``."""
+    mo, ident, cl = results["model_order"], results["identification"], results["closed_loop"]
+    td = mo["time_domain"]
+    pw = mo["frequency_domain"]["paper_weights"]
+    worst = {k: max(pw["max_error_F"][k].values()) for k in ("second-order", "second-order-band")}
+    rmse = {k: [td[s][k]["rmse_K"] for s in SCENARIOS] for k in ORDERS}
+    verdicts = ", ".join(f"<b>{d['Rw']['verdict']}</b> on {s}" for s, d in ident["diagnose"].items())
+    a = ident["attempts"]["1"]["methods"]
+    c = ident["attempts"]["2"]["methods"]
+    rw_a, rw_c, rw_map = (x["parameters"]["Rw"] for x in (a["ls"], c["ls"], a["map"]))
+    ratio = {
+        case: (res["ls"]["rw_ratio_C_over_A"], res["ml"]["rw_ratio_C_over_A"]) for case, res in cl.items()
+    }
+    strength = ", ".join(f"{case}: {ls:.1f} (LS) and {ml:.1f} (ML)" for case, (ls, ml) in ratio.items())
+    return [
+        "<b>Which model order is enough (III).</b> Open loop on the three nights, the 13-state model's RMSE "
+        f"is {_range(rmse['full-scale'])} K, the 2nd-order model's {_range(rmse['second-order'])} K and the "
+        f"1st-order model's {_range(rmse['first-order'])} K. At the paper's weights the 2nd-order model's "
+        f"largest eq.-7 error is {worst['second-order']:.1f} F with parallel values and "
+        f"{worst['second-order-band']:.1f} F with band-matched values (paper: within 1 F).",
+        f"<b>Can the data identify R and C (IV).</b> Before any fit, rczone diagnose finds Rw {verdicts}.",
+        f"<b>Closed-loop data mislead.</b> LS on night A gives Rw = {rw_a['estimate']:.3g} K/W, "
+        f"{rw_a['estimate'] / rw_a['construction']:.2f} times the construction value; it matches A "
+        f"({a['ls']['validation']['A']['rmse_K']:.2f} K RMSE) but fails on the forced night C "
+        f"({a['ls']['validation']['C']['rmse_K']:.2f} K). LS on C gives Rw = {rw_c['estimate']:.3g} K/W and "
+        f"predicts A and B to {c['ls']['validation']['A']['rmse_K']:.2f} and "
+        f"{c['ls']['validation']['B']['rmse_K']:.2f} K. MAP on A stays at Rw = {rw_map['estimate']:.3g} K/W "
+        f"and predicts C to {a['map']['validation']['C']['rmse_K']:.2f} K.",
+        f"<b>How strong the closed-loop effect is.</b> Rw of the fit to the forced night over the fit to the "
+        f"closed-loop night: {strength} (paper: 15.5 and 8.9).",
+    ]
+
+
+def summary_parameters(results: dict[str, Any]) -> list[dict[str, object]]:
+    """The reduced model's Cr and Rw by every fit, with unit, construction value and true equivalent."""
+    attempts = results["identification"]["attempts"]
+    rows = []
+    for n in ("Cr", "Rw"):
+        first = attempts["1"]["methods"]["ls"]["parameters"][n]
+        row: dict[str, object] = {
+            "parameter": n,
+            "unit": first["unit"],
+            "construction": first["construction"],
+            "true equivalent": first["true_equivalent"],
+        }
+        for res in attempts.values():
+            for meth in METHODS:
+                row[f"{meth.upper()} on {res['calibration']}"] = res["methods"][meth]["parameters"][n][
+                    "estimate"
+                ]
+        rows.append(row)
+    return rows
+
+
+def _summary(title: str, results: dict[str, Any]) -> Report:
+    """The report's first screen: what was done, the findings and the fitted parameters."""
+    report = Report(title)
     report.paragraph(
         "This report reproduces the study of Lin, Middelkoop and Barooah (IEEE CDC 2012) on rczone's "
         "built-in virtual office building, which stands in for the paper's unpublished measurements: "
@@ -547,9 +607,28 @@ def run_demo(out: str | os.PathLike, progress: Callable[[str], None] | None = No
         "night) with a forced-response test in which the room's supply air is commanded to drive it away "
         "from its neighbours."
     )
-    results = {"model_order": model_order_study(report, progress)}
-    results["identification"] = identification_study(report, progress, true_equivalent())
-    results["closed_loop"] = closed_loop_study(report, progress)
+    report.heading("Summary")
+    report.bullets(summary_findings(results))
+    report.table(
+        summary_parameters(results),
+        "Cr (room capacity) and Rw (wall resistance) of the reduced 2nd-order model, by method and "
+        "calibration night",
+        digits=3,
+    )
+    return report
+
+
+def run_demo(out: str | os.PathLike, progress: Callable[[str], None] | None = None) -> Path:
+    """Run the demo and write ``report.html``, PNG figures and ``results.json`` into ``out``."""
+    progress = progress or (lambda _msg: None)
+    out = Path(out)
+    title = "rczone demo: the paper's study on the virtual building"
+    body = Report(title)
+    results = {"model_order": model_order_study(body, progress)}
+    results["identification"] = identification_study(body, progress, true_equivalent())
+    results["closed_loop"] = closed_loop_study(body, progress)
+    report = _summary(title, results)
+    report.extend(body)
     report.write(out)
     write_json_atomic(out / "results.json", results)
     return out / "report.html"

@@ -105,3 +105,22 @@ def test_closed_loop_case_at_the_papers_strength(demo):
     assert ls["A"]["C_rmse_K"] > 2 * ls["C"]["own_rmse_K"]
     mp = demo[1]["identification"]["map_prior"]
     assert mp["better"] in ("parallel", "band") and set(mp["rules"]) == {"parallel", "band"}
+
+
+def test_the_report_opens_with_a_summary_of_computed_findings_and_parameters_with_units(demo):
+    out, res = demo
+    html = (out / "report.html").read_text()
+    headings = re.findall(r"<h2>(.*?)</h2>", html)
+    assert headings[0] == "Summary" and headings.index("Summary") < headings.index(
+        "III. Which model order is enough?"
+    )
+    summary = html[html.index("<h2>Summary</h2>") : html.index("<h2>III.")]
+    # the numbers are the results', not prose: the closed-loop fit's Rw and its error on C
+    a = res["identification"]["attempts"]["1"]["methods"]["ls"]
+    assert f"Rw = {a['parameters']['Rw']['estimate']:.3g} K/W" in summary
+    assert f"({a['validation']['C']['rmse_K']:.2f} K)" in summary
+    for s in "ABC":
+        assert f"{res['identification']['diagnose'][s]['Rw']['verdict']}</b> on {s}" in summary
+    # the parameter table: one row per parameter with its unit, a column per fit
+    assert "<th>unit</th>" in summary and "<td>K/W</td>" in summary and "<td>J/K</td>" in summary
+    assert "<th>LS on A</th>" in summary and "<th>ML on C</th>" in summary

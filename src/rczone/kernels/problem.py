@@ -425,7 +425,9 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
 @njit(cache=True, error_model="numpy", inline="always")
 def cost_theta(theta: np.ndarray, prob) -> float:
     """The cost at physical values ``theta``; ``inf`` where the model is invalid."""
-    return evaluate(theta, prob, False)[0]
+    # want_grad as a value (always False), not the constant: a literal False would compile a second
+    # specialization of evaluate, the whole filter tree, beside the one Python's calls use
+    return evaluate(theta, prob, theta.shape[0] < 0)[0]
 
 
 @njit(cache=True, error_model="numpy", inline="always")

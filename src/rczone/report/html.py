@@ -93,6 +93,16 @@ class Report:
         cls = f' class="{css}"' if css else ""
         self.parts.append(f"<p{cls}>{text}</p>")
 
+    def bullets(self, items: Sequence[str]) -> None:
+        """A bulleted list; each item may contain simple inline HTML written by rczone itself."""
+        if items:
+            self.parts.append("<ul>" + "".join(f"<li>{item}</li>" for item in items) + "</ul>")
+
+    def extend(self, other: Report) -> None:
+        """Append ``other``'s sections and figures (a summary written last can then come first)."""
+        self.parts.extend(other.parts)
+        self.figures.update(other.figures)
+
     def table(self, rows: Sequence[Mapping[str, object]], caption: str = "", digits: int = 4) -> None:
         """A table from a list of dicts sharing keys (first key is the row label)."""
         if not rows:
