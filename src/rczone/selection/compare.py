@@ -103,6 +103,16 @@ class Candidate:
     terms: np.ndarray | None = None
 
     @property
+    def trustworthy(self) -> bool:
+        """Whether the candidate's fit carries no flag (its verdict)."""
+        return bool(self.calibration.verdict.trustworthy)
+
+    @property
+    def flag_reasons(self) -> str:
+        """Why the fit is flagged, in words ("" when it is not)."""
+        return "; ".join(self.calibration.verdict.reasons) if not self.trustworthy else ""
+
+    @property
     def fit_loglik(self) -> float:
         """``log L`` of the fit at the estimate, of all the model's outputs."""
         return float(self.calibration.result.llf)
@@ -241,6 +251,10 @@ class Selection(Result):
         test's p-value.
     not_fitted : tuple of str
         Candidates a forward selection never reached.
+    passed_over : dict of str to str
+        Candidates that scored better (criterion) or were the best extension (forward) but whose
+        fits are flagged, with the flags in words: a flagged fit never wins silently. The selected
+        model is flagged only when every candidate is.
     samples : dict
         The common stretch: ``n`` samples, ``start_s``, ``end_s``, ``n_obs`` observed outputs.
     basis : Basis, optional
@@ -264,6 +278,7 @@ class Selection(Result):
     path: tuple[str, ...]
     steps: tuple[dict, ...] = ()
     not_fitted: tuple[str, ...] = ()
+    passed_over: Mapping[str, str] = field(default_factory=dict)
     samples: Mapping[str, float] = field(default_factory=dict)
     basis: Basis | None = None
     vuong: tuple[VuongTest, ...] = ()
@@ -309,6 +324,7 @@ class Selection(Result):
                     "Ljung-Box p": inn.ljung_box_p if inn is not None else None,
                     "white": ("yes" if inn.white else "no") if inn is not None else "n/a",
                     "selected": "<-" if name == self.selected else "",
+                    "passed over": "flagged" if name in self.passed_over else "",
                 }
             )
         return rows
@@ -328,6 +344,7 @@ class Selection(Result):
             "basis": self.basis.describe() if self.basis is not None else "joint",
             "targets": list(self.basis.targets) if self.basis is not None else None,
             "models": {n: c.to_dict() for n, c in self.candidates.items()},
+            "passed_over": dict(self.passed_over),
             "tests": [{"kind": "likelihood-ratio", **t.to_dict()} for t in self.tests]
             + [v.to_dict(self.alpha) for v in self.vuong],
             "forward": {"path": list(self.path), "steps": list(self.steps)}
@@ -479,6 +496,7 @@ def select_models(
 
     order = sorted(names, key=lambda n: len(free[n]))
     steps: list[dict] = []
+    passed_over: dict[str, str] = {}
     if forward:
         fewest = len(free[order[0]])
         first = [fit_one(n) for n in order if len(free[n]) == fewest]
@@ -490,9 +508,14 @@ def select_models(
             if not smallest:
                 break
             tried = [fit_one(b) for b in smallest]
-            best = max(tried, key=lambda c: c.loglik)
+            # a flagged fit (a parameter at a bound, a flat profile, ...) cannot be accepted: the
+            # best sound extension is tested instead, and a flagged best is refused, not taken
+            sound = [c for c in tried if c.trustworthy]
+            best = max(sound or tried, key=lambda c: c.loglik)
             test = likelihood_ratio_test(fitted[current], best, nests[(current, best.name)])
-            accept = test.rejects(alpha)
+            accept = test.rejects(alpha) and best.trustworthy
+            flagged = {c.name: c.flag_reasons for c in tried if not c.trustworthy}
+            passed_over.update(flagged)
             steps.append(
                 {
                     "from": current,
@@ -502,6 +525,8 @@ def select_models(
                     "df": test.df,
                     "p_value": test.p_value,
                     "accepted": accept,
+                    "refused_flagged": bool(test.rejects(alpha) and not best.trustworthy),
+                    "flagged": flagged,
                 }
             )
             if not accept:
@@ -514,7 +539,11 @@ def select_models(
             fit_one(n)
         if basis.conditional:
             measured = _condition(fitted, frame, basis, constants)
-        selected = min(fitted.values(), key=lambda c: c.criterion(rule)).name
+        ranked = sorted(fitted.values(), key=lambda c: c.criterion(rule))
+        pick = next((c for c in ranked if c.trustworthy), ranked[0])
+        # better-scoring candidates whose fits are flagged are passed over, and the table says so
+        passed_over.update({c.name: c.flag_reasons for c in ranked[: ranked.index(pick)]})
+        selected = pick.name
         path, rule_used = [selected], rule
     tests = tuple(
         likelihood_ratio_test(fitted[a], fitted[b], nest)
@@ -549,6 +578,7 @@ def select_models(
         tuple(path),
         tuple(steps),
         tuple(n for n in names if n not in fitted),
+        passed_over,
         {
             "n": len(frame),
             "start_s": float(t[0]),

@@ -28,7 +28,9 @@ def candidates_table(sel, title: str):
             f"{row['dBIC']:.1f}",
             "n/a" if p is None else f"{p:.2g}",
             f"[green]{white}[/]" if white == "yes" else f"[red]{white}[/]",
-            "[bold]selected[/]" if row["selected"] else "",
+            "[bold]selected[/]"
+            if row["selected"]
+            else ("[yellow]flagged: passed over[/]" if row["passed over"] else ""),
         )
     return table
 
@@ -104,13 +106,23 @@ def selection_lines(sel) -> list:
     if sel.vuong:
         lines.append(vuong_table(sel))
     for step in sel.steps:
-        verdict = "accepted" if step["accepted"] else "rejected: stop"
+        if step["accepted"]:
+            verdict = "accepted"
+        elif step.get("refused_flagged"):
+            verdict = f"refused: the fit of {esc(step['best'])} is flagged, stop"
+        else:
+            verdict = "rejected: stop"
         lines.append(
             f"forward: {esc(step['from'])} -> {esc(step['best'])} (of {', '.join(map(esc, step['tried']))}):"
             f" LR {step['statistic']:.2f}, df {step['df']}, p = {step['p_value']:.3g}, {verdict}"
         )
     if sel.not_fitted:
         lines.append("not reached (not fitted): " + ", ".join(map(esc, sel.not_fitted)))
+    for name, why in sel.passed_over.items():
+        lines.append(
+            f"[yellow]passed over:[/] {esc(name)}, whose fit is flagged ({esc(why)}): a flagged fit is never"
+            " selected while a sound one remains"
+        )
     lines.append(f"selected: [bold]{esc(sel.selected)}[/] ({how})")
     lines.append(
         f"the same fit alone: rczone fit {esc(sel.source or sel.data_label)} --model {esc(sel.selected)}"

@@ -74,3 +74,47 @@ def test_fit_reports_innovations_for_ml_and_labelled_open_loop_residuals_for_ls(
     assert p["horizon"] == "6 steps ahead" and 0.85 < p["coverage_2sigma"]["Ti"] <= 1.0
     assert set(p["mean_sd_K"]) == {"noise", "estimates"}
     assert p["mean_sd_K"]["estimates"]["Ti"] < p["mean_sd_K"]["noise"]["Ti"]
+
+
+def test_a_flagged_fit_is_passed_over_not_selected(files, tmp_path, capsys):
+    """TiTe+heater with Ce capped at 1.5e6 J/K (the data were made with 8e6): its fit pins Ce at the bound.
+
+    It still scores better than Ti+heater, but a flagged fit must not win without saying why: BIC passes
+    it over and names the flag; forward selection refuses the step (issue: select returned a model whose
+    heater-node noise sat at its upper bound).
+    """
+    from rczone.models import model_to_toml
+    from tests.unit.diagnostics.synthetic import family
+
+    toml = model_to_toml(family("TiTe+heater"))
+    capped = toml.replace(
+        'Ce = { value = 10000000.0, unit = "J/K", bounds = [100000.0, 10000000000.0]',
+        'Ce = { value = 1000000.0, unit = "J/K", bounds = [100000.0, 1500000.0]',
+    )
+    assert capped != toml
+    (tmp_path / "capped.toml").write_text(capped)
+    args = [
+        "select",
+        str(files / "zone.csv"),
+        "--model",
+        "Ti+heater",
+        "--model",
+        str(tmp_path / "capped.toml"),
+    ]
+    out = tmp_path / "sel.json"
+    assert main([*args, "--json", str(out)]) == 0  # the selected model is sound
+    text = capsys.readouterr().out
+    res = json.loads(out.read_text())
+    capped_name = next(n for n in res["models"] if n != "Ti+heater")
+    flagged = res["models"][capped_name]
+    assert not flagged["trustworthy"] and flagged["bic"] < res["models"]["Ti+heater"]["bic"]
+    assert res["selected"] == "Ti+heater" and set(res["passed_over"]) == {capped_name}
+    assert "bound" in res["passed_over"][capped_name]
+    assert "passed over" in text and "selected: Ti+heater" in text
+    # forward: the likelihood-ratio test favours the capped model, but its step is refused
+    assert main([*args, "--forward", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    fwd = json.loads(out.read_text())
+    step = fwd["forward"]["steps"][0]
+    assert step["p_value"] < 0.05 and not step["accepted"] and step["refused_flagged"]
+    assert fwd["selected"] == "Ti+heater" and "refused: the fit of" in text
