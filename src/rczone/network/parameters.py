@@ -28,15 +28,13 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 from rczone.errors import ParameterError, did_you_mean
+from rczone.network.stochastic import RESERVED_PREFIXES, is_reserved
 
 #: Kinds of parameter; ``resistance`` and ``capacitance`` must be strictly positive.
 KINDS = ("resistance", "capacitance", "gain", "other")
 
 #: Kinds estimated by default (unless declared ``fixed``).
 ESTIMATED_KINDS = ("resistance", "capacitance", "gain")
-
-#: Name prefixes of the estimation's own parameters (noise, initial state), not network parameters.
-RESERVED_PREFIXES = ("sigma_", "x0_")
 
 _UNITS = {"resistance": "K/W", "capacitance": "J/K", "gain": "1", "other": ""}
 
@@ -96,7 +94,7 @@ class Parameter:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.isidentifier() or keyword.iskeyword(self.name):
             raise ParameterError(f"parameter name {self.name!r} is not a valid identifier")
-        if self.name.startswith(RESERVED_PREFIXES):
+        if is_reserved(self.name):
             raise ParameterError(
                 f"parameter name {self.name!r}: names starting with {' or '.join(RESERVED_PREFIXES)} are"
                 " reserved for the noise and initial-state parameters of the estimation"
