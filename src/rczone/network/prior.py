@@ -18,8 +18,9 @@ positive physical parameter (Gelman et al. 2013, sec. 2.8; Kristensen, Madsen & 
 sec. 2.2 use it in the MAP estimation of grey-box models).
 
 A prior is a declaration only, for now: the MAP cost of :mod:`rczone.estimation.costs` still puts
-its own log-normal prior around every construction value (``prior_spread``); the declared priors
-are read, validated, stored on :class:`~rczone.network.parameters.Parameter` and written back.
+its own log-normal prior around the construction value of every resistance and capacitance
+(``prior_spread``); the declared priors are read, validated, stored on
+:class:`~rczone.network.parameters.Parameter` and written back.
 
 References
 ----------
