@@ -40,6 +40,16 @@ from rczone.estimation.validation import (
 )
 from rczone.models import ZoneModel, load_model
 from rczone.network import RCNetwork
+from rczone.network.stochastic import (
+    INITIAL_SPREAD,
+    INITIAL_STATE,
+    KINDS,
+    initial_spread_name,
+    is_noise_name,
+    kind_of,
+    measurement_noise_names,
+    target_of,
+)
 from rczone.results import Result
 from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, verdict_of
 
@@ -289,8 +299,6 @@ class Calibration(Result):
 
     def to_dict(self) -> dict:
         """What ``rczone fit --json`` writes: the fit, its errors, residuals, checks and verdict."""
-        from rczone.estimation.parameters import measurement_noise_names
-
         r = self.result
         payload = r.to_dict()
         net = self.model.network
@@ -402,8 +410,8 @@ def calibrate(
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
     kind = method_of(method)
-    noise = {k: v for k, v in values.items() if k.startswith("sigma_")} if kind.stochastic else {}
-    initial = {k: v for k, v in values.items() if k.startswith("x0_")}
+    noise = {k: v for k, v in values.items() if is_noise_name(k)} if kind.stochastic else {}
+    initial = {k: v for k, v in values.items() if kind_of(k) == INITIAL_STATE}
     fitted = zm.with_values(
         theta,
         noise,
@@ -568,7 +576,7 @@ class Prediction(Result):
                 "initial temperatures of the unmeasured nodes, estimated from the data (steady state for the"
                 " first sample in brackets): "
                 + ", ".join(
-                    f"{esc(k.removeprefix('x0_'))} {start.values[k]:.2f} ({start.steady[k]:.2f}) ± {sd:.2f} K"
+                    f"{esc(target_of(k))} {start.values[k]:.2f} ({start.steady[k]:.2f}) ± {sd:.2f} K"
                     for k, sd in start.sd.items()
                 )
             )
@@ -595,7 +603,7 @@ class Prediction(Result):
             "horizon": self.horizon,
             "steps": self.steps,
             "initial_state": {
-                k.removeprefix("x0_"): {
+                target_of(k): {
                     "estimate_degC": v,
                     "steady_degC": start.steady[k],
                     "sd_K": start.sd[k],
@@ -671,7 +679,7 @@ def prediction(
     data = dataset(zm, frame, constants)
     net = zm.network
     values = {**zm.theta, **noise_values(zm)}
-    has_noise = any(k.startswith("sigma_") for k in zm.noise)
+    has_noise = any(is_noise_name(k) for k in zm.noise)
     if steps is not None and not has_noise:
         raise DataError(
             f"a {steps}-step prediction needs the model's noise levels; fit the model by ML"
@@ -684,7 +692,7 @@ def prediction(
         start = _estimated_start(zm, values, data, has_noise)
         values.update(start.values)
         if has_noise:
-            values.update({f"sigma_x0_{k.removeprefix('x0_')}": v for k, v in start.sd.items()})
+            values.update({initial_spread_name(target_of(k)): v for k, v in start.sd.items()})
     sources = []
     if has_noise:
         y_hat, sd = noise_band(net, values, data, steps)
@@ -742,8 +750,6 @@ INITIAL_STATES = ("estimated", "steady")
 
 def _estimated_start(zm: ZoneModel, values: Mapping[str, float], data: Dataset, has_noise: bool):
     """The unmeasured nodes' initial temperatures for an open-loop prediction on ``data``."""
-    from rczone.estimation.parameters import measurement_noise_names
-
     net = zm.network
     if has_noise:
         noise = [values[n] for n in measurement_noise_names(net.outputs)]
@@ -753,7 +759,7 @@ def _estimated_start(zm: ZoneModel, values: Mapping[str, float], data: Dataset, 
         noise = [level] * len(net.outputs)
     noise = [max(float(v), 1e-3) for v in noise]
     prior = {
-        s: float(values.get(f"sigma_x0_{s}", INITIAL_STATE_PRIOR_K)) or INITIAL_STATE_PRIOR_K
+        s: float(values.get(initial_spread_name(s), INITIAL_STATE_PRIOR_K)) or INITIAL_STATE_PRIOR_K
         for s in net.state_names
     }
     return estimate_initial_state(net, values, data, noise, prior)
@@ -761,18 +767,16 @@ def _estimated_start(zm: ZoneModel, values: Mapping[str, float], data: Dataset, 
 
 def noise_values(zm: ZoneModel) -> dict[str, float]:
     """The model's noise levels completed with the defaults for those it has none of (empty without any)."""
-    if not any(k.startswith("sigma_") for k in zm.noise):
+    if not any(is_noise_name(k) for k in zm.noise):
         return {}
-    from rczone.estimation.parameters import NOISE_DEFAULTS, noise_parameter_names
+    from rczone.estimation.parameters import noise_parameter_names
 
     values = dict(zm.noise)
     for n in noise_parameter_names(zm.network):
-        if n.startswith("sigma_w_") and n not in values:
-            values[n] = 0.0
-        elif n.startswith("sigma_x0_") and n not in values:
-            values[n] = NOISE_DEFAULTS["sigma_x0"]
-        elif n.startswith("sigma_v") and n not in values:
-            values[n] = 0.0
+        kind = kind_of(n)
+        if n in values or kind == INITIAL_STATE:
+            continue
+        values[n] = KINDS[INITIAL_SPREAD].default if kind == INITIAL_SPREAD else 0.0
     return values
 
 

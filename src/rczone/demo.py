@@ -20,6 +20,7 @@ from rczone.models import get_model
 from rczone.models.paper import Q_PAPER
 from rczone.models.reduction import F_PER_K, PAPER_DU_K, band_matched_model
 from rczone.network import RCNetwork
+from rczone.network.stochastic import measurement_noise_names, process_noise_name
 from rczone.report import Report
 from rczone.report import figures as figs
 from rczone.virtual.operation import Operation
@@ -43,11 +44,12 @@ VARIANTS = (
     "first-order-band",
 )
 #: The paper's unknowns (section IV: theta = [Cr, Rw], the initial state taken from the data), plus
-#: the noise levels a likelihood fit needs.
+#: the noise levels a likelihood fit needs (of the one output and state Ti).
+_PAPER_NOISE = (*measurement_noise_names(("Ti",)), process_noise_name("Ti"))
 PAPER_FREE = {
     "ls": ("Cr", "Rw"),
-    "ml": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
-    "map": ("Cr", "Rw", "sigma_v", "sigma_w_Ti"),
+    "ml": ("Cr", "Rw", *_PAPER_NOISE),
+    "map": ("Cr", "Rw", *_PAPER_NOISE),
 }
 
 

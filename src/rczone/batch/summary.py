@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 
 from rczone.atomic import write_json_in
+from rczone.network.stochastic import is_reserved
 from rczone.report import Report
 from rczone.report.html import ReportFigure as Figure
 
@@ -91,7 +92,7 @@ def write_summary(df: pd.DataFrame, folder: str | Path, title: str = "rczone bat
     write_json_in(folder, "summary.json", s)
     rep = Report(f"{title}: {s['tasks']} calibrations of {s['zones']} zones")
     rep.paragraph(f"{s['ok']} succeeded, {s['failed']} failed.", "warn" if s["failed"] else "")
-    params = [p for p in parameter_names(df) if not p.startswith(("sigma_", "x0_"))]
+    params = [p for p in parameter_names(df) if not is_reserved(p)]
     if params and s["ok"]:
         rep.heading("Distribution of the estimates")
         rep.figure("estimates", _histograms(df, params), "Estimates across zones (log scale), per method")

@@ -15,7 +15,7 @@ discretization module (:func:`rczone.simulation.discretize.process_noise_covaria
 by :class:`rczone.control.model.ControlModel`).
 
 A model without fitted noise (a least-squares fit, construction values) gets the documented
-defaults of :data:`rczone.estimation.parameters.NOISE_DEFAULTS`, and :attr:`NoiseModel.source`
+defaults of :data:`rczone.network.stochastic.KINDS`, and :attr:`NoiseModel.source`
 says so.
 
 References
@@ -36,8 +36,15 @@ from typing import Any
 import numpy as np
 
 from rczone.errors import ParameterError
-from rczone.estimation.parameters import NOISE_DEFAULTS, measurement_noise_names
 from rczone.models.zone import ZoneModel
+from rczone.network.stochastic import (
+    KINDS,
+    MEASUREMENT_NOISE,
+    PROCESS_NOISE,
+    measurement_noise_names,
+    process_noise_name,
+    process_noise_names,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,7 +80,7 @@ class NoiseModel:
         """
         net = model.network
         values = {**dict(model.noise), **dict(overrides or {})}
-        w_names = [f"sigma_w_{s}" for s in net.state_names]
+        w_names = list(process_noise_names(net.state_names))
         v_names = list(measurement_noise_names(net.outputs))
         unknown = [k for k in dict(overrides or {}) if k not in (*w_names, *v_names)]
         if unknown:
@@ -81,8 +88,8 @@ class NoiseModel:
                 f"noise override {unknown[0]!r}: model {net.name!r} has the noise values "
                 f"{', '.join((*w_names, *v_names))}"
             )
-        sw = [values.get(k, NOISE_DEFAULTS["sigma_w"]) for k in w_names]
-        sv = [values.get(k, NOISE_DEFAULTS["sigma_v"]) for k in v_names]
+        sw = [values.get(k, KINDS[PROCESS_NOISE].default) for k in w_names]
+        sv = [values.get(k, KINDS[MEASUREMENT_NOISE].default) for k in v_names]
         for k, v in zip((*w_names, *v_names), (*sw, *sv)):
             if not (math.isfinite(v) and v >= 0):
                 raise ParameterError(f"noise value {k} = {v!r}: must be finite and >= 0")
@@ -109,6 +116,8 @@ class NoiseModel:
         """One line per noise value."""
         d = self.to_dict()
         lines = [f"noise model ({d['source']})"]
-        lines += [f"  sigma_w_{k:<10s} {v:.3g} K/sqrt(s)" for k, v in d["sigma_w_K_per_sqrt_s"].items()]
+        lines += [
+            f"  {process_noise_name(k):<18s} {v:.3g} K/sqrt(s)" for k, v in d["sigma_w_K_per_sqrt_s"].items()
+        ]
         lines += [f"  sigma_v {k:<10s} {v:.3g} K" for k, v in d["sigma_v_K"].items()]
         return "\n".join(lines)

@@ -38,6 +38,7 @@ from rczone.estimation.parameters import make_spec
 from rczone.estimation.uncertainty import profile
 from rczone.models import ZoneModel
 from rczone.network import RCNetwork
+from rczone.network.stochastic import initial_state_name, is_reserved
 
 #: Rise of the tempered negative log-likelihood that a 95 % profile interval allows.
 PROFILE_THRESHOLD = 0.5 * float(chdtri(1, 0.05))  # chi2(1) 95 % quantile
@@ -112,7 +113,7 @@ def _objective(model, frame: pd.DataFrame, res: FitResult, constants) -> tuple[O
     data = dataset(zm, frame, constants)
     ss0 = network.state_space()
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
-    x0_auto = {f"x0_{s}": float(v) for s, v in zip(ss0.state_names, x0a)}
+    x0_auto = {initial_state_name(s): float(v) for s, v in zip(ss0.state_names, x0a)}
     fixed = {
         k: v for k, v in res.fixed.items() if k not in network.parameters or not network.parameters[k].is_tied
     }
@@ -233,7 +234,7 @@ def compare_fits(
     keys = list(fits)
     if names is None and keys:
         common = set.intersection(*(set(f.names) for f in fits.values()))
-        names = [n for n in fits[keys[0]].names if n in common and not n.startswith(("sigma_", "x0_"))]
+        names = [n for n in fits[keys[0]].names if n in common and not is_reserved(n)]
     out = []
     for i, a in enumerate(keys):
         for b in keys[i + 1 :]:

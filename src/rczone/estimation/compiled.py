@@ -20,7 +20,6 @@ from __future__ import annotations
 import numpy as np
 
 from rczone.estimation.methods import METHODS, method_of
-from rczone.estimation.parameters import measurement_noise_names
 from rczone.kernels.arrays import (
     ConductanceArrays,
     Penalty,
@@ -33,6 +32,12 @@ from rczone.kernels.arrays import (
 from rczone.kernels.kalman import STEADY_RTOL
 from rczone.kernels.problem import evaluate, theta_of_z
 from rczone.network.parameters import proportional_base
+from rczone.network.stochastic import (
+    initial_spread_names,
+    initial_state_names,
+    measurement_noise_names,
+    process_noise_names,
+)
 from rczone.simulation.discretize import SYMMETRY_RTOL
 
 
@@ -115,8 +120,8 @@ def compiled_problem(objective) -> Problem | None:
     noise = []
     for group in (
         measurement_noise_names(net.outputs),
-        [f"sigma_w_{s}" for s in states],
-        [f"sigma_x0_{s}" for s in states],
+        process_noise_names(states),
+        initial_spread_names(states),
     ):
         if method_of(objective.method).kernel == "ls":
             noise.append((np.full(len(group), -1, dtype=np.int64), np.zeros(len(group))))
@@ -125,7 +130,7 @@ def compiled_problem(objective) -> Problem | None:
         if sl is None:
             return None
         noise.append(sl)
-    x0_names = [f"x0_{s}" for s in states]
+    x0_names = initial_state_names(states)
     given = np.array([n in spec.names or n in spec.fixed for n in x0_names], dtype=bool)
     x0_idx = np.array([spec.names.index(n) if n in spec.names else -1 for n in x0_names], dtype=np.int64)
     x0_k = np.array([1.0 if n in spec.names else float(spec.fixed.get(n, 0.0)) for n in x0_names])

@@ -39,7 +39,6 @@ from rczone.estimation.kalman import (
     kalman_filter_arrays,
     stochastic_matrices,
 )
-from rczone.estimation.parameters import measurement_noise_names
 from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.kalman import (
@@ -52,6 +51,16 @@ from rczone.kernels.kalman import (
 )
 from rczone.kernels.problem import trapezoid
 from rczone.network import BilinearStateSpace, RCNetwork
+from rczone.network.stochastic import (
+    MEASUREMENT_NOISE,
+    initial_spread_name,
+    initial_spread_names,
+    initial_state_names,
+    measurement_noise_names,
+    parameter_name,
+    process_noise_name,
+    process_noise_names,
+)
 from rczone.simulation.discretize import symmetrizing_scale
 from rczone.simulation.simulate import propagate, transition_matrices
 
@@ -124,7 +133,7 @@ def auto_initial_state(ss: BilinearStateSpace, u0: np.ndarray, m0: np.ndarray, y
 
 def initial_state(ss: BilinearStateSpace, values: Mapping[str, float], data: Dataset) -> np.ndarray:
     """Initial state from ``x0_<state>`` values where given, else :func:`auto_initial_state`."""
-    names = [f"x0_{s}" for s in ss.state_names]
+    names = initial_state_names(ss.state_names)
     if all(n in values for n in names):
         return np.array([values[n] for n in names])
     x = auto_initial_state(ss, data.u[0], data.m[0], data.y[0])
@@ -144,12 +153,13 @@ def noise_values(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(sigma_w, sigma_x0, sigma_v)`` from ``values``: per state, per state, per output; validated."""
     try:
-        sw = np.array([values[f"sigma_w_{n}"] for n in ss.state_names], dtype=float)
-        sx = np.array([values[f"sigma_x0_{n}"] for n in ss.state_names], dtype=float)
+        sw = np.array([values[n] for n in process_noise_names(ss.state_names)], dtype=float)
+        sx = np.array([values[n] for n in initial_spread_names(ss.state_names)], dtype=float)
         sv = np.array([values[n] for n in measurement_noise_names(ss.output_names)], dtype=float)
     except KeyError as exc:
         raise ParameterError(f"noise parameter {exc.args[0]!r} has no value; fix it or free it") from None
-    for nm, v in (("sigma_v", sv), ("sigma_w_*", sw), ("sigma_x0_*", sx)):
+    labels = (parameter_name(MEASUREMENT_NOISE, None), process_noise_name("*"), initial_spread_name("*"))
+    for nm, v in zip(labels, (sv, sw, sx), strict=True):
         if not all(0.0 <= x < math.inf for x in v):  # also rejects NaN
             raise ParameterError(f"{nm} must be finite and >= 0, got {v}")
     return sw, sx, sv
@@ -206,7 +216,7 @@ def _initial_state_derivatives(
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`initial_state` and its derivatives (len(wrt), n) along ``derivs`` (None: no state-space change)."""
     n = ss.n_states
-    names = [f"x0_{s}" for s in ss.state_names]
+    names = initial_state_names(ss.state_names)
     x = initial_state(ss, values, data)
     dx = np.zeros((len(wrt), n))
     if not all(nm in values for nm in names):
@@ -293,9 +303,9 @@ def general_cost(
         sv_names = measurement_noise_names(ss.output_names)
         for k, w in enumerate(wrt):
             for i, s in enumerate(ss.state_names):
-                if w == f"sigma_w_{s}":
+                if w == process_noise_name(s):
                     dqc[k, i] = 2.0 * sw[i]
-                elif w == f"sigma_x0_{s}":
+                elif w == initial_spread_name(s):
                     dP0[k, i, i] = 2.0 * sx[i]
             if w in sv_names:
                 j = sv_names.index(w)

@@ -33,12 +33,23 @@ from rczone.estimation.engines import general_cost
 from rczone.estimation.kalman import kalman_innovations_fast
 from rczone.estimation.methods import Method, method_of
 from rczone.estimation.optimize import OPTIMIZERS
-from rczone.estimation.parameters import NOISE_DEFAULTS, make_spec, noise_parameter_names
+from rczone.estimation.parameters import make_spec
 from rczone.estimation.resolution import noise_floor
 from rczone.estimation.result import FitResult
 from rczone.estimation.search import global_search
 from rczone.estimation.uncertainty import covariance, hessian
 from rczone.network import RCNetwork
+from rczone.network.stochastic import (
+    KINDS,
+    MEASUREMENT_NOISE,
+    initial_state_name,
+    initial_state_names,
+    is_noise_name,
+    kind_of,
+    measurement_noise_names,
+    process_noise_names,
+)
+from rczone.network.stochastic import unit_of as stochastic_unit
 from rczone.results import Estimate
 from rczone.simulation.simulate import HOLDS
 
@@ -83,10 +94,10 @@ def default_free(
     free = list(network.default_free)
     measured = measured_states(network)
     if method_of(method).stochastic:
-        free += [n for n in noise_parameter_names(network) if n.startswith("sigma_v")]
-        free += [f"sigma_w_{s}" for s in (measured if noise == "measured" else network.state_names)]
+        free += measurement_noise_names(network.outputs)
+        free += process_noise_names(measured if noise == "measured" else network.state_names)
     elif initial_state == "estimate":
-        free += [f"x0_{s}" for s in network.state_names if s not in measured]
+        free += initial_state_names(s for s in network.state_names if s not in measured)
     return tuple(free)
 
 
@@ -97,9 +108,7 @@ def noise_bounds(network: RCNetwork, data: Dataset, free: Sequence[str]) -> dict
     output's spread (a noise larger than the signal explains nothing), at least 100 floors.
     """
     out = {}
-    names = [n for n in noise_parameter_names(network) if n.startswith("sigma_v")]
-    for j, o in enumerate(network.outputs):
-        name = names[0] if len(names) == 1 else f"sigma_v_{o}"
+    for j, name in enumerate(measurement_noise_names(network.outputs)):
         if name not in free:
             continue
         y = data.y[:, j]
@@ -202,7 +211,7 @@ def fit(
     data.check_against(network)
     free = tuple(free) if free else default_free(network, method, initial_state)
     if not meth.stochastic:
-        noisy = [n for n in free if n.startswith("sigma_")]
+        noisy = [n for n in free if is_noise_name(n)]
         if noisy:
             raise ParameterError(
                 f"noise parameter(s) {noisy} cannot be estimated by least squares; use method='ml' or 'map'"
@@ -210,12 +219,12 @@ def fit(
     rng = np.random.default_rng(0) if rng is None else rng
     ss0 = network.state_space()
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
-    x0_auto = {f"x0_{s}": float(v) for s, v in zip(ss0.state_names, x0a)}
+    x0_auto = {initial_state_name(s): float(v) for s, v in zip(ss0.state_names, x0a)}
     all_bounds = {**noise_bounds(network, data, free), **dict(bounds or {})}
     start = dict(start or {})
     for name, (lo, hi) in all_bounds.items():
-        if name.startswith("sigma_v") and name not in start and name not in (bounds or {}):
-            v = NOISE_DEFAULTS["sigma_v"]
+        if kind_of(name) == MEASUREMENT_NOISE and name not in start and name not in (bounds or {}):
+            v = KINDS[MEASUREMENT_NOISE].default
             if not lo < v < hi:  # a coarse logger: start above its resolution
                 start[name] = math.sqrt(lo * hi) if hi < 100 * lo else 10.0 * lo
     spec = make_spec(network, free, bounds=all_bounds, start=start, fixed=fixed, x0_auto=x0_auto)
@@ -334,8 +343,4 @@ def _unit_of(network: RCNetwork, name: str) -> str:
     """SI unit of a free parameter, for tables."""
     if name in network.parameters:
         return network.parameters[name].unit or ""
-    if name.startswith("sigma_w_"):
-        return "K/sqrt(s)"
-    if name.startswith("x0_"):
-        return "degC"  # a temperature, not a difference of temperatures
-    return "K" if name.startswith("sigma_") else ""
+    return stochastic_unit(name) or ""

@@ -14,8 +14,10 @@ name                          unit       meaning
 ``sigma_x0_<state>``          K          standard deviation of the initial state
 ============================  =========  ==================================================
 
+Those names are built and read by :mod:`rczone.network.stochastic` only.
+
 Any subset is *free* (estimated); the others are fixed at the values given by the
-user or at their defaults (network declarations, :data:`NOISE_DEFAULTS`). Tied network
+user or at their defaults (network declarations, :data:`rczone.network.stochastic.KINDS`). Tied network
 parameters (``R1 = Rw/2``) are handled by the network and are never free.
 
 ``theta`` is the physical value; ``eta`` the optimizer's value: ``eta = log(theta)``
@@ -33,16 +35,14 @@ import numpy as np
 
 from rczone.errors import ParameterError, did_you_mean
 from rczone.network import RCNetwork
-
-#: Default values of the noise parameters (``x0`` defaults to the data-driven value).
-NOISE_DEFAULTS = {"sigma_v": 0.1, "sigma_w": 1e-3, "sigma_x0": 1.0}
-
-#: Values of noise parameters that are neither free nor given: no process noise on a state whose
-#: noise is not estimated. (A fixed nonzero intensity on an unmeasured wall or slab node, e.g. the
-#: start value 1e-3 K/sqrt(s), i.e. a random walk of 0.06 K per hour, is a strong claim the data never
-#: checked; on a synthetic zone with exact structure it biased the ML estimates of R and C by 20-27 %
-#: where zero gives the truth within the standard errors.)
-FIXED_NOISE_DEFAULTS = {"sigma_w": 0.0}
+from rczone.network.stochastic import (
+    FIXED_PROCESS_NOISE,
+    INITIAL_STATE,
+    PROCESS_NOISE,
+    default_value,
+    kind_of,
+    stochastic_parameter_names,
+)
 
 #: Default bound factor for log-transformed parameters: ``[theta0 / f, theta0 * f]``.
 LOG_BOUND_FACTOR = 1000.0
@@ -53,43 +53,24 @@ X0_HALF_WIDTH = 20.0
 _LOG_KINDS = ("resistance", "capacitance", "noise")
 
 
-def measurement_noise_names(outputs: Sequence[str]) -> tuple[str, ...]:
-    """``("sigma_v",)`` for one output, else ``sigma_v_<output>`` per output (``R`` is their squares)."""
-    return ("sigma_v",) if len(outputs) == 1 else tuple(f"sigma_v_{o}" for o in outputs)
-
-
 def noise_parameter_names(network: RCNetwork) -> tuple[str, ...]:
     """Names of the stochastic-model parameters of ``network`` (see the module table)."""
-    s = network.state_names
-    return (
-        *measurement_noise_names(network.outputs),
-        *(f"sigma_w_{n}" for n in s),
-        *(f"x0_{n}" for n in s),
-        *(f"sigma_x0_{n}" for n in s),
-    )
+    return stochastic_parameter_names(network.outputs, network.state_names)
 
 
 def parameter_kind(network: RCNetwork, name: str) -> str:
     """Kind of a parameter: a network kind, ``"noise"`` (std devs) or ``"state"`` (x0)."""
     if name in network.parameters:
         return network.parameters[name].kind
-    if name.startswith("x0_"):
-        return "state"
-    return "noise"
+    return "state" if kind_of(name) == INITIAL_STATE else "noise"
 
 
 def _default_value(network: RCNetwork, name: str, x0_auto: Mapping[str, float] | None) -> float | None:
     if name in network.parameters:
         return network.parameters[name].value
-    if name == "sigma_v" or name.startswith("sigma_v_"):
-        return NOISE_DEFAULTS["sigma_v"]
-    if name.startswith("sigma_w_"):
-        return NOISE_DEFAULTS["sigma_w"]
-    if name.startswith("sigma_x0_"):
-        return NOISE_DEFAULTS["sigma_x0"]
-    if name.startswith("x0_") and x0_auto is not None:
-        return x0_auto.get(name)
-    return None
+    if kind_of(name) == INITIAL_STATE:
+        return None if x0_auto is None else x0_auto.get(name)
+    return default_value(name)
 
 
 def check_name(network: RCNetwork, name: str, what: str = "parameter") -> None:
@@ -312,11 +293,7 @@ def make_spec(
         # current parameters (auto_initial_state), not from the construction values
         v = fixed.get(name)
         if v is None:
-            v = (
-                FIXED_NOISE_DEFAULTS["sigma_w"]
-                if name.startswith("sigma_w_")
-                else _default_value(network, name, None)
-            )
+            v = FIXED_PROCESS_NOISE if kind_of(name) == PROCESS_NOISE else _default_value(network, name, None)
         if v is not None:
             values[name] = float(v)
     return ParameterSpec(free, kinds, log, st, lo, hi, con, MappingProxyType(values))

@@ -31,6 +31,7 @@ from rczone.estimation.data import Dataset
 from rczone.estimation.innovations import acf, ljung_box_q
 from rczone.estimation.kalman import kalman_filter_arrays
 from rczone.network import RCNetwork
+from rczone.network.stochastic import initial_state_names
 from rczone.simulation.simulate import propagate, transition_matrices
 
 
@@ -146,7 +147,7 @@ def estimate_initial_state(
     """
     ss = network.state_space(network_theta(network, values))
     x_ss = initial_state(ss, {}, data)
-    names = [f"x0_{s}" for s in ss.state_names]
+    names = initial_state_names(ss.state_names)
     measured = measured_states(ss)
     free = [i for i in range(ss.n_states) if i not in measured]
     steady = {names[i]: float(x_ss[i]) for i in free}

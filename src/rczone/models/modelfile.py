@@ -42,6 +42,7 @@ errors with a suggestion, so a typo never drops a setting silently::
     Rea = { value = 20, unit = "K/kW", fixed = true }   # held unless a fit frees it
     Aw  = { value = 2, unit = "m2", bounds = [0, 50] }
     # R1 = { expr = "Rw/2" }           # a tie: follows other parameters, never estimated
+    # Rie = { value = 2, unit = "K/kW", prior = { dist = "lognormal", median = 2, sigma = 0.7 } }
 
     [inputs]                           # how inputs are found in data besides by name
     # Q = { default = 50, description = "internal gain, W" }  # constant when the data lack Q
@@ -52,7 +53,10 @@ parameter used only in ties takes the kind of the ties that use it. Units: resis
 ``K/W``, ``K/kW``; capacities ``J/K``, ``kJ/K``, ``MJ/K``, ``Wh/K``, ``kWh/K``; gains ``1`` or
 ``m2`` (an aperture for an irradiance input); heat inputs ``W`` or ``W/m2``. Bounds are in the
 parameter's unit. The free parameters of a fit are, by default, every resistance, capacitance and
-gain not marked ``fixed`` (and the noise levels for ML).
+gain not marked ``fixed`` (and the noise levels for ML). A parameter's ``prior`` table declares
+its prior distribution (:mod:`rczone.network.prior`: ``lognormal`` with ``median``, ``sigma``;
+``normal`` with ``mean``, ``sigma``; ``uniform`` with ``lower``, ``upper``), numbers in the
+parameter's unit except a log-normal's dimensionless ``sigma``.
 
 Model files are untrusted input: size, encoding (UTF-8), nesting (:mod:`rczone.textfiles`), names, numbers (finite),
 units and tie expressions (bounded arithmetic, evaluated by rczone, never executed) are checked,
@@ -68,7 +72,7 @@ from typing import Any
 
 from rczone.errors import ModelFileError, RczoneError, did_you_mean
 from rczone.models.zone import ModelInputs, ZoneModel, read_model_document
-from rczone.network import CP_AIR, HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
+from rczone.network import CP_AIR, HeatInput, Node, Parameter, Prior, RCNetwork, Resistor, SupplyAir
 from rczone.network.network import HEAT_INPUT_UNITS
 from rczone.network.parameters import expression_names
 
@@ -87,7 +91,7 @@ TOP_KEYS = (
 NODE_KEYS = ("capacity", "description")
 HEAT_KEYS = ("to", "unit", "description")
 AIR_KEYS = ("node", "flow", "temperature", "cp")
-PARAMETER_KEYS = ("value", "unit", "bounds", "fixed", "expr", "kind", "description")
+PARAMETER_KEYS = ("value", "unit", "bounds", "fixed", "expr", "kind", "description", "prior")
 INPUT_KEYS = ("default", "mean_of", "description")
 
 #: Units accepted for parameter values, per kind: factor to the SI unit (first entry).
@@ -383,6 +387,11 @@ def _parameters(
             if not isinstance(spec["description"], str):
                 raise r.err(f"{where}.description", "must be text")
             kw["description"] = spec["description"]
+        if "prior" in spec:
+            try:
+                kw["prior"] = Prior.from_dict(r.table(spec["prior"], f"{where}.prior"), scale=factor)
+            except RczoneError as exc:
+                raise r.err(f"{where}.prior", str(exc)) from None
         if "value" not in spec and "expr" not in spec:
             raise r.err(where, "needs a value (or an expr for a tie)")
         try:
@@ -501,6 +510,8 @@ def model_to_toml(model: ZoneModel | RCNetwork, header: str = "") -> str:
             ps["fixed"] = True
         if p.description:
             ps["description"] = p.description
+        if p.prior is not None:
+            ps["prior"] = p.prior.to_dict()
         if p.kind == "gain" and p.unit == "1":
             ps.pop("unit", None)
         lines.append(f"{_key(p.name)} = {_toml_value(ps)}")

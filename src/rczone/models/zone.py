@@ -45,6 +45,7 @@ from rczone.errors import (
 )
 from rczone.network import BilinearStateSpace, LinearStateSpace, RCNetwork
 from rczone.network.serialize import network_from_dict, network_to_dict
+from rczone.network.stochastic import is_reserved
 from rczone.simulation import SimulationResult, foh, simulate, zoh
 
 FORMAT = "rczone-model/1"
@@ -181,7 +182,7 @@ class ZoneModel:
         vals = self.network.values(theta)  # validates names, ranges and ties now
         self.inputs.check_against(self.network)
         for k, v in dict(self.noise).items():
-            if not str(k).startswith(("sigma_", "x0_")) or not (
+            if not is_reserved(k) or not (
                 isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
             ):
                 raise ModelFileError(f"noise value {k!r} = {v!r}: expected sigma_*/x0_* with a finite number")
@@ -484,7 +485,7 @@ class ZoneModel:
         if noise is None:
             legacy = prov.get("noise_and_initial_state", {})
             noise = (
-                {k: v for k, v in legacy.items() if str(k).startswith("sigma_")}
+                {k: v for k, v in legacy.items() if is_reserved(k, noise_only=True)}
                 if isinstance(legacy, Mapping)
                 else {}
             )

@@ -2,6 +2,7 @@
 
 from rczone.network.network import CP_AIR, HeatInput, Node, RCNetwork, Resistor, SupplyAir
 from rczone.network.parameters import Parameter
+from rczone.network.prior import Prior
 from rczone.network.statespace import BilinearStateSpace, LinearStateSpace, StateSpaceDerivative
 
 __all__ = [
@@ -11,6 +12,7 @@ __all__ = [
     "LinearStateSpace",
     "Node",
     "Parameter",
+    "Prior",
     "RCNetwork",
     "Resistor",
     "StateSpaceDerivative",

@@ -44,6 +44,7 @@ from rczone.network.parameters import (
     evaluate_ties,
     resolve,
 )
+from rczone.network.prior import Prior
 from rczone.network.statespace import BilinearStateSpace, StateSpaceDerivative
 
 #: Specific heat of air at constant pressure, J/(kg K), used when none is given.
@@ -301,6 +302,11 @@ class RCNetwork:
     def free_parameter_names(self) -> tuple[str, ...]:
         """Base (untied) parameter names."""
         return tuple(n for n, p in self.parameters.items() if not p.is_tied)
+
+    @property
+    def priors(self) -> dict[str, Prior]:
+        """The declared priors (:mod:`rczone.network.prior`), by parameter name."""
+        return {n: p.prior for n, p in self.parameters.items() if p.prior is not None}
 
     @property
     def default_free(self) -> tuple[str, ...]:

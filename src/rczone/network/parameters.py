@@ -28,6 +28,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 from rczone.errors import ParameterError, did_you_mean
+from rczone.network.prior import Prior
+from rczone.network.stochastic import RESERVED_PREFIXES, is_reserved
 
 #: Kinds of parameter; ``resistance`` and ``capacitance`` must be strictly positive.
 KINDS = ("resistance", "capacitance", "gain", "other")
@@ -35,8 +37,8 @@ KINDS = ("resistance", "capacitance", "gain", "other")
 #: Kinds estimated by default (unless declared ``fixed``).
 ESTIMATED_KINDS = ("resistance", "capacitance", "gain")
 
-#: Name prefixes of the estimation's own parameters (noise, initial state), not network parameters.
-RESERVED_PREFIXES = ("sigma_", "x0_")
+#: Kinds whose values are strictly positive (and may have a log-normal prior).
+POSITIVE_KINDS = ("resistance", "capacitance")
 
 _UNITS = {"resistance": "K/W", "capacitance": "J/K", "gain": "1", "other": ""}
 
@@ -82,6 +84,9 @@ class Parameter:
     fixed : bool
         Held at ``value`` unless a fit names it as free. Default False: base resistances,
         capacitances and gains are estimated (:attr:`RCNetwork.default_free`).
+    prior : Prior, optional
+        Prior distribution of the value (:mod:`rczone.network.prior`); a log-normal only for a
+        resistance or a capacitance. Declared and kept, not yet used by an estimator.
     """
 
     name: str
@@ -92,11 +97,12 @@ class Parameter:
     description: str = ""
     bounds: tuple[float, float] | None = None
     fixed: bool = False
+    prior: Prior | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name.isidentifier() or keyword.iskeyword(self.name):
             raise ParameterError(f"parameter name {self.name!r} is not a valid identifier")
-        if self.name.startswith(RESERVED_PREFIXES):
+        if is_reserved(self.name):
             raise ParameterError(
                 f"parameter name {self.name!r}: names starting with {' or '.join(RESERVED_PREFIXES)} are"
                 " reserved for the noise and initial-state parameters of the estimation"
@@ -130,11 +136,31 @@ class Parameter:
             )
         if self.bounds is not None:
             object.__setattr__(self, "bounds", _check_bounds(self, self.bounds))
+        if self.prior is not None:
+            _check_prior(self, self.prior)
 
     @property
     def is_tied(self) -> bool:
         """True when the parameter is defined by an expression."""
         return self.expr is not None
+
+
+def _check_prior(p: Parameter, prior: object) -> None:
+    if not isinstance(prior, Prior):
+        raise ParameterError(
+            f"parameter {p.name!r}: prior must be a Prior, got {type(prior).__name__}"
+            " (e.g. Prior('lognormal', median=0.01, sigma=0.7))"
+        )
+    if p.is_tied:
+        raise ParameterError(
+            f"parameter {p.name!r} is tied ({p.name} = {p.expr}); it follows its expression,"
+            " so a prior belongs to the parameters it depends on"
+        )
+    if prior.needs_positive and p.kind not in POSITIVE_KINDS:
+        raise ParameterError(
+            f"parameter {p.name!r}: a {prior.dist} prior needs a positive parameter (a resistance or a"
+            f" capacitance), not a {p.kind}; use a normal or uniform prior"
+        )
 
 
 def _check_bounds(p: Parameter, bounds: object) -> tuple[float, float]:

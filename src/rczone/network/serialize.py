@@ -13,10 +13,11 @@ from typing import Any
 from rczone.errors import NetworkError, ParameterError
 from rczone.network.network import HeatInput, Node, RCNetwork, Resistor, SupplyAir
 from rczone.network.parameters import Parameter
+from rczone.network.prior import Prior
 
 FORMAT = "rczone-network/1"
 
-_PARAMETER_KEYS = ("name", "kind", "value", "expr", "unit", "description", "bounds", "fixed")
+_PARAMETER_KEYS = ("name", "kind", "value", "expr", "unit", "description", "bounds", "fixed", "prior")
 
 
 def network_to_dict(net: RCNetwork) -> dict[str, Any]:
@@ -43,6 +44,8 @@ def network_to_dict(net: RCNetwork) -> dict[str, Any]:
                 "description": p.description,
                 "bounds": list(p.bounds) if p.bounds is not None else None,
                 "fixed": p.fixed,
+                # written only when declared, so a model without priors keeps its JSON
+                **({"prior": p.prior.to_dict()} if p.prior is not None else {}),
             }
             for p in net.parameters.values()
         ],
@@ -106,6 +109,8 @@ def _parameter(p: object, i: int) -> Parameter:
         kw["bounds"] = tuple(_value(x, f"{where}.bounds") for x in b)
     if p.get("fixed") is not None:
         kw["fixed"] = p["fixed"]
+    if p.get("prior") is not None:
+        kw["prior"] = Prior.from_dict(_table(p["prior"], f"{where}.prior"))
     return Parameter(**kw)
 
 

@@ -7,6 +7,7 @@ import html
 import numpy as np
 
 from rczone.calibrate import Prediction
+from rczone.network.stochastic import target_of
 from rczone.report.html import Report
 from rczone.report.html import ReportFigure as Figure
 
@@ -70,7 +71,7 @@ def prediction_report(pred: Prediction, data_name: str, model_name: str) -> Repo
         rep.table(
             [
                 {
-                    "node": k.removeprefix("x0_"),
+                    "node": target_of(k),
                     "initial temperature (°C)": start.values[k],
                     "steady state (°C)": start.steady[k],
                     "std. error (K)": sd,

@@ -58,6 +58,7 @@ from rczone.calibrate import Calibration, ModelLike, as_model, calibrate, comple
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.fit import default_free
 from rczone.models import ZoneModel
+from rczone.network.stochastic import MEASUREMENT_NOISE, PROCESS_NOISE, kind_of, process_noise_name, target_of
 from rczone.results import Result
 from rczone.results.verdict import EXIT_UNTRUSTED
 from rczone.selection.coupling import (
@@ -620,12 +621,12 @@ def _warm_start(zm: ZoneModel, simpler: Candidate, nest: Nesting) -> ZoneModel:
         elif not any(k == q for q, _ in nest.restriction):
             # (without declared bounds the box is relative to the start: a limit value would ruin it)
             theta[k] = v
-    noise = {k: v for k, v in source.noise.items() if k in ("sigma_v",) or k.startswith("sigma_v_")}
+    noise = {k: v for k, v in source.noise.items() if kind_of(k) == MEASUREMENT_NOISE}
     for k, v in source.noise.items():
-        if k.startswith("sigma_w_"):
-            state = nest.node_map.get(k[len("sigma_w_") :])
+        if kind_of(k) == PROCESS_NOISE:
+            state = nest.node_map.get(target_of(k))
             if state is not None:
-                noise[f"sigma_w_{state}"] = v
+                noise[process_noise_name(state)] = v
     return zm.with_values(theta, {**zm.noise, **noise})
 
 

@@ -72,6 +72,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from rczone.network import RCNetwork
+from rczone.network.stochastic import MEASUREMENT_NOISE, is_reserved, parameter_name, parse_name
 
 #: Most unmeasured nodes whose correspondence is searched (their permutations are tried).
 MAX_MATCHED_NODES = 7
@@ -475,11 +476,10 @@ def _pairs(a: _Skeleton, b: _Skeleton, phi: dict[str, str]) -> list[tuple[Term, 
 
 def _noise_matches(free_a: set[str], free_b: set[str], phi: Mapping[str, str]) -> bool:
     for name in free_a:
-        for prefix in ("sigma_w_", "sigma_x0_", "x0_"):
-            if name.startswith(prefix):
-                name = prefix + phi.get(name[len(prefix) :], name[len(prefix) :])
-                break
-        if name.startswith(("sigma_", "x0_")) and name not in free_b:
+        p = parse_name(name)
+        if p is not None and p.kind != MEASUREMENT_NOISE:
+            name = parameter_name(p.kind, phi.get(p.target, p.target))
+        if is_reserved(name) and name not in free_b:
             return False
     return True
 

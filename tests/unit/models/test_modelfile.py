@@ -165,6 +165,35 @@ BAD = [
     ("resistors = 3\n[nodes]\nTi = 'C'\n[parameters]\nC = 1", r"resistors: must be a list"),
     ("x = " + "[" * 5000 + "]" * 5000, r"nested more than 32 levels"),
     ("[nodes]\n[parameters]\n", r"missing 'resistors'"),
+    (
+        GOOD.replace(
+            'Rie = { value = 2, unit = "K/kW" }',
+            'Rie = { value = 2, prior = { dist = "lognormal", median = 2, sigm = 1 } }',
+        ),
+        r"Rie.prior: lognormal prior: unknown key 'sigm'; did you mean 'sigma'",
+    ),
+    (
+        GOOD.replace(
+            'Rie = { value = 2, unit = "K/kW" }',
+            'Rie = { value = 2, prior = { dist = "normal", mean = 2, sigma = 0 } }',
+        ),
+        r"Rie.prior: normal prior: sigma must be > 0",
+    ),
+    (
+        GOOD.replace(
+            'Aw  = { value = 2, unit = "m2", bounds = [0, 50] }',
+            'Aw  = { value = 2, prior = { dist = "lognormal", median = 2, sigma = 1 } }',
+        ),
+        r"Aw: parameter 'Aw': a lognormal prior needs a positive parameter",
+    ),
+    (
+        GOOD.replace('Ce  = { value = 15, unit = "MJ/K" }', "Ce  = { value = 15, prior = 3 }"),
+        r"Ce.prior: must be a table",
+    ),
+    (
+        GOOD.replace('Ce  = { value = 15, unit = "MJ/K" }', "Ce  = { value = 15, prior = { median = 3 } }"),
+        r"Ce.prior: a prior needs dist",
+    ),
 ]
 
 
@@ -238,3 +267,35 @@ def test_saved_values_become_the_start(tmp_path) -> None:
     assert back.theta["Rw"] == 0.02 and back.noise == {"sigma_v": 0.05}
     assert back.network.parameters["Rw"].value == zm.network.parameters["Rw"].value  # construction kept
     assert back.inputs.defaults == {"Q": 50.0} and back.provenance["method"] == "ml"
+
+
+def test_priors_are_read_in_the_parameters_unit_and_written_back(tmp_path) -> None:
+    text = (
+        GOOD.replace(
+            'Rie = { value = 2, unit = "K/kW" }',
+            'Rie = { value = 2, unit = "K/kW", prior = { dist = "lognormal", median = 2.5, sigma = 0.7 } }',
+        )
+        .replace(
+            'Ce  = { value = 15, unit = "MJ/K" }',
+            'Ce  = { value = 15, unit = "MJ/K", prior = { dist = "normal", mean = 15, sigma = 3 } }',
+        )
+        .replace(
+            'Aw  = { value = 2, unit = "m2", bounds = [0, 50] }',
+            'Aw  = { value = 2, unit = "m2", bounds = [0, 50], prior = { dist = "uniform", lower = 0, upper = 10 } }',
+        )
+    )
+    net = read_model_file(_write(tmp_path, text)).network
+    # K/kW -> K/W and MJ/K -> J/K on the numbers in the unit; the log-normal sigma is a ratio
+    assert {n: p.to_dict() for n, p in net.priors.items()} == {
+        "Rie": {"dist": "lognormal", "median": pytest.approx(2.5e-3, rel=1e-12), "sigma": 0.7},
+        "Ce": {
+            "dist": "normal",
+            "mean": pytest.approx(15e6, rel=1e-12),
+            "sigma": pytest.approx(3e6, rel=1e-12),
+        },
+        "Aw": {"dist": "uniform", "lower": 0.0, "upper": 10.0},
+    }
+    back = read_model_file(_write(tmp_path, model_to_toml(net), "back.toml")).network
+    assert back.priors == net.priors
+    plain = read_model_file(_write(tmp_path, GOOD, "none.toml"))
+    assert plain.network.priors == {} and "prior" not in model_to_toml(plain)
