@@ -2,7 +2,9 @@
 
 * zero-order hold (inputs constant over a sample),
 * first-order hold (inputs linear between samples),
-* the discrete process-noise covariance of a continuous white-noise input (Van Loan).
+* the discrete process-noise covariance of a continuous white-noise input (Van Loan),
+* the mean of the state over a zero-order-hold step (:func:`zoh_with_mean`, for references stated
+  in hourly means).
 
 :func:`zoh`, :func:`foh` and :func:`van_loan` work for any state space through one block
 matrix exponential; :func:`process_noise_covariance` makes Van Loan's integral safe for
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.linalg import expm, expm_frechet
@@ -73,6 +76,44 @@ def _zoh_block(A: np.ndarray, B: np.ndarray, dt: float) -> np.ndarray:
     blk[:n, :n] = A * dt
     blk[:n, n:] = B * dt
     return blk
+
+
+class ZohWithMean(NamedTuple):
+    """A zero-order-hold step and the mean of the state over it (:func:`zoh_with_mean`)."""
+
+    Phi: np.ndarray  #: (n, n), ``x[k+1] = Phi x[k] + Gamma u[k]``
+    Gamma: np.ndarray  #: (n, p)
+    Psi: np.ndarray  #: (n, n), mean over the step ``= Psi x[k] + Lambda u[k]``
+    Lambda: np.ndarray  #: (n, p)
+
+
+def zoh_with_mean(A: np.ndarray, B: np.ndarray, dt: float) -> ZohWithMean:
+    """A zero-order-hold step and the exact mean of the state over it, from one block exponential.
+
+    ``(1/dt) integral_0^dt x(s) ds = Psi x[k] + Lambda u[k]``: the quantity hourly-mean
+    references (VDI 6007) are stated in. The exponential of ``[[0, I, 0], [0, A, B], [0, 0, 0]] dt``
+    holds ``Phi``, ``Gamma`` and the integrals ``int e^{As} ds`` and ``int int e^{Ar} B dr ds``
+    (Van Loan [2]_).
+
+    Examples
+    --------
+    One node of time constant ``tau``: the mean of ``x`` decaying from 1 with no input over a step
+    is ``(1 - exp(-dt / tau)) tau / dt``.
+
+    >>> import numpy as np
+    >>> step = zoh_with_mean(np.array([[-1 / 3600.0]]), np.zeros((1, 1)), 3600.0)
+    >>> bool(np.isclose(step.Psi[0, 0], 1 - np.exp(-1.0)))
+    True
+    """
+    n, p = B.shape
+    big = np.zeros((2 * n + p, 2 * n + p), np.result_type(A, B, float))
+    big[:n, n : 2 * n] = np.eye(n)
+    big[n : 2 * n, n : 2 * n] = A
+    big[n : 2 * n, 2 * n :] = B
+    E = expm(big * dt)
+    return ZohWithMean(
+        E[n : 2 * n, n : 2 * n], E[n : 2 * n, 2 * n :], E[:n, n : 2 * n] / dt, E[:n, 2 * n :] / dt
+    )
 
 
 def zoh_derivative(

@@ -41,10 +41,10 @@ from importlib import resources
 
 import numpy as np
 import pandas as pd
-from scipy.linalg import expm
 
 from rczone.errors import ParameterError, did_you_mean
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
+from rczone.simulation.discretize import zoh_with_mean
 
 #: Cases implemented; each maps to its parameter set and inputs below.
 CASES = ("TC1", "TC2", "TC3", "TC4", "TC5", "TC10", "TC12")
@@ -268,25 +268,19 @@ def hourly_means(case: str) -> np.ndarray:
     spec = SPECS[case]
     ss = network(spec).state_space()
     u_day, m_day, _ = inputs(case)
-    n, p = ss.n_states, ss.n_inputs
-    x = np.full(n, spec.room["T0"])
-    # augmented system [integral of x; x; u]: d/dt = [[0, I, 0], [0, A, B], [0, 0, 0]]
+    x = np.full(ss.n_states, spec.room["T0"])
+    # one exact step per hour and the exact mean of the state over it (rczone.simulation.discretize)
     steps = {}
     for mk in np.unique(m_day):
         A, B = ss.matrices(mk) if ss.n_flows else (ss.A, ss.B)
-        big = np.zeros((2 * n + p, 2 * n + p))
-        big[:n, n : 2 * n] = np.eye(n)
-        big[n : 2 * n, n : 2 * n] = A
-        big[n : 2 * n, 2 * n :] = B
-        steps[mk] = expm(big * 3600.0)
+        steps[mk] = zoh_with_mean(A, B, 3600.0)
     out = np.empty(HOURS)
     for k in range(HOURS):
         h = k % 24
-        E = steps[m_day[h]]
-        z = np.concatenate([np.zeros(n), x, u_day[h]])
-        z = E @ z
-        integral, x = z[:n], z[n : 2 * n]
-        out[k] = (ss.C @ integral)[0] / 3600.0 + (ss.D @ u_day[h])[0]
+        step = steps[m_day[h]]
+        mean = step.Psi @ x + step.Lambda @ u_day[h]
+        x = step.Phi @ x + step.Gamma @ u_day[h]
+        out[k] = (ss.C @ mean)[0] + (ss.D @ u_day[h])[0]
     return out
 
 
