@@ -205,6 +205,67 @@ def figure(rows: list[dict], path: Path, scenarios=SCENARIOS) -> None:
     fig.savefig(path, dpi=110)
 
 
+def _kwh(series, window) -> float:
+    return float(series["power_W"][window].sum() * 60 / 3.6e6)
+
+
+def event_figure(path: Path, seed: int = 1, days: float = 1.0) -> str:
+    """Room temperature and flow around the demand-response event, one seed; returns a Markdown table.
+
+    The thermostat, and the MPC with the 2-state ML fit on C and with the 13-state model, under
+    the event and (the 2-state MPC) under the flat price on the same day: the energy before the
+    event (11 am to 2 pm, after its announcement) and during it shows what is shifted.
+    """
+    from matplotlib.figure import Figure
+
+    from rczone.control.closedloop import DR_HOURS, DR_NOTICE
+
+    zms = models(("2-state, ML on C (forced)", "13-state, construction"))
+    two = zms["2-state, ML on C (forced)"]
+    cases = {
+        "thermostat": (two, "thermostat", "dr"),
+        "MPC, 2-state ML on C, flat price": (two, "mpc", "flat"),
+        "MPC, 2-state ML on C, DR event": (two, "mpc", "dr"),
+        "MPC, 13-state, DR event": (zms["13-state, construction"], "mpc", "dr"),
+    }
+    fig = Figure(figsize=(9, 6))
+    ax_t, ax_m = fig.subplots(2, 1, sharex=True)
+    hour = 3600.0
+    lines = [
+        f"| run (seed {seed}) | energy 11 am-2 pm kWh | energy 2-4 pm kWh | peak flow 2-4 pm kg/s"
+        " | Ti at 2 pm degC |",
+        "|---|---|---|---|---|",
+    ]
+    for label, (zm, ctrl, price) in cases.items():
+        r = closed_loop_test(zm, season="summer", days=days, seed=seed, controller=ctrl, price=price)
+        t, s = r.t, r.series
+        pre = (t >= DR_HOURS[0] - DR_NOTICE) & (t < DR_HOURS[0])
+        ev = (t >= DR_HOURS[0]) & (t < DR_HOURS[1])
+        ti_start = s["Ti"][np.searchsorted(t, DR_HOURS[0])]
+        lines.append(
+            f"| {label} | {_kwh(s, pre):.2f} | {_kwh(s, ev):.2f} | {s['m'][ev].max():.3f} | {ti_start:.2f} |"
+        )
+        win = (t >= 14 * hour) & (t <= 24 * hour)
+        clock = 18 + t[win] / hour - 24
+        ax_t.plot(clock, s["Ti"][win], lw=1, label=label)
+        ax_m.plot(clock, s["m"][win], lw=1, label=label)
+        band_lo, band_hi = s["lower"][win], s["upper"][win]
+    ax_t.plot(clock, band_lo, "k--", lw=0.7)
+    ax_t.plot(clock, band_hi, "k--", lw=0.7, label="comfort band")
+    for ax in (ax_t, ax_m):
+        ax.axvspan(14, 16, color="0.85", zorder=0)
+        ax.axvline(11, color="0.5", lw=0.7, ls=":")
+        ax.grid(alpha=0.3)
+    ax_t.set_ylabel("room air (degC)")
+    ax_m.set_ylabel("supply flow (kg/s)")
+    ax_m.set_xlabel("hour of day (event shaded, announced at 11 am)")
+    ax_t.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("validation-output") / "closed_loop")
@@ -221,6 +282,8 @@ def main() -> None:
         print()
         print(event_table(rows))
         figure(rows, args.figures / "closed_loop_harder.png", HARDER)
+        print()
+        print(event_figure(args.figures / "closed_loop_dr_event.png", seeds[0], args.days))
         return
     rows = run_all(args.out, args.days, seeds)
     print(table(rows))
