@@ -23,8 +23,19 @@ def control_test(
     ] = False,
     price: Annotated[
         str,
-        typer.Option("--price", help="flat, or tou: 3x price from noon to 6 pm (the MPC minimizes cost)."),
+        typer.Option(
+            "--price",
+            help="flat; tou: 3x price from noon to 6 pm; dr: a demand-response event, 10x price from 2 pm"
+            " to 4 pm announced at 11 am (the MPC minimizes cost).",
+        ),
     ] = "flat",
+    band: Annotated[
+        str,
+        typer.Option(
+            "--band",
+            help="normal: the thermostat's comfort band; tight: its occupied band narrowed to 0.8 K.",
+        ),
+    ] = "normal",
     json_out: Annotated[
         Path | None, typer.Option("--json", help="Write the scores as JSON ('-': stdout).")
     ] = None,
@@ -45,6 +56,7 @@ def control_test(
         controller=controller,
         disturbance=not no_disturbance,
         price=price,
+        comfort_band=band,
     )
     out.print(esc(res.summary()))
     write_json(json_out, res.to_dict())

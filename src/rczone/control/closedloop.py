@@ -14,6 +14,8 @@ Scores (from 6 pm of the first day on; the warm-up is not scored):
   occupied band (``heat_occ``, ``cool_occ``), over the occupied hours, K h;
 * ``energy_kWh``: reheat + cooling + fan energy of the zone (:mod:`rczone.control.energy`);
 * ``cost``: the same energy weighted by the price signal (equal to ``energy_kWh`` for a flat price);
+* with the demand-response price (``price="dr"``) also ``event_energy_kWh``, ``event_cost``,
+  ``event_peak_flow_kg_s`` and ``event_comfort_Kh``: the same scores over the event windows only;
 * ``peak_flow_kg_s``; ``max_discharge_degC``;
 * ``prediction_rmse_K``: the model's 10-min-ahead prediction error along the run (its Kalman
   filter without a disturbance state, on the run's sensed data averaged over each 10 min);
@@ -21,20 +23,32 @@ Scores (from 6 pm of the first day on; the warm-up is not scored):
 
 The MPC's forecast: the outdoor temperature's diurnal curve shifted by the last measured
 error (:func:`rczone.virtual.weather.diurnal_curve`), the neighbours' and the AHU
-temperatures held, the thermostat's band by its schedule.
+temperatures held, the thermostat's band by its schedule, and the price; a demand-response
+event is in the forecast only from its announcement (:data:`DR_NOTICE` before it) on.
+
+Harder scenarios (both optional, the defaults are the plain summer and winter tests):
+
+* ``comfort_band="tight"``: the occupied band narrowed to :data:`TIGHT_BAND_K` about its
+  centre, for the thermostat, the MPC and the score alike (:func:`tighten`);
+* ``price="dr"``: a demand-response event, the price :data:`DR_PRICE` times the normal one
+  from 2 pm to 4 pm (:data:`DR_HOURS`), announced :data:`DR_NOTICE` ahead; the thermostat
+  ignores it, the MPC can pre-cool. Demand-response events of this kind (a price or a
+  curtailment signal for a few afternoon hours, notified hours ahead) are described in [2]_.
 
 References
 ----------
 .. [1] D. Sturzenegger, D. Gyalistras, M. Morari, R. S. Smith, "Model predictive climate
    control of a Swiss office building: implementation, results, and cost-benefit analysis",
    IEEE Trans. Control Systems Technology 24(1) (2016) 1-12 (the scores of a closed-loop test).
+.. [2] J. E. Braun, "Load control using building thermal mass", J. Solar Energy Engineering
+   125(3) (2003) 292-301 (pre-cooling ahead of an afternoon peak or event).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -48,7 +62,7 @@ from rczone.errors import ParameterError, did_you_mean
 from rczone.models.zone import ZoneModel
 from rczone.network import CP_AIR
 from rczone.virtual.building import build_building
-from rczone.virtual.control import CONTROL_DT, ControllerConfig, coil_lag
+from rczone.virtual.control import CONTROL_DT, ControllerConfig, VAVController, coil_lag
 from rczone.virtual.emulator import DAY, EmulatorRun, run, thermostat_configs
 from rczone.virtual.scenarios import SURROUNDINGS
 from rczone.virtual.weather import diurnal_curve
@@ -57,9 +71,18 @@ SEASONS = ("summer", "winter")
 CONTROLLERS = ("mpc", "thermostat")
 #: Price signals: flat (energy), or time-of-use with a peak price of :data:`PEAK_PRICE` from
 #: noon to 6 pm (a summer on-peak window, when pre-cooling pays).
-PRICES = ("flat", "tou")
+PRICES = ("flat", "tou", "dr")
 PEAK_PRICE = 3.0
 PEAK_HOURS = (18 * 3600.0, 24 * 3600.0)  # s after 6 pm: noon to 6 pm
+#: Demand-response event ("dr"): :data:`DR_PRICE` times the price from 2 pm to 4 pm, in the
+#: MPC's forecast only from :data:`DR_NOTICE` before its start (announced at 11 am).
+DR_PRICE = 10.0
+DR_HOURS = (20 * 3600.0, 22 * 3600.0)  # s after 6 pm: 2 pm to 4 pm
+DR_NOTICE = 3 * 3600.0
+#: Comfort bands: the thermostat's ("normal"), or its occupied band narrowed to
+#: :data:`TIGHT_BAND_K` about its centre ("tight"; the normal one is 1.8 K in summer, 1.1 K in winter).
+BANDS = ("normal", "tight")
+TIGHT_BAND_K = 0.8
 #: Warm-up before the first 6 pm, s (the MPC's observer settles; not scored).
 WARMUP = 6 * 3600.0
 #: Interval of the prediction-error score, s.
@@ -74,11 +97,36 @@ def band(cfg: ControllerConfig, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     return lower, upper, ~unocc
 
 
-def price_signal(kind: str, t: np.ndarray) -> np.ndarray:
-    """Price per kWh at ``t`` (s from 6 pm): 1, or :data:`PEAK_PRICE` in the peak window ("tou")."""
+def _window(t: np.ndarray, hours: tuple[float, float]) -> np.ndarray:
     tm = np.asarray(t, float) % DAY
-    peak = (tm >= PEAK_HOURS[0]) & (tm < PEAK_HOURS[1])
-    return np.where(peak & (kind == "tou"), PEAK_PRICE, 1.0)
+    return (tm >= hours[0]) & (tm < hours[1])
+
+
+def price_signal(kind: str, t: np.ndarray) -> np.ndarray:
+    """Price per kWh at ``t`` (s from 6 pm): 1, :data:`PEAK_PRICE` in the peak window ("tou"),
+    or :data:`DR_PRICE` in the demand-response event ("dr")."""
+    if kind == "dr":
+        return np.where(_window(t, DR_HOURS), DR_PRICE, 1.0)
+    return np.where(_window(t, PEAK_HOURS) & (kind == "tou"), PEAK_PRICE, 1.0)
+
+
+def forecast_price(kind: str, now: float, times: np.ndarray) -> np.ndarray:
+    """The price at ``times`` as known at ``now`` (s from 6 pm).
+
+    The time-of-use price is known in advance; a demand-response event only from its
+    announcement, :data:`DR_NOTICE` before its start, on (the normal price before that).
+    """
+    p = price_signal(kind, times)
+    if kind == "dr":
+        starts = np.floor((np.asarray(times, float) - DR_HOURS[0]) / DAY) * DAY + DR_HOURS[0]
+        p = np.where(now >= starts - DR_NOTICE, p, 1.0)
+    return p
+
+
+def tighten(cfg: ControllerConfig, width: float = TIGHT_BAND_K) -> ControllerConfig:
+    """``cfg`` with its occupied band narrowed to ``width`` K about its centre (unoccupied band kept)."""
+    mid = 0.5 * (cfg.heat_occ + cfg.cool_occ)
+    return replace(cfg, heat_occ=mid - 0.5 * width, cool_occ=mid + 0.5 * width)
 
 
 class MPCZoneController:
@@ -91,7 +139,7 @@ class MPCZoneController:
         The zone thermostat's settings: its band and schedule are the MPC's comfort band.
     season : str
         For the outdoor forecast's diurnal curve.
-    price : {"flat", "tou"}
+    price : {"flat", "tou", "dr"}
     """
 
     def __init__(self, mpc: MPC, config: ControllerConfig, season: str, price: str = "flat") -> None:
@@ -121,7 +169,9 @@ class MPCZoneController:
         lower, upper, _ = band(self.cfg, times)
         used = set(self.mpc.cm.input_names)
         inputs = {k: v for k, v in {"To": to, **held}.items() if k in used}
-        return Forecast(inputs, np.full(times.size, t_ahu), lower, upper, price_signal(self.price, times))
+        return Forecast(
+            inputs, np.full(times.size, t_ahu), lower, upper, forecast_price(self.price, t, times)
+        )
 
     def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
         if self.next_time is None or t >= self.next_time - 1e-9:
@@ -170,6 +220,11 @@ class ClosedLoopResult:
             f"  peak flow    {s['peak_flow_kg_s']:.3f} kg/s",
             f"  prediction   {s['prediction_rmse_K']:.3f} K RMSE (10 min ahead)",
         ]
+        if "event_energy_kWh" in s:
+            lines.append(
+                f"  DR event     {s['event_energy_kWh']:.2f} kWh, peak flow {s['event_peak_flow_kg_s']:.3f} kg/s, "
+                f"{s['event_comfort_Kh']:.2f} K h outside the band"
+            )
         if s["solve_time_s"] is not None:
             lines.append(
                 f"  QP time      {1e3 * s['solve_time_s']['mean']:.1f} ms mean, "
@@ -178,7 +233,9 @@ class ClosedLoopResult:
         return "\n".join(lines)
 
 
-def _check(season: str, days: float, controller: str, price: str) -> None:
+def _check(season: str, days: float, controller: str, price: str, comfort_band: str) -> None:
+    if comfort_band not in BANDS:
+        raise ParameterError(f"unknown comfort band {comfort_band!r}; " + did_you_mean(comfort_band, BANDS))
     if price not in PRICES:
         raise ParameterError(f"unknown price signal {price!r}; " + did_you_mean(price, PRICES))
     if season not in SEASONS:
@@ -199,6 +256,7 @@ def closed_loop_test(
     disturbance: bool = True,
     settings: MPCSettings | None = None,
     price: str = "flat",
+    comfort_band: str = "normal",
 ) -> ClosedLoopResult:
     """Run the virtual building for ``days`` with ``controller`` on its target zone, and score it.
 
@@ -214,18 +272,24 @@ def closed_loop_test(
     disturbance : bool
         The MPC's observer estimates an unmeasured heat input (offset-free); False: none.
     settings : MPCSettings, optional
-    price : {"flat", "tou"}
+    price : {"flat", "tou", "dr"}
         The price the MPC minimizes (``cost`` in the scores); the thermostat ignores it.
+    comfort_band : {"normal", "tight"}
+        The thermostat's occupied band, or that band narrowed to :data:`TIGHT_BAND_K`; the
+        thermostat, the MPC and the comfort score all use it.
 
     Returns
     -------
     ClosedLoopResult
     """
-    _check(season, days, controller, price)
+    _check(season, days, controller, price, comfort_band)
     bld = build_building()
     duration = round(days * DAY / CONTROL_DT) * CONTROL_DT
     cfg = thermostat_configs(bld, season, np.random.default_rng(seed), warmup=WARMUP, daily=True)["target"]
     ctrl = None
+    if comfort_band == "tight":
+        cfg = tighten(cfg)
+        ctrl = VAVController(cfg, -WARMUP)  # the thermostat, on the tight band
     if controller == "mpc":
         mpc = MPC(model, settings, disturbance=Disturbance("heat") if disturbance else None)
         ctrl = MPCZoneController(mpc, cfg, season, price)
@@ -247,9 +311,10 @@ def closed_loop_test(
         "controller": controller,
         "disturbance_estimate": bool(disturbance) if controller == "mpc" else None,
         "price": price,
+        "band": comfort_band,
     }
     solve = None
-    if ctrl is not None and ctrl.solve_times:
+    if isinstance(ctrl, MPCZoneController) and ctrl.solve_times:
         solve = {"mean": float(np.mean(ctrl.solve_times)), "max": float(np.max(ctrl.solve_times))}
     return ClosedLoopResult({**result[0], "solve_time_s": solve}, setup, result[1], result[2])
 
@@ -279,6 +344,14 @@ def _score(
         "max_discharge_degC": float(ts.max()),
         "prediction_rmse_K": prediction_rmse(r, bld, model),
     }
+    if price == "dr":
+        ev = _window(t, DR_HOURS)
+        scores.update(
+            event_energy_kWh=float(p.total[ev].sum() * CONTROL_DT / 3.6e6),
+            event_cost=float(p.total[ev].sum() * DR_PRICE * CONTROL_DT / 3.6e6),
+            event_peak_flow_kg_s=float(m[ev].max()) if ev.any() else 0.0,
+            event_comfort_Kh=float((outside * occ * ev).sum() * h),
+        )
     series = {"Ti": ti, "lower": lower, "upper": upper, "occupied": occ, "m": m, "Ts": ts, "power_W": p.total}
     return scores, t, series
 

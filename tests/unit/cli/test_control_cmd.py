@@ -32,3 +32,16 @@ def test_control_test_mistakes_are_one_line_and_exit_2(tmp_path, capsys, extra, 
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and match in err
     assert not out.exists()
+
+
+def test_control_test_runs_the_tight_band_and_the_event_and_refuses_an_unknown_band(tmp_path, capsys):
+    out = tmp_path / "scores.json"
+    args = ["control-test", "--scenario", "summer", "--days", "0.1", "--controller", "thermostat"]
+    assert main([*args, "--band", "tight", "--price", "dr", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["setup"]["band"] == "tight" and doc["setup"]["price"] == "dr"
+    assert doc["event_energy_kWh"] == 0.0  # the first 2.4 h hold no event
+    capsys.readouterr()
+    assert main([*args, "--band", "wide", "--json", str(tmp_path / "x.json")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "wide" in err
