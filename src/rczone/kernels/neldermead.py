@@ -49,10 +49,35 @@ def _scaled(cost, z: np.ndarray, prob, scale: float) -> float:
 
 @njit(cache=True, error_model="numpy")
 def _sort(sim: np.ndarray, fsim: np.ndarray) -> None:
-    """Order the vertices by value, best first (stable for equal values)."""
-    order = np.argsort(fsim, kind="mergesort")
-    sim[:] = sim[order]
-    fsim[:] = fsim[order]
+    """Order the vertices by value, best first (stable for equal values).
+
+    An insertion sort: d + 1 rows, nearly sorted after each step, and a fraction of the compile
+    time of ``np.argsort`` with fancy indexing.
+    """
+    n_v, d = sim.shape
+    row = np.empty(d)
+    for k in range(1, n_v):
+        f = fsim[k]
+        for i in range(d):
+            row[i] = sim[k, i]
+        j = k - 1
+        while j >= 0 and fsim[j] > f:
+            fsim[j + 1] = fsim[j]
+            for i in range(d):
+                sim[j + 1, i] = sim[j, i]
+            j -= 1
+        fsim[j + 1] = f
+        for i in range(d):
+            sim[j + 1, i] = row[i]
+
+
+@njit(cache=True, error_model="numpy")
+def _combine(a: float, x: np.ndarray, b: float, y: np.ndarray) -> np.ndarray:
+    """``a x + b y``, element by element (loops compile faster than array expressions)."""
+    out = np.empty(x.shape[0])
+    for i in range(x.shape[0]):
+        out[i] = a * x[i] + b * y[i]
+    return out
 
 
 # inlined into one compiled search per cost below: a compiled function taking another as an argument
@@ -97,10 +122,13 @@ def _search(
             break
         xbar = np.zeros(d)
         for k in range(last):
-            xbar += sim[k]
-        xbar /= d
+            for i in range(d):
+                xbar[i] += sim[k, i]
+        for i in range(d):
+            xbar[i] /= d
         worst = sim[last].copy()
-        xr = 2.0 * xbar - worst
+        # a x + (-b) y is a x - b y exactly: the same vertices as the array expressions
+        xr = _combine(2.0, xbar, -1.0, worst)
         fxr = _scaled(cost, xr, prob, scale)
         n_evals += 1
         # the new vertex and its value; an evaluation the budget does not allow ends the search
@@ -110,7 +138,7 @@ def _search(
         if fxr < fsim[0]:
             if n_evals >= max_evals:
                 break
-            xe = 3.0 * xbar - 2.0 * worst
+            xe = _combine(3.0, xbar, -2.0, worst)
             fxe = _scaled(cost, xe, prob, scale)
             n_evals += 1
             if fxe < fxr:
@@ -120,12 +148,12 @@ def _search(
             if n_evals >= max_evals:
                 break
             if fxr < fsim[last]:  # outside contraction
-                xn = 1.5 * xbar - 0.5 * worst
+                xn = _combine(1.5, xbar, -0.5, worst)
                 fn = _scaled(cost, xn, prob, scale)
                 n_evals += 1
                 shrink = not fn <= fxr
             else:  # inside contraction
-                xn = 0.5 * xbar + 0.5 * worst
+                xn = _combine(0.5, xbar, 0.5, worst)
                 fn = _scaled(cost, xn, prob, scale)
                 n_evals += 1
                 shrink = not fn < fsim[last]
@@ -133,12 +161,14 @@ def _search(
                 for k in range(1, n_v):
                     if n_evals >= max_evals:
                         break
-                    sim[k] = sim[0] + 0.5 * (sim[k] - sim[0])
+                    for i in range(d):
+                        sim[k, i] = sim[0, i] + 0.5 * (sim[k, i] - sim[0, i])
                     fsim[k] = _scaled(cost, sim[k], prob, scale)
                     n_evals += 1
                 _sort(sim, fsim)
                 continue
-        sim[last] = xn
+        for i in range(d):
+            sim[last, i] = xn[i]
         fsim[last] = fn
         _sort(sim, fsim)
     return sim[0].copy(), fsim[0], n_evals, status
