@@ -7,8 +7,8 @@ initial state is a constant or proportional to one free parameter (``R1 = Rw/2``
 unseen: every tied parameter of the network (used by an element or not) is proportional,
 every resistance and capacitance is positive by construction (positive constants, positive
 factors of log-transformed free parameters), and every free parameter that sets an element
-value is log-transformed. Then :func:`rczone.kernels.problem.evaluate` computes the cost and
-its gradient, and :func:`rczone.kernels.neldermead.nelder_mead` minimizes it without
+value is log-transformed. Then :mod:`rczone.kernels.problem` computes the cost and its
+gradient, and :func:`rczone.kernels.neldermead.nelder_mead` minimizes it without
 returning to Python. Anything else returns None and takes the general engine of
 :mod:`rczone.estimation.costs`, with the same results.
 
@@ -30,7 +30,7 @@ from rczone.kernels.arrays import (
     Slots,
 )
 from rczone.kernels.kalman import STEADY_RTOL
-from rczone.kernels.problem import evaluate, theta_of_z
+from rczone.kernels.problem import cost, theta_of_z
 from rczone.network.parameters import proportional_base
 from rczone.network.stochastic import (
     initial_spread_names,
@@ -170,5 +170,5 @@ def compiled_cost(problem: Problem, eta: np.ndarray) -> float:
     f = (np.asarray(eta, dtype=float) - lo) / (hi - lo)
     with np.errstate(divide="ignore"):
         z = np.log(f) - np.log1p(-f)
-    # cost_z's steps from Python: cost_z itself is inlined into compiled callers only
-    return float(evaluate(theta_of_z(z, lo, hi, logp), problem, False)[0])
+    # the compiled search's steps (rczone.kernels.neldermead), from Python
+    return cost(theta_of_z(z, lo, hi, logp), problem)

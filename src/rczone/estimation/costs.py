@@ -64,7 +64,7 @@ from rczone.estimation.methods import METHODS as _REGISTERED
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec
 from rczone.kernels.arrays import Problem
-from rczone.kernels.problem import evaluate
+from rczone.kernels.problem import cost_and_gradient, value_kernel
 from rczone.network import RCNetwork
 
 __all__ = [
@@ -207,6 +207,8 @@ class Objective:
             )  # values from the general kernel
         object.__setattr__(self, "engine", engine)
         object.__setattr__(self, "_packed", packed if engine in ("rc2-fused", "compiled") else None)
+        # the compiled value kernel of the engine, chosen once (rczone.kernels.problem.value_kernel)
+        object.__setattr__(self, "_value", None if self._packed is None else value_kernel(self._packed))
 
     @property
     def compiled(self) -> Problem | None:
@@ -221,7 +223,7 @@ class Objective:
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
         if self._packed is not None:
-            return float(evaluate(np.asarray(theta, dtype=np.float64), self._packed, False)[0])
+            return self._value(np.asarray(theta, dtype=np.float64), self._packed)
         return self._general(np.asarray(theta, dtype=float), False)[0]
 
     def theta_value_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -232,7 +234,7 @@ class Objective:
         """
         theta = np.asarray(theta, dtype=np.float64)
         if self.gradient_engine == "compiled":
-            j, g, c = evaluate(theta, self._packed, True)
+            j, g, c = cost_and_gradient(theta, self._packed)
             return (
                 (float(j), g, c)
                 if math.isfinite(j)

@@ -10,7 +10,8 @@ declared rules (:func:`choose_engine`), never by trying one and catching its fai
     gradient from the ``"compiled"`` engine.
 ``"compiled"``
     The problem packs into arrays: parameter values to cost and gradient in one compiled call
-    (:func:`rczone.kernels.problem.evaluate`).
+    (:func:`rczone.kernels.problem.value_general`,
+    :func:`rczone.kernels.problem.value_and_gradient`).
 ``"general"``
     Anything else (massless nodes, ties that are not proportional, ...): the state space and
     its exact parameter derivatives are built in Python (:meth:`RCNetwork.state_space`,

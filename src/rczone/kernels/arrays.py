@@ -207,7 +207,46 @@ class ProblemConstants(NamedTuple):
     foh: bool
     symmetry_rtol: float
     steady_rtol: float
-    fused: bool  #: the fused 2-state kernel serves values
+    fused: bool  #: the fused 2-state kernel serves values (:func:`rczone.kernels.problem.value_kernel`)
+
+
+class ElementValues(NamedTuple):
+    """Element values, noise levels and initial states of a packed problem at one parameter point (SI)."""
+
+    res: np.ndarray  #: (nr,) resistances, K/W
+    cap: np.ndarray  #: (n,) capacities, J/K
+    sv: np.ndarray  #: (ny,) measurement noise, K
+    sw: np.ndarray  #: (n,) process noise intensity
+    sx: np.ndarray  #: (n,) initial state spread, K
+    x0: np.ndarray  #: (n,) given initial states, K
+
+
+class Assembled(NamedTuple):
+    """The continuous-time model of a packed problem at one parameter point, with its filter's start."""
+
+    A0: np.ndarray  #: (n, n)
+    N: np.ndarray  #: (nf, n, n)
+    B0: np.ndarray  #: (n, p)
+    M: np.ndarray  #: (nf, n, p)
+    cap: np.ndarray  #: (n,) capacities, J/K
+    x0: np.ndarray  #: (n,) initial state
+    P0: np.ndarray  #: (n, n) its covariance
+    qc: np.ndarray  #: (n,) process noise intensities
+    r: np.ndarray  #: (ny,) measurement variances
+    C: np.ndarray  #: (ny, n)
+
+
+class AssembledDerivatives(NamedTuple):
+    """Derivatives of :class:`Assembled` along ``q`` parameter directions (``q = 0``: none)."""
+
+    dA0: np.ndarray  #: (q, n, n)
+    dN: np.ndarray  #: (q, nf, n, n)
+    dB0: np.ndarray  #: (q, n, p)
+    dM: np.ndarray  #: (q, nf, n, p)
+    dx0: np.ndarray  #: (q, n)
+    dP0: np.ndarray  #: (q, n, n)
+    dqc: np.ndarray  #: (q, n)
+    dr: np.ndarray  #: (ny, q)
 
 
 class Problem(NamedTuple):

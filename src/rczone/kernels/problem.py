@@ -21,6 +21,12 @@ proportional to one free parameter (the packing is
 * returns ``J_LS`` (trapezoid rule on the open-loop errors, K^2 s), ``J_ML`` (``-log L``) or
   ``J_MAP`` (tempered likelihood plus log-normal prior) and its gradient in ``theta``.
 
+Each path is a compiled entry point of its own, chosen in Python: :func:`value_fused` (values,
+fused 2-state kernel), :func:`value_general` (values, modal or general filter) and
+:func:`value_and_gradient` (filter with sensitivities); :func:`value_kernel` names the value
+kernel of a problem. numba links every callee into each function it compiles and optimizes the
+whole, so one function holding all paths cost every command the compile time of all of them.
+
 The problem is a :class:`rczone.kernels.arrays.Problem` of contiguous float64 / int64 / bool
 arrays: the kind (LS, ML or MAP), the conductance form, the data with its distinct intervals, the
 slots of every element, noise level and initial state, the direct search's box, the MAP prior, the
@@ -41,7 +47,15 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series
+from rczone.kernels.arrays import (
+    Assembled,
+    AssembledDerivatives,
+    ElementValues,
+    FilterOptions,
+    Observation,
+    Prior,
+    Series,
+)
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
 from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
@@ -265,36 +279,26 @@ def trapezoid(t: np.ndarray, e: np.ndarray, de: np.ndarray, grad: np.ndarray, cu
 
 
 @njit(cache=True, error_model="numpy")
-def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarray, np.ndarray]:
-    """The cost at physical values ``theta`` and, with ``want_grad``, its gradient in ``theta``.
+def element_values(theta: np.ndarray, prob) -> tuple[ElementValues, bool]:
+    """The element values, noise levels and given initial states at ``theta``; False where invalid.
 
-    The third result is a diagonal curvature estimate in ``theta`` (Fisher information for
-    ``J_ML``, Gauss-Newton for ``J_LS``; zeros without ``want_grad``). ``(inf, zeros, zeros)``
-    where the model is invalid (a non-positive element value, a singular steady state, a
-    non-positive innovation variance).
+    Invalid: a resistance or capacity that is not positive and finite, an infinite initial
+    state, or (ML, MAP) a negative or infinite noise level.
     """
-    kind, form, data, slots, _box, penalty, consts, scratch = prob
-    L, P, E, Gb0, Nf, Mf, out_state = form
-    t, m, u, y, keys, which, groups = data
-    res_idx, res_k, cap_idx, cap_k, sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, x0_idx, x0_k, x0_given = slots
-    prior_idx, prior_logc, spread, weight = penalty
-    foh, sym_rtol, steady_rtol, fused = consts
-    d = theta.shape[0]
-    grad = np.zeros(d)
-    curv = np.zeros(d)
+    L = prob.form.L
+    out_state = prob.form.output_state
+    res_idx, res_k, cap_idx, cap_k, sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, x0_idx, x0_k, _ = prob.slots
     nr, n = L.shape
     ny = out_state.shape[0]
-    N_t = t.shape[0]
+    ok = True
     res = np.empty(nr)
     for s in range(nr):
         res[s] = _slot(theta, res_idx[s], res_k[s])
-        if not (res[s] > 0.0 and res[s] < math.inf):
-            return math.inf, grad, curv
+        ok = ok and res[s] > 0.0 and res[s] < math.inf
     cap = np.empty(n)
     for s in range(n):
         cap[s] = _slot(theta, cap_idx[s], cap_k[s])
-        if not (cap[s] > 0.0 and cap[s] < math.inf):
-            return math.inf, grad, curv
+        ok = ok and cap[s] > 0.0 and cap[s] < math.inf
     sv = np.empty(ny)
     for s in range(ny):
         sv[s] = _slot(theta, sv_idx[s], sv_k[s])
@@ -305,32 +309,43 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
         sw[s] = _slot(theta, sw_idx[s], sw_k[s])
         sx[s] = _slot(theta, sx_idx[s], sx_k[s])
         x0v[s] = _slot(theta, x0_idx[s], x0_k[s])
-        if not (abs(x0v[s]) < math.inf):
-            return math.inf, grad, curv
-    if kind != LS:
+        ok = ok and abs(x0v[s]) < math.inf
+    if prob.kind != LS:
         for s in range(ny):
-            if not (sv[s] >= 0.0 and sv[s] < math.inf):
-                return math.inf, grad, curv
+            ok = ok and sv[s] >= 0.0 and sv[s] < math.inf
         for s in range(n):
-            if not (sw[s] >= 0.0 and sw[s] < math.inf and sx[s] >= 0.0 and sx[s] < math.inf):
-                return math.inf, grad, curv
+            ok = ok and sw[s] >= 0.0 and sw[s] < math.inf and sx[s] >= 0.0 and sx[s] < math.inf
+    return ElementValues(res, cap, sv, sw, sx, x0v), ok
+
+
+@njit(cache=True, error_model="numpy")
+def assembled(theta: np.ndarray, prob, q: int) -> tuple[Assembled, AssembledDerivatives, bool]:
+    """The model at physical values ``theta`` and its derivatives in ``theta[0..q-1]``.
+
+    False where the values are invalid (:func:`element_values`; the arrays are then computed
+    but meaningless) or the steady state that starts the unmeasured states is singular.
+    """
+    vals, valid = element_values(theta, prob)
+    L, P, E, Gb0, Nf, Mf, out_state = prob.form
+    m, u, y = prob.data.m, prob.data.u, prob.data.y
+    res_idx, res_k, cap_idx, cap_k, sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, x0_idx, _, x0_given = prob.slots
+    res, cap, sv, sw, sx, x0v = vals
+    n = L.shape[1]
+    ny = out_state.shape[0]
     A0, N, B0, M = assemble(L, P, E, Gb0, Nf, Mf, res, cap)
-    q = d if want_grad else 0
     dA0, dN, dB0, dM = assemble_derivatives(
         L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_idx, cap_k, q
     )
     x0, dx0, ok = initial_state(
         A0, N, B0, M, dA0, dN, dB0, dM, m[0], u[0], y[0], out_state, x0_given, x0v, x0_idx
     )
-    if not ok:
-        return math.inf, grad, curv
     qc = np.zeros(n)
     P0 = np.zeros((n, n))
     r = np.ones(ny)
     dqc = np.zeros((q, n))
     dP0 = np.zeros((q, n, n))
     dr = np.zeros((ny, q))
-    if kind != LS:
+    if prob.kind != LS:
         for s in range(n):
             qc[s] = sw[s] * sw[s]
             P0[s, s] = sx[s] * sx[s]
@@ -345,93 +360,188 @@ def evaluate(theta: np.ndarray, prob, want_grad: bool) -> tuple[float, np.ndarra
     C = np.zeros((ny, n))  # output j reads state out_state[j]
     for s in range(ny):
         C[s, out_state[s]] = 1.0
-    if fused and not want_grad:
-        # values of 2-state, 1-output problems: the fused kernel (rczone.kernels.rc2)
-        e = scratch[:0]
-        if kind == LS:
-            e = scratch
-            for k in range(N_t):
-                e[k] = math.nan
-        nll, n_obs = nll_rc2(
-            A0, N, B0, M, cap, t, m, u, y[:, 0], x0, P0, C[0], np.zeros(B0.shape[1]), r[0], qc, foh,
-            sym_rtol, steady_rtol, e, groups,
-        )  # fmt: skip
-        if n_obs < 0:
-            return math.inf, grad, curv
-        if kind == LS:
-            return trapezoid(t, e.reshape((N_t, 1)), np.empty((N_t, 1, 0)), grad, curv), grad, curv
-        j = nll + 0.5 * n_obs * _LOG_2PI
-    elif q == 0 and kind != LS and modal_pays(which, n):
+    return (
+        Assembled(A0, N, B0, M, cap, x0, P0, qc, r, C),
+        AssembledDerivatives(dA0, dN, dB0, dM, dx0, dP0, dqc, dr),
+        valid and ok,
+    )
+
+
+@njit(cache=True, error_model="numpy")
+def with_prior(
+    j: float, theta: np.ndarray, penalty, grad: np.ndarray, curv: np.ndarray, want_grad: bool
+) -> float:
+    """``J_MAP = w J + 0.5 sum z^2`` (log-normal prior, ``z = (log theta - log c) / s``) of ``J = -log L``.
+
+    ``grad`` and ``curv`` (of ``J``) are updated in place; the prior's own terms are added
+    only ``want_grad``.
+    """
+    prior_idx, prior_logc, spread, weight = penalty
+    pen = 0.0
+    for i in range(theta.shape[0]):
+        grad[i] *= weight
+        curv[i] *= weight
+    for a in range(prior_idx.shape[0]):
+        i = prior_idx[a]
+        z = (math.log(theta[i]) - prior_logc[a]) / spread
+        pen += z * z
+        if want_grad:
+            grad[i] += z / (spread * theta[i])
+            curv[i] += 1.0 / (spread * theta[i]) ** 2
+    return weight * j + 0.5 * pen
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _no_directions(theta: np.ndarray) -> int:
+    # q = 0 as a value, not the constant: a literal 0 would compile assembled() and its callees a
+    # second time beside the specialization of value_and_gradient
+    return theta.shape[0] * 0
+
+
+# Three entry points, chosen in Python (value_kernel, and value_and_gradient for gradients): each
+# compiles only the filter and discretization it runs. One function holding every path would link,
+# optimize and generate the machine code of all of them (about 2.5 MB) into every command and again
+# into every compiled caller (the direct search), though a command runs one of them.
+
+
+@njit(cache=True, error_model="numpy")
+def value_fused(theta: np.ndarray, prob) -> float:
+    """The cost at physical values ``theta`` of a 2-state, 1-output problem (fused kernel); ``inf`` where invalid."""
+    mod, _, ok = assembled(theta, prob, _no_directions(theta))
+    if not ok:
+        return math.inf
+    t, m, u, y, _, _, groups = prob.data
+    foh, sym_rtol, steady_rtol, _ = prob.consts
+    scratch = prob.scratch
+    N_t = t.shape[0]
+    e = scratch[:0]
+    if prob.kind == LS:
+        e = scratch
+        for k in range(N_t):
+            e[k] = math.nan
+    nll, n_obs = nll_rc2(
+        mod.A0, mod.N, mod.B0, mod.M, mod.cap, t, m, u, y[:, 0], mod.x0, mod.P0, mod.C[0],
+        np.zeros(mod.B0.shape[1]), mod.r[0], mod.qc, foh, sym_rtol, steady_rtol, e, groups,
+    )  # fmt: skip
+    if n_obs < 0:
+        return math.inf
+    grad = np.zeros(theta.shape[0])
+    curv = np.zeros(theta.shape[0])
+    if prob.kind == LS:
+        return trapezoid(t, e.reshape((N_t, 1)), np.empty((N_t, 1, 0)), grad, curv)
+    j = nll + 0.5 * n_obs * _LOG_2PI
+    if prob.kind == MAP:
+        j = with_prior(j, theta, prob.penalty, grad, curv, False)
+    return j
+
+
+@njit(cache=True, error_model="numpy")
+def value_general(theta: np.ndarray, prob) -> float:
+    """The cost at physical values ``theta`` by the general filter (modal where it pays); ``inf`` where invalid."""
+    mod, _, ok = assembled(theta, prob, _no_directions(theta))
+    if not ok:
+        return math.inf
+    t, _, u, y, keys, which, _ = prob.data
+    foh, _, steady_rtol, _ = prob.consts
+    kind = prob.kind
+    n = mod.A0.shape[0]
+    p = mod.B0.shape[1]
+    ny = mod.C.shape[0]
+    N_t = t.shape[0]
+    scale = np.sqrt(mod.cap)
+    if kind != LS and modal_pays(which, n):
         # values of larger models with flows constant over stretches: the modal filter
-        scale = np.sqrt(cap)
-        modal = modal_matrices(A0, N, B0, M, keys, qc, scale, foh)
-        p = B0.shape[1]
+        modal = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
         obs = Observation(
-            C, np.zeros((ny, p)), r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
+            mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
         )
-        prior0 = Prior(x0, P0, np.zeros((0, n)), np.zeros((0, n, n)))
+        prior0 = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
         nll, n_obs = kalman_filter_modal(modal, scale, obs, prior0, Series(u, y, which), foh)
-        if n_obs < 0:
-            return math.inf, grad, curv
-        j = nll + 0.5 * n_obs * _LOG_2PI
     else:
-        noise = kind != LS
-        if q:
-            mats, dmats = interval_derivatives(
-                A0, N, B0, M, dA0, dN, dB0, dM, keys, qc, dqc, np.sqrt(cap), foh, noise
-            )
-        else:
-            mats = interval_matrices(A0, N, B0, M, keys, qc, np.sqrt(cap), foh, noise)
-            dmats = no_sensitivities(keys.shape[0], n, B0.shape[1])
-        p = B0.shape[1]
-        obs = Observation(C, np.zeros((ny, p)), r, np.zeros((ny, q, n)), np.zeros((ny, q, p)), dr)
-        outs = outputs(N_t, n, ny, q, kind == LS, False)
-        nll, n_obs, g, fim = kalman_filter(
+        mats = interval_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh, kind != LS)
+        dmats = no_sensitivities(keys.shape[0], n, p)
+        obs = Observation(
+            mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
+        )
+        outs = outputs(N_t, n, ny, 0, kind == LS, False)
+        nll, n_obs, _, _ = kalman_filter(
             mats,
             dmats,
             obs,
-            Prior(x0, P0, dx0, dP0),
+            Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n))),
             Series(u, y, which),
             FilterOptions(foh, kind == LS, steady_rtol),
             outs,
         )
-        if n_obs < 0:
-            return math.inf, grad, curv
-        if kind == LS:
-            return trapezoid(t, outs.e, outs.de, grad, curv), grad, curv
-        j = nll + 0.5 * n_obs * _LOG_2PI
-        for i in range(q):
-            grad[i] = g[i]
-            curv[i] = fim[i]
+        if n_obs >= 0 and kind == LS:
+            return trapezoid(t, outs.e, outs.de, np.zeros(theta.shape[0]), np.zeros(theta.shape[0]))
+    if n_obs < 0:
+        return math.inf
+    j = nll + 0.5 * n_obs * _LOG_2PI
     if kind == MAP:
-        pen = 0.0
-        for i in range(d):
-            grad[i] *= weight
-            curv[i] *= weight
-        for a in range(prior_idx.shape[0]):
-            i = prior_idx[a]
-            z = (math.log(theta[i]) - prior_logc[a]) / spread
-            pen += z * z
-            if want_grad:
-                grad[i] += z / (spread * theta[i])
-                curv[i] += 1.0 / (spread * theta[i]) ** 2
-        j = weight * j + 0.5 * pen
+        j = with_prior(j, theta, prob.penalty, np.zeros(theta.shape[0]), np.zeros(theta.shape[0]), False)
+    return j
+
+
+@njit(cache=True, error_model="numpy")
+def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.ndarray]:
+    """The cost at physical values ``theta`` (one or more), its gradient and a diagonal curvature estimate.
+
+    The curvature is the Fisher information for ``J_ML`` and the Gauss-Newton Hessian for
+    ``J_LS``, in ``theta``. ``(inf, zeros, zeros)`` where the model is invalid.
+    """
+    d = theta.shape[0]
+    grad = np.zeros(d)
+    curv = np.zeros(d)
+    mod, der, ok = assembled(theta, prob, d)
+    if not ok:
+        return math.inf, grad, curv
+    t, _, u, y, keys, which, _ = prob.data
+    foh, _, steady_rtol, _ = prob.consts
+    kind = prob.kind
+    n = mod.A0.shape[0]
+    p = mod.B0.shape[1]
+    ny = mod.C.shape[0]
+    mats, dmats = interval_derivatives(
+        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
+        np.sqrt(mod.cap), foh, kind != LS,
+    )  # fmt: skip
+    obs = Observation(mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, d, n)), np.zeros((ny, d, p)), der.dr)
+    outs = outputs(t.shape[0], n, ny, d, kind == LS, False)
+    nll, n_obs, g, fim = kalman_filter(
+        mats,
+        dmats,
+        obs,
+        Prior(mod.x0, mod.P0, der.dx0, der.dP0),
+        Series(u, y, which),
+        FilterOptions(foh, kind == LS, steady_rtol),
+        outs,
+    )
+    if n_obs < 0:
+        return math.inf, grad, curv
+    if kind == LS:
+        return trapezoid(t, outs.e, outs.de, grad, curv), grad, curv
+    j = nll + 0.5 * n_obs * _LOG_2PI
+    for i in range(d):
+        grad[i] = g[i]
+        curv[i] = fim[i]
+    if kind == MAP:
+        j = with_prior(j, theta, prob.penalty, grad, curv, True)
     return j, grad, curv
 
 
-# The two wrappers are inlined where compiled code calls them (the search's inner loop): compiled as
-# functions of their own, each would link and optimize the whole filter tree once more (seconds of
-# compile time each); Python calls evaluate() directly.
-@njit(cache=True, error_model="numpy", inline="always")
-def cost_theta(theta: np.ndarray, prob) -> float:
-    """The cost at physical values ``theta``; ``inf`` where the model is invalid."""
-    # want_grad as a value (always False), not the constant: a literal False would compile a second
-    # specialization of evaluate, the whole filter tree, beside the one Python's calls use
-    return evaluate(theta, prob, theta.shape[0] < 0)[0]
+def value_kernel(prob):
+    """The compiled cost of a packed problem's values: :func:`value_fused` or :func:`value_general`."""
+    return value_fused if prob.consts.fused else value_general
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def cost_z(z: np.ndarray, prob) -> float:
-    """The cost at direct-search variables ``z`` (:func:`theta_of_z`, then :func:`cost_theta`)."""
-    lo, hi, logp = prob.box
-    return cost_theta(theta_of_z(z, lo, hi, logp), prob)
+def cost(theta: np.ndarray, prob) -> float:
+    """The cost at physical values ``theta`` (from Python); ``inf`` where the model is invalid."""
+    return float(value_kernel(prob)(theta, prob))
+
+
+def cost_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.ndarray]:
+    """:func:`value_and_gradient` from Python, also without free parameters (empty gradient)."""
+    if theta.shape[0] == 0:
+        return value_general(theta, prob), np.zeros(0), np.zeros(0)
+    return value_and_gradient(theta, prob)
