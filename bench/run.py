@@ -249,7 +249,8 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
 
     def fit4():
         return fit(
-            net4, data4, problems.FOUR_ZONE_FREE, "ml", "lbfgs", start=start4, fixed=fixed4, uncertainty=False,
+            net4, data4, problems.FOUR_ZONE_FREE, method="ml", optimizer="lbfgs", start=start4, fixed=fixed4,
+            uncertainty=False,
             n_starts=1,
         )  # fmt: skip
 
@@ -336,10 +337,22 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
         free = problems.PEER_FREE
 
         def fitp():
-            return fit(netp, arma, free, "ml", "lbfgs", start=startp, fixed=fixedp, hold="foh", n_starts=1)
+            return fit(
+                netp,
+                arma,
+                free,
+                method="ml",
+                optimizer="lbfgs",
+                start=startp,
+                fixed=fixedp,
+                hold="foh",
+                n_starts=1,
+            )
 
         def fitp_global():
-            return fit(netp, arma, free, "ml", "lbfgs", start=startp, fixed=fixedp, hold="foh")
+            return fit(
+                netp, arma, free, method="ml", optimizer="lbfgs", start=startp, fixed=fixedp, hold="foh"
+            )
 
         def plain_fitp():
             return plain.fit_ml_lbfgs(netp, free, startp, fixedp, arma, "foh")[0]

@@ -122,6 +122,7 @@ def fit(
     network: RCNetwork,
     data: Dataset,
     free: Sequence[str] | None = None,
+    *,
     method: str = "ls",
     optimizer: str = "auto",
     n_starts: int | None = None,
@@ -132,7 +133,6 @@ def fit(
     hold: str = "zoh",
     prior_spread: float = PRIOR_SPREAD,
     correlation_time_s: float = MAP_CORRELATION_TIME,
-    spread: float = 10.0,
     uncertainty: bool = True,
     max_evals: int | None = None,
     initial_state: str = "estimate",
@@ -181,8 +181,6 @@ def fit(
         ``min(1, dt / correlation_time_s)`` (see :class:`~rczone.estimation.costs.Objective`),
         so that a night of closed-loop data cannot overrule the construction values with
         thousands of samples that carry the information of a few dozen.
-    spread : float
-        Kept for compatibility; the global phase samples the whole box of bounds.
     uncertainty : bool
         Compute the Hessian, standard errors and correlations.
     max_evals : int, optional

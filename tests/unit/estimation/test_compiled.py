@@ -84,9 +84,9 @@ def test_problems_the_compiled_path_cannot_take_go_the_general_way() -> None:
 def test_compiled_search_ends_where_scipy_ends(method, monkeypatch) -> None:
     data = noisy_data(seed=5)
     kw = {"correlation_time_s": 3000.0} if method == "map" else {}
-    compiled = fit(NET2, data, FREE[method], method, **kw)
+    compiled = fit(NET2, data, FREE[method], method=method, **kw)
     monkeypatch.setattr(compiled_module, "compiled_problem", lambda objective: None)  # the general engine
-    python = fit(NET2, data, FREE[method], method, **kw)
+    python = fit(NET2, data, FREE[method], method=method, **kw)
     assert compiled.converged and python.converged
     for n in compiled.names:
         assert compiled.estimates[n] == pytest.approx(python.estimates[n], rel=2e-5)
