@@ -439,7 +439,8 @@ def choose_operating_point(
             " than assumed: read the verdicts with caution, or raise the model error"
         )
     states = dict(zip(net.state_names, map(float, x0), strict=True))
-    pinned = parameters_at_bound(net, [n for n in fit_free if n in net.parameters], fitted)
+    # the fit's own at-bound flags (Estimate records): diagnose and the fit agree by construction
+    pinned = {n: e.bound_side for n, e in cal.result.parameters.items() if n in net.parameters and e.at_bound}
     reason += _pinned_words(pinned)
     return OperatingPoint("fit", fitted, states, r_model, threshold, r_fit, reason, fit_free, pinned)
 
@@ -448,6 +449,9 @@ def parameters_at_bound(
     network: RCNetwork, names: Sequence[str], theta: Mapping[str, float]
 ) -> dict[str, str]:
     """Which of ``names`` sit at a bound of the search box a fit would use, and which bound.
+
+    For the model's own values, where no fit ran; a quick fit's estimates carry the same flags in
+    their :class:`~rczone.results.estimate.Estimate` records.
 
     The box is the one :func:`rczone.estimation.parameters.make_spec` gives (declared bounds, else
     a factor 1000 around the declared value); "at" is within 0.1 % of its width in the optimizer's

@@ -52,6 +52,20 @@ class Estimate(NamedTuple):
     kind: str = "other"
     log_scale: bool = False
 
+    @property
+    def bound_side(self) -> str | None:
+        """``"lower"`` or ``"upper"``: the bound an estimate :attr:`at_bound` sits at; None otherwise.
+
+        The nearer bound on the optimizer's scale (log for a log-scale parameter).
+        """
+        if not self.at_bound:
+            return None
+        if self.log_scale and self.lower > 0:
+            mid = math.sqrt(self.lower * self.upper)
+        else:
+            mid = 0.5 * (self.lower + self.upper)
+        return "upper" if self.value > mid else "lower"
+
     def interval(self, alpha: float = 0.05) -> tuple[float, float]:
         """Wald interval of level ``1 - alpha`` (NaN without a standard error).
 

@@ -81,3 +81,22 @@ def test_the_fit_own_flags_are_part_of_the_verdict() -> None:
     v = verdict_of(r)
     assert not v.trustworthy and v.reasons == ("Rw is at a bound",) and v.suspect == ("Rw",)
     assert np.array_equal(v.checked, ("fit",))
+
+
+@pytest.mark.parametrize(
+    ("value", "lower", "upper", "at_bound", "log_scale", "side"),
+    [
+        (1e9, 1e4, 1e9, True, True, "upper"),
+        (1e4, 1e4, 1e9, True, True, "lower"),
+        # 2e6 lies below the log-space middle sqrt(1e4 * 1e9) = 3.2e6: on the optimizer's (log) scale
+        # it is nearer the lower bound, though far below the arithmetic middle too
+        (2e6, 1e4, 1e9, True, True, "lower"),
+        (1e8, 1e4, 1e9, True, True, "upper"),
+        (-19.9, -20.0, 20.0, True, False, "lower"),
+        (19.9, -20.0, 20.0, True, False, "upper"),
+        (5.0, -20.0, 20.0, False, False, None),
+    ],
+)
+def test_the_bound_an_estimate_sits_at(value, lower, upper, at_bound, log_scale, side):
+    e = Estimate("x", value, math.nan, lower, upper, math.nan, at_bound, log_scale=log_scale)
+    assert e.bound_side == side
