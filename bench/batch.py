@@ -33,8 +33,8 @@ from pathlib import Path
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from rczone.atomic import write_json_atomic  # noqa: E402
 from rczone.batch import read_manifest, run_batch  # noqa: E402
+from rczone.files.atomic import write_json_atomic  # noqa: E402
 from rczone.virtual.scenarios import generate_night  # noqa: E402
 
 

@@ -24,8 +24,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from rczone.atomic import write_json_atomic
 from rczone.cli.compile_notice import NOTICE
+from rczone.files.atomic import write_json_atomic
 
 HERE = Path(__file__).resolve().parent
 COMMAND = ["fit", "C", "--starts", "1"]

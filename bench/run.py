@@ -37,7 +37,7 @@ import numpy as np  # noqa: E402
 
 import plain  # noqa: E402
 import problems  # noqa: E402
-from rczone.atomic import write_json_atomic  # noqa: E402
+from rczone.files.atomic import write_json_atomic  # noqa: E402
 from rczone.models import get_model  # noqa: E402
 from rczone.simulation import simulate, steady_state  # noqa: E402
 from rczone.simulation.simulate import transition_matrices  # noqa: E402
@@ -389,7 +389,7 @@ def filter_cases(rng: np.random.Generator) -> list[Case]:
 
 def two_zone_gradient_cases() -> list[Case]:
     """Issue 12: value and exact gradient of the joint two-zone virtual building (many distinct intervals)."""
-    from rczone.calibrate import dataset
+    from rczone.calibration import dataset
     from rczone.estimation import engines
     from rczone.estimation.costs import Objective
     from rczone.estimation.fit import default_free

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from rczone import datasets
-from rczone.calibrate import calibrate
+from rczone.calibration import calibrate
 from rczone.control.closedloop import closed_loop_test
 from rczone.models import load_model
 

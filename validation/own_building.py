@@ -182,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
     if not results:
         print("skipped: no case ran")
         return 0
-    from rczone.atomic import write_json_atomic
+    from rczone.files.atomic import write_json_atomic
 
     write_json_atomic(args.out / "own_building.json", results)
     return 0

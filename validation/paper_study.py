@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from rczone import datasets
-from rczone.calibrate import calibrate
-from rczone.comparison import FrequencyComparison, compare_frequency, input_variation
+from rczone.calibration import calibrate
+from rczone.models.comparison import FrequencyComparison, compare_frequency, input_variation
 from rczone.construction import ashrae_construction, office_241
 from rczone.construction.room import AIR_CP
 from rczone.demo import PAPER_FREE
@@ -108,7 +108,7 @@ def part1(out: Path) -> None:
     ex = exact_room_response(g)
     for split in ("matched", "symmetric"):
         fr = compare_frequency({"full": get_model("full-scale", split=split)}, "full", PAPER_DU_K, M, F)
-        from rczone.frequency import frequency_response
+        from rczone.simulation.frequency import frequency_response
 
         H = frequency_response(get_model("full-scale", split=split).state_space().lti(M), F).summed(
             {"Tsd": ["Tf", "Tc", "Tn1", "Tn2", "Thw"]}

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rczone.atomic import write_json_atomic
+from rczone.files.atomic import write_json_atomic
 from rczone.data import load_zone_data
 from rczone.data.quality import RczoneWarning
 from rczone.diagnostics import diagnose

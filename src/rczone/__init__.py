@@ -45,8 +45,8 @@ _EXPORTS = {
     "design_test": "rczone.workflow.api",
     "select_models": "rczone.workflow.api",
     # results
-    "Calibration": "rczone.calibrate",
-    "Prediction": "rczone.calibrate",
+    "Calibration": "rczone.calibration",
+    "Prediction": "rczone.calibration",
     "FitResult": "rczone.estimation.result",
     "Estimate": "rczone.results",
     "Verdict": "rczone.results.verdict",

@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 
 from rczone import datasets
-from rczone.atomic import write_json_atomic
-from rczone.comparison import TimeComparison, compare_frequency, compare_time, input_variation
+from rczone.files.atomic import write_json_atomic
 from rczone.models import get_model
+from rczone.models.comparison import TimeComparison, compare_frequency, compare_time, input_variation
 from rczone.models.paper import Q_PAPER
 from rczone.models.reduction import F_PER_K, PAPER_DU_K, band_matched_model
 from rczone.network import RCNetwork
@@ -258,7 +258,7 @@ def identification_study(
     true_equivalent: dict[str, float] | None = None,
 ) -> dict[str, Any]:
     """Section IV of the paper: calibrate on one night, validate on the others."""
-    from rczone.calibrate import calibrate, predict
+    from rczone.calibration import calibrate, predict
     from rczone.diagnostics import diagnose
 
     net = get_model("second-order-paper")
@@ -380,7 +380,7 @@ def _map_prior_study(
     net: Any, frames: dict[str, Any], const: dict[str, float], progress: Callable[[str], None]
 ) -> dict[str, Any]:
     """MAP on the closed-loop nights with each rule's construction values as prior; judged on C."""
-    from rczone.calibrate import calibrate, predict
+    from rczone.calibration import calibrate, predict
     from rczone.models.aggregation import REDUCED_RULE
 
     nets = {"parallel": net, "band": band_matched_model("second-order-paper")}
@@ -417,7 +417,7 @@ CLOSED_LOOP_NIGHTS = {"A": ("summer", "closed-loop", 20110802), "C": ("autumn", 
 
 def closed_loop_study(report: Report, progress: Callable[[str], None]) -> dict[str, Any]:
     """Closed-loop (A-style) against forced (C-style) LS and ML fits for today's operation and the strongest case."""
-    from rczone.calibrate import calibrate, predict
+    from rczone.calibration import calibrate, predict
     from rczone.virtual.scenarios import generate_night
 
     net = get_model("second-order-paper")

@@ -18,7 +18,7 @@ from functools import cache
 import numpy as np
 import pandas as pd
 
-from rczone.calibrate import calibrate
+from rczone.calibration import calibrate
 from rczone.diagnostics import diagnose
 from rczone.diagnostics.design import DesignLimits, DesignResult, design_test
 from rczone.models import get_model

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rczone.calibrate import calibrate
+from rczone.calibration import calibrate
 from rczone.diagnostics import diagnose
 from rczone.virtual.scenarios import generate_night
 

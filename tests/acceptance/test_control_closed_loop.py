@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rczone import datasets
-from rczone.calibrate import calibrate
+from rczone.calibration import calibrate
 from rczone.control.closedloop import closed_loop_test
 from rczone.control.mpc import MPCSettings
 

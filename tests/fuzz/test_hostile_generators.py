@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from rczone.data import read_column_map
 from rczone.errors import RczoneError
-from rczone.textfiles import nfkc, read_toml
+from rczone.files.text import nfkc, read_toml
 
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=list(HealthCheck), database=None)
 

@@ -27,7 +27,7 @@ from rczone.data import parse_column_map, read_column_map
 from rczone.errors import RczoneError
 from rczone.models import ZoneModel, load_model
 from rczone.models.modelfile import model_from_document
-from rczone.sources import read_frame
+from rczone.workflow.reader import read_frame
 
 QUICK, LONG = 60, 10_000
 

@@ -11,7 +11,7 @@ the spread of Rw doubles: that guess is an error source the Fisher model does no
 
 import numpy as np
 
-from rczone.calibrate import calibrate
+from rczone.calibration import calibrate
 from rczone.diagnostics import diagnose
 from rczone.models import get_model
 from rczone.simulation import simulate

@@ -12,7 +12,6 @@ import pytest
 
 from rczone.construction import AIR_CP, ashrae_construction, office_241
 from rczone.errors import InputShapeError
-from rczone.frequency import frequency_response, gain_error
 from rczone.models import (
     SURROUNDINGS,
     first_order,
@@ -22,6 +21,7 @@ from rczone.models import (
     surroundings_to_tsd,
 )
 from rczone.simulation import simulate
+from rczone.simulation.frequency import frequency_response, gain_error
 
 SURF = (("o", "To"), ("f", "Tf"), ("c", "Tc"), ("n1", "Tn1"), ("n2", "Tn2"), ("hw", "Thw"))
 BAND = np.logspace(-5, -3, 60)

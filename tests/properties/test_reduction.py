@@ -1,6 +1,6 @@
 """Band-matched reduction: its closed-form responses against the declared networks, and what it keeps.
 
-Oracles: :func:`rczone.frequency.frequency_response` of the networks that
+Oracles: :func:`rczone.simulation.frequency.frequency_response` of the networks that
 :mod:`rczone.models.paper` declares (the core builds their state space from the RC graph,
 independently of the transmission-matrix and closed-form responses in the reduction module), and
 the parallel aggregation's DC gains.
@@ -9,12 +9,11 @@ the parallel aggregation's DC gains.
 import numpy as np
 import pytest
 
-from rczone.comparison import compare_frequency
 from rczone.construction import office_241
 from rczone.errors import ParameterError
-from rczone.frequency import frequency_response
 from rczone.models import get_model, surface_elements
 from rczone.models.aggregation import reduced_values
+from rczone.models.comparison import compare_frequency
 from rczone.models.reduction import (
     PAPER_DU_K,
     band_matched,
@@ -22,6 +21,7 @@ from rczone.models.reduction import (
     full_response,
     low_order_response,
 )
+from rczone.simulation.frequency import frequency_response
 
 F = np.logspace(-5, -3, 25)
 SURR = ("Tf", "Tc", "Tn1", "Tn2", "Thw")

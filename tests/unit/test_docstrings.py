@@ -66,7 +66,7 @@ def _modules(*packages: str) -> list[str]:
     return out
 
 
-DOCTESTED = _modules("rczone.network", "rczone.simulation", "rczone.mpc")
+DOCTESTED = _modules("rczone.network", "rczone.simulation", "rczone.control")
 
 
 @pytest.mark.parametrize("module", DOCTESTED)
@@ -81,7 +81,7 @@ def test_docstring_examples_run(module: str) -> None:
 
 def test_the_network_simulation_and_mpc_modules_have_examples() -> None:
     finder = doctest.DocTestFinder()
-    for package in ("rczone.network", "rczone.simulation", "rczone.mpc"):
+    for package in ("rczone.network", "rczone.simulation", "rczone.control"):
         examples = sum(
             len(t.examples) for m in _modules(package) for t in finder.find(importlib.import_module(m))
         )

@@ -52,7 +52,7 @@ from pathlib import Path
 
 from rczone.errors import DataError, did_you_mean
 from rczone.estimation.methods import METHODS as REGISTERED_METHODS
-from rczone.textfiles import nfkc, read_toml, regular_file
+from rczone.files.text import nfkc, read_toml, regular_file
 
 MAX_TASKS = 200_000
 """Most calibrations (zones x methods) one manifest may ask for."""

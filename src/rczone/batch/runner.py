@@ -22,12 +22,12 @@ from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, Future, ProcessP
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from rczone.atomic import immediate
 from rczone.batch.manifest import Manifest, Task
 from rczone.batch.store import ResultStore
 from rczone.batch.summary import write_summary
 from rczone.batch.task import run_tasks
 from rczone.errors import RczoneError
+from rczone.files.atomic import immediate
 
 CONNECT_TIMEOUT = 20.0
 """Seconds to wait for a Dask scheduler to answer."""

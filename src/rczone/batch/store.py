@@ -8,7 +8,7 @@ Layout of the output folder::
     .lock                  held by the run writing into the folder
 
 Nothing is written outside the folder: every file is written by
-:func:`rczone.atomic.write_bytes_in`, which follows no symbolic link below the folder (a link
+:func:`rczone.files.atomic.write_bytes_in`, which follows no symbolic link below the folder (a link
 planted at a part's or the table's name is replaced, a link in place of ``parts`` refused), and
 the lock file is opened with ``O_NOFOLLOW`` and must be a regular file with one name (a link
 planted there is refused with one line, its target never opened). The lock is the portable one
@@ -43,7 +43,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rczone.atomic import (
+from rczone.batch.manifest import Task
+from rczone.errors import RczoneError
+from rczone.files.atomic import (
     NOFOLLOW,
     ensure_folder,
     ensure_folder_in,
@@ -51,8 +53,6 @@ from rczone.atomic import (
     output_error,
     write_bytes_in,
 )
-from rczone.batch.manifest import Task
-from rczone.errors import RczoneError
 
 RESULTS = "results.parquet"
 LOCK = ".lock"

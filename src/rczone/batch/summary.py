@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rczone.atomic import write_json_in
+from rczone.files.atomic import write_json_in
 from rczone.network.stochastic import is_reserved
 from rczone.report import Report
 from rczone.report.html import ReportFigure as Figure

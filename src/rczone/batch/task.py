@@ -28,7 +28,7 @@ def load_task_data(task: Task, zm) -> pd.DataFrame:
 
         _, season, mode, seed = task.source
         return generate_night(season, mode, seed)
-    from rczone.sources import read_model_frame
+    from rczone.workflow.reader import read_model_frame
 
     _, path, columns = task.source
     return read_model_frame(Path(path), Path(columns) if columns else None, zm)
@@ -69,7 +69,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
         "error": "",
     }
     try:
-        from rczone.calibrate import calibrate
+        from rczone.calibration import calibrate
 
         zm = task_model(task)
         net = zm.network

@@ -159,8 +159,8 @@ def fit(
 
 def _save(zm, path: Path) -> None:
     """A fitted model as JSON (everything) or as a model file (structure and values)."""
-    from rczone.atomic import write_text_atomic
     from rczone.errors import ParameterError
+    from rczone.files.atomic import write_text_atomic
     from rczone.models import model_to_toml
 
     suffix = path.suffix.lower()
@@ -222,7 +222,7 @@ def predict(
     The band adds the process and measurement noise of a model fitted by ML (or the RMSE of an
     LS fit) and the uncertainty of the estimates saved with a fitted model.
     """
-    from rczone.calibrate import prediction
+    from rczone.calibration import prediction
     from rczone.errors import ParameterError
 
     if steps is not None and steps < 1:

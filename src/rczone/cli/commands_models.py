@@ -60,7 +60,7 @@ def show(
     ] = None,
 ) -> None:
     """Print a model as a model file (TOML), the format `--model FILE.toml` reads."""
-    from rczone.atomic import write_text_atomic
+    from rczone.files.atomic import write_text_atomic
     from rczone.models import load_model, model_to_toml
 
     zm = load_model(name)

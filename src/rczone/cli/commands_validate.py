@@ -23,7 +23,7 @@ def vdi6007(
     json_out: Annotated[Path | None, typer.Option("--json", help="Write the deviations as JSON.")] = None,
 ) -> None:
     """VDI 6007-1 test cases: hourly mean air temperatures against the VDI and Dymola references."""
-    from rczone.atomic import write_json_atomic
+    from rczone.files.atomic import write_json_atomic
     from rczone.validation.vdi6007 import CASES, TOL_DYMOLA_K, TOL_VDI_K, run_case
 
     names = case or list(CASES)

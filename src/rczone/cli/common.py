@@ -53,12 +53,12 @@ def model(spec: str) -> ZoneModel:
 
 
 def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None = None) -> pd.DataFrame:
-    """A zone's data as a frame in rczone's default columns (see :func:`rczone.sources.read_frame`).
+    """A zone's data as a frame in rczone's default columns (see :func:`rczone.workflow.reader.read_frame`).
 
     With the model ``zm``, a file without a column map is read by the model's signal names.
     """
-    from rczone.sources import read_frame as read
-    from rczone.sources import read_model_frame
+    from rczone.workflow.reader import read_frame as read
+    from rczone.workflow.reader import read_model_frame
 
     return read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
 
@@ -74,7 +74,7 @@ def check_seed(value: int) -> int:
 
 def split(text: str | None) -> list[str] | None:
     """``"a, b,c"`` -> ``["a", "b", "c"]``; None or empty -> None."""
-    from rczone.textfiles import nfkc
+    from rczone.files.text import nfkc
 
     return [nfkc(s.strip()) for s in text.split(",") if s.strip()] if text else None
 
@@ -82,7 +82,7 @@ def split(text: str | None) -> list[str] | None:
 def constants(items: Iterable[str] | None) -> dict[str, float] | None:
     """``["Q=50", "Ts=20"]`` -> ``{"Q": 50.0, "Ts": 20.0}`` (SI units); None when none given."""
     from rczone.errors import ParameterError
-    from rczone.textfiles import nfkc
+    from rczone.files.text import nfkc
 
     out: dict[str, float] = {}
     for item in items or ():
@@ -106,7 +106,7 @@ def out_console(json_out: Path | None) -> Console:
     ``--json /dev/stdout`` or a link to it)."""
     from rich.console import Console
 
-    from rczone.atomic import is_stream
+    from rczone.files.atomic import is_stream
 
     return Console(stderr=json_out is not None and is_stream(json_out))
 
@@ -115,7 +115,7 @@ def write_json(json_out: Path | None, payload: Any) -> None:
     """Write ``payload`` to ``json_out`` atomically, or to stdout for ``-``."""
     if json_out is None:
         return
-    from rczone.atomic import json_text, write_json_atomic, write_stdout
+    from rczone.files.atomic import json_text, write_json_atomic, write_stdout
 
     if str(json_out) == "-":
         write_stdout(json_text(payload))

@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
     no traceback), 3 a fit flagged untrustworthy, 4 ``fit-many`` stored failed zones, 5
     ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
     """
-    from rczone.atomic import all_or_nothing
+    from rczone.files.atomic import all_or_nothing
 
     argv = sys.argv[1:] if argv is None else list(argv)
     try:

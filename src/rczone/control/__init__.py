@@ -1,4 +1,9 @@
-"""State and disturbance estimation, a reference MPC and closed-loop tests for fitted zone models.
+"""The MPC-facing entry point: fitted zone models, state and disturbance estimation, a reference MPC.
+
+A :class:`ZoneModel` (:mod:`rczone.models.zone`, re-exported here) is a network with parameter values
+and their provenance; it saves to and loads from a small JSON file and gives the continuous or exact
+discrete LTI matrices at a chosen mass flow (the bilinear model is LTI for constant flow), as numpy
+arrays or a python-control ``StateSpace``. Importing this package loads no plotting library.
 
 Modules: :mod:`~rczone.control.noise` (the discrete noise model of a fit),
 :mod:`~rczone.control.disturbance` (the appended disturbance state),
@@ -8,6 +13,20 @@ derivatives in the flow), :mod:`~rczone.control.observer` (Kalman filter, steady
 energy is counted), :mod:`~rczone.control.mpc` (the reference economic MPC, OSQP),
 :mod:`~rczone.control.closedloop` (closed-loop tests on the virtual building) and
 :mod:`~rczone.control.export` (python-control and plain named arrays).
+
+Examples
+--------
+The one-node family model ``Ti`` (room capacity ``Ci`` behind ``Ria`` to outdoors) at 10-min steps:
+its discrete pole is ``exp(-dt / (Ria Ci))``, and a model with supply air needs its operating flow.
+
+>>> import numpy as np
+>>> from rczone.models import load_model
+>>> zm = load_model("Ti")
+>>> d = zm.discrete(600.0)
+>>> bool(np.isclose(d.Ad[0, 0], np.exp(-600.0 / (zm.theta["Ria"] * zm.theta["Ci"]))))
+True
+>>> load_model("second-order-paper").discrete(600.0, m=0.1).Ad.shape
+(2, 2)
 """
 
 from rczone.control.disturbance import Disturbance
@@ -17,12 +36,15 @@ from rczone.control.model import ControlModel, DiscreteMatrices, FlowDerivative
 from rczone.control.mpc import MPC, ControlAction, Forecast, MPCSettings, Plan
 from rczone.control.noise import NoiseModel
 from rczone.control.observer import Estimate, KalmanObserver, StateEstimate, estimate_state
+from rczone.models.zone import FORMAT, DiscreteModel, ZoneModel
 
 __all__ = [
+    "FORMAT",
     "MPC",
     "ControlAction",
     "ControlModel",
     "DiscreteMatrices",
+    "DiscreteModel",
     "Disturbance",
     "Estimate",
     "FlowDerivative",
@@ -33,6 +55,7 @@ __all__ = [
     "NoiseModel",
     "Plan",
     "StateEstimate",
+    "ZoneModel",
     "ZonePower",
     "estimate_state",
     "named_arrays",

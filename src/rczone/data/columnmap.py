@@ -75,7 +75,7 @@ from pathlib import Path
 
 from rczone.data.units import DEFAULT_AIR_DENSITY, SI_UNITS, canonical_unit
 from rczone.errors import DataError, did_you_mean
-from rczone.textfiles import nfkc, read_toml
+from rczone.files.text import nfkc, read_toml
 
 KNOWN_CHANNELS = {
     "Ti": ("temperature", "room"),

@@ -64,7 +64,7 @@ MAX_ROWS = 2_000_000
 
 def _csv_source(path: Path) -> Path | io.BytesIO:
     """A CSV file as pandas reads it: the file, or a ``.gz`` decompressed here within the limit."""
-    from rczone.textfiles import _too_large
+    from rczone.files.text import _too_large
 
     if not path.name.lower().endswith(".gz"):
         return path
@@ -121,7 +121,7 @@ def _check_header(frame: pd.DataFrame, header: list[str], path: Path, sep: str) 
 
 def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFrame:
     """Read a CSV or Parquet trend log into a DataFrame, turning reader failures into DataError."""
-    from rczone.textfiles import _too_large, nfkc, regular_file
+    from rczone.files.text import _too_large, nfkc, regular_file
 
     path = Path(path)
     name = path.name.lower()

@@ -42,11 +42,11 @@ from types import MappingProxyType
 import numpy as np
 import pandas as pd
 
-from rczone.atomic import write_text_atomic
 from rczone.data.units import to_si
 from rczone.diagnostics.fisher import check_free, marginal_fisher, nuisance_responses, sample_weight
 from rczone.errors import ParameterError, did_you_mean
 from rczone.estimation.costs import auto_initial_state
+from rczone.files.atomic import write_text_atomic
 from rczone.models import ZoneModel
 from rczone.network import RCNetwork
 from rczone.results import Result

@@ -28,7 +28,7 @@ Four pieces of evidence are combined into a verdict per free parameter:
 own values are used when they *reproduce the data*: an open-loop simulation at them, with the
 nuisances re-fitted (as a fit would), leaves a residual of at most :data:`CONSISTENT_FACTOR` times
 the error level ``sqrt(sigma_K^2 + model_error_K^2)``. Otherwise a quick least-squares fit
-(:func:`rczone.calibrate.calibrate` without standard errors) is run first and the analysis is done
+(:func:`rczone.calibration.calibrate` without standard errors) is run first and the analysis is done
 at its estimates. The report says which was used, and the residual of each.
 
 References
@@ -420,7 +420,7 @@ def choose_operating_point(
         return OperatingPoint(
             "model", theta, states, r_model, threshold, reason=reason + _pinned_words(pinned), at_bound=pinned
         )
-    from rczone.calibrate import calibrate
+    from rczone.calibration import calibrate
     from rczone.estimation.fit import default_free
 
     fit_free = tuple(dict.fromkeys((*default_free(net, "ls"), *free)))
@@ -585,7 +585,7 @@ def diagnose(
     -------
     IdentifiabilityReport
     """
-    from rczone.calibrate import dataset, frame_from
+    from rczone.calibration import dataset, frame_from
     from rczone.models import load_model
 
     _check_settings(sigma_K, correlation_time_s, model_error_K, operating_point)

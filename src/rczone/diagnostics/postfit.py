@@ -106,7 +106,7 @@ def _inside(value: float, lo: float, hi: float) -> float:
 
 
 def _objective(model, frame: pd.DataFrame, res: FitResult, constants) -> tuple[Objective, float]:
-    from rczone.calibrate import as_model, dataset
+    from rczone.calibration import as_model, dataset
 
     zm = as_model(model)
     network = zm.network

@@ -58,7 +58,7 @@ its prior distribution (:mod:`rczone.network.prior`: ``lognormal`` with ``median
 ``normal`` with ``mean``, ``sigma``; ``uniform`` with ``lower``, ``upper``), numbers in the
 parameter's unit except a log-normal's dimensionless ``sigma``.
 
-Model files are untrusted input: size, encoding (UTF-8), nesting (:mod:`rczone.textfiles`), names, numbers (finite),
+Model files are untrusted input: size, encoding (UTF-8), nesting (:mod:`rczone.files.text`), names, numbers (finite),
 units and tie expressions (bounded arithmetic, evaluated by rczone, never executed) are checked,
 and every problem is one :class:`~rczone.errors.ModelFileError` naming the file and the key.
 """

@@ -30,7 +30,7 @@ Which parameters move
 The full model's responses are computed here from the surface elements' transmission matrices
 (:func:`rczone.models.split.lumped_wall_response`), not from the network's state space, and the
 low-order responses from their closed forms; ``tests/properties/test_reduction.py`` checks both
-against :func:`rczone.frequency.frequency_response` of the declared networks.
+against :func:`rczone.simulation.frequency.frequency_response` of the declared networks.
 
 References
 ----------

@@ -34,7 +34,6 @@ import numpy as np
 import pandas as pd
 
 from rczone import __version__
-from rczone.atomic import write_json_atomic
 from rczone.errors import (
     DataError,
     InputShapeError,
@@ -43,6 +42,7 @@ from rczone.errors import (
     RczoneError,
     did_you_mean,
 )
+from rczone.files.atomic import write_json_atomic
 from rczone.network import BilinearStateSpace, LinearStateSpace, RCNetwork
 from rczone.network.serialize import network_from_dict, network_to_dict
 from rczone.network.stochastic import is_reserved
@@ -525,10 +525,10 @@ class ZoneModel:
 def read_model_document(path: Path, kind: str) -> object:
     """The parsed document of a model file (``kind`` "TOML" or "JSON"), every read problem one line.
 
-    The checks of :mod:`rczone.textfiles` (a folder in place of the file, not UTF-8, too large,
+    The checks of :mod:`rczone.files.text` (a folder in place of the file, not UTF-8, too large,
     nested too deeply, not valid TOML or JSON) become :class:`ModelFileError`.
     """
-    from rczone.textfiles import nfkc, read_json, read_toml
+    from rczone.files.text import nfkc, read_json, read_toml
 
     try:
         # names in one Unicode form (NFKC), as Python reads the ties' identifiers

@@ -1,4 +1,4 @@
-"""Reports: self-contained HTML pages and figures (results files: :mod:`rczone.atomic`)."""
+"""Reports: self-contained HTML pages and figures (results files: :mod:`rczone.files.atomic`)."""
 
 from rczone.report.html import Report
 

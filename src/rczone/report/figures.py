@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from rczone.comparison import FrequencyComparison, TimeComparison
+from rczone.models.comparison import FrequencyComparison, TimeComparison
 from rczone.models.reduction import F_PER_K
 from rczone.report.html import ReportFigure as Figure
 

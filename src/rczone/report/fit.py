@@ -7,7 +7,7 @@ import math
 
 import pandas as pd
 
-from rczone.calibrate import Calibration
+from rczone.calibration import Calibration
 from rczone.diagnostics import IdentifiabilityReport
 from rczone.report import figures as figs
 from rczone.report.diagnose import add_verdicts, signal_panels

@@ -6,7 +6,7 @@ import html
 
 import numpy as np
 
-from rczone.calibrate import Prediction
+from rczone.calibration import Prediction
 from rczone.network.stochastic import target_of
 from rczone.report.html import Report
 from rczone.report.html import ReportFigure as Figure

@@ -1,7 +1,7 @@
 """The console text of a fit: the parameter table, the search line, the residual verdicts.
 
 Shared by :meth:`rczone.estimation.result.FitResult.summary` and
-:meth:`rczone.calibrate.Calibration.summary` (what ``rczone fit`` prints). Plain functions over a
+:meth:`rczone.calibration.Calibration.summary` (what ``rczone fit`` prints). Plain functions over a
 result's attributes; rich renders them (``[red]...[/]`` is rich markup, and every user string
 goes through :func:`esc`).
 """

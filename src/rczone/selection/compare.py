@@ -1,7 +1,7 @@
 """Fit candidate models to the same data and choose one.
 
 Every candidate is fitted by maximum likelihood (the Kalman filter of its stochastic model,
-:func:`rczone.calibrate.calibrate` with ``method="ml"``) on the *same* samples: the longest
+:func:`rczone.calibration.calibrate` with ``method="ml"``) on the *same* samples: the longest
 stretch where every input of every candidate is known. For each fit:
 
 * ``log L`` at the estimate, ``k`` free parameters (noise levels included), ``n`` observed
@@ -54,7 +54,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import chdtrc
 
-from rczone.calibrate import Calibration, ModelLike, as_model, calibrate, complete_stretch, frame_from
+from rczone.calibration import Calibration, ModelLike, as_model, calibrate, complete_stretch, frame_from
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.fit import default_free
 from rczone.models import ZoneModel
@@ -416,7 +416,7 @@ def select_models(
     models : sequence of model
         At least two: built-in names, model files or :class:`~rczone.models.ZoneModel`.
     frame : DataFrame
-        As for :func:`rczone.calibrate.calibrate`.
+        As for :func:`rczone.calibration.calibrate`.
     constants : mapping, optional
         Inputs held constant.
     rule : {"bic", "aic"}
@@ -426,7 +426,7 @@ def select_models(
     alpha : float
         Level of the likelihood-ratio tests.
     n_starts, seed
-        As for :func:`rczone.calibrate.calibrate`.
+        As for :func:`rczone.calibration.calibrate`.
     progress : callable, optional
         Called with the name of each model before it is fitted.
     noise : {"all", "measured"}

@@ -77,7 +77,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import ndtr
 
-from rczone.calibrate import Calibration, dataset
+from rczone.calibration import Calibration, dataset
 from rczone.errors import ParameterError
 from rczone.estimation.data import Dataset
 from rczone.estimation.engines import run_filter

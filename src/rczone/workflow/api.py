@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from rczone.calibrate import Calibration, Prediction, as_model, prediction
+from rczone.calibration import Calibration, Prediction, as_model, prediction
 from rczone.errors import ParameterError
 from rczone.estimation.methods import DEFAULT_METHOD
 from rczone.models import ZoneModel
@@ -280,7 +280,7 @@ def read_for_models(
     -------
     DataFrame
     """
-    from rczone.sources import read_frame
+    from rczone.workflow.reader import read_frame
 
     signals: dict[str, str] = {}
     needed: list[str] = []

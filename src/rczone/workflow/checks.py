@@ -4,7 +4,7 @@ After the estimates, :func:`check_fit` asks whether they can be trusted: the ide
 analysis at the estimates (:func:`rczone.diagnostics.diagnose`), each R and C profiled over a
 factor of ten, the estimates at a bound or far from the construction values, and the same model
 fitted to other data (their estimates compared, and this fit predicting them). The answers enter
-the one verdict of the returned :class:`~rczone.calibrate.Calibration`.
+the one verdict of the returned :class:`~rczone.calibration.Calibration`.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from collections.abc import Callable, Mapping
 
 import pandas as pd
 
-from rczone.calibrate import Calibration, calibrate, predict
+from rczone.calibration import Calibration, calibrate, predict
 from rczone.models import ZoneModel
 from rczone.workflow.settings import FitSettings
 
@@ -84,7 +84,7 @@ def check_fit(
     Parameters
     ----------
     cal : Calibration
-        A fit of :func:`rczone.calibrate.calibrate`.
+        A fit of :func:`rczone.calibration.calibrate`.
     frame : DataFrame
         The data it was fitted to.
     settings : FitSettings

@@ -77,7 +77,7 @@ class TrendLog:
         -------
         DataFrame
         """
-        from rczone.sources import read_frame, read_model_frame
+        from rczone.workflow.reader import read_frame, read_model_frame
 
         frame = (
             read_frame(self.path, self.columns)

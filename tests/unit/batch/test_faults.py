@@ -274,7 +274,7 @@ def test_a_full_disk_by_enospc_from_the_operating_system(tmp_path, quick, monkey
     """The same without root: the fourth write of a part fails with ENOSPC (monkeypatched os.replace)."""
     import errno
 
-    import rczone.atomic as atomic
+    import rczone.files.atomic as atomic
 
     real, calls = os.replace, []
 

@@ -16,7 +16,7 @@ import pytest
 
 from rczone.cli.main import main
 from rczone.data import load_zone_data
-from rczone.sources import read_frame
+from rczone.workflow.reader import read_frame
 
 
 def zone_frame(n: int = 60) -> pd.DataFrame:

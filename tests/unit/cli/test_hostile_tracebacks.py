@@ -80,7 +80,7 @@ def test_big_integers_in_a_column_map(tmp_path, data, capsys, text, key):
     one_line_exit_2(
         ["diagnose", str(data), "--model", "TiTe", "--columns", str(tmp_path / "map.toml")],
         capsys,
-        key + r": an integer beyond 64 bits \(rczone.textfiles.INT_LIMIT\)",
+        key + r": an integer beyond 64 bits \(rczone.files.text.INT_LIMIT\)",
     )
 
 
@@ -290,7 +290,7 @@ def test_a_data_file_over_the_size_limit(tmp_path, capsys, monkeypatch):
 
 
 def test_running_out_of_memory_is_one_line(data, capsys, monkeypatch):
-    import rczone.sources as sources
+    import rczone.workflow.reader as sources
 
     def exhausted(*args, **kwargs):
         raise MemoryError

@@ -222,8 +222,8 @@ def test_a_design_prints_and_serializes_as_the_command(tmp_path, capsys, monkeyp
     """The schedule the command prints and writes is the result's summary() and to_dict()."""
     import json
 
-    from rczone.atomic import _jsonable
     from rczone.cli.main import main
+    from rczone.files.atomic import _jsonable
 
     monkeypatch.setenv("COLUMNS", "100")
     args = ["design", "--actuate", "Ts=13,35", "--actuate", "m=0.02,0.12", "--condition", "To=16"]

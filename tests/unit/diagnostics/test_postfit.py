@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from rczone.calibrate import calibrate
+from rczone.calibration import calibrate
 from rczone.cli.main import main
 from rczone.diagnostics.postfit import PROFILE_THRESHOLD, compare_fits, far_from_construction, profile_checks
 from rczone.errors import ParameterError

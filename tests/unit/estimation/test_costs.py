@@ -121,7 +121,7 @@ def test_ml_cost_from_parameter_values_equals_the_reference_filter(hold) -> None
         data = data2(noise=0.05, rng=rng) if net is NET2 else None
         if data is None:
             from rczone import datasets
-            from rczone.calibrate import dataset
+            from rczone.calibration import dataset
 
             data = dataset(net, datasets.load("C").iloc[:200], {"Q": 50.0})
         for _ in range(3):

@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from scipy.linalg import expm
 
-from rczone.calibrate import dataset, prediction
+from rczone.calibration import dataset, prediction
 from rczone.cli.main import main
 from rczone.estimation.validation import estimate_initial_state
 from rczone.models import read_model_file

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from rczone.atomic import write_bytes_atomic, write_json_atomic
+from rczone.files.atomic import write_bytes_atomic, write_json_atomic
 from rczone.report import Report
 
 

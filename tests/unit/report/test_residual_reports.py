@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from rczone.calibrate import calibrate
+from rczone.calibration import calibrate
 from rczone.diagnostics.postfit import profile_checks
 from rczone.report import figures as figs
 from rczone.report.fit import fit_report, parameter_rows

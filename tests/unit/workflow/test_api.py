@@ -12,8 +12,8 @@ import pandas as pd
 import pytest
 
 import rczone
-from rczone.atomic import _jsonable
 from rczone.cli.main import main
+from rczone.files.atomic import _jsonable
 
 #: A width both the console and summary() use (rich reads COLUMNS).
 WIDTH = 100

@@ -22,10 +22,10 @@ import numpy as np
 import pandas as pd
 
 from rczone.errors import DataError, did_you_mean
-from rczone.frequency import FrequencyResponse, frequency_response, gain_error
 from rczone.models.paper import SURROUNDINGS
 from rczone.network import RCNetwork
 from rczone.simulation import simulate
+from rczone.simulation.frequency import FrequencyResponse, frequency_response, gain_error
 from rczone.simulation.initial import output_consistent_state
 
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy.linalg import expm
 
+from rczone.control import ZoneModel
 from rczone.errors import ModelFileError, NetworkError, ParameterError
 from rczone.models import get_model
-from rczone.mpc import ZoneModel
 from rczone.network.serialize import network_from_dict, network_to_dict
 from tests.netfactory import thirteen_state
 

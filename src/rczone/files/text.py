@@ -139,7 +139,7 @@ def read_text(path: str | os.PathLike, what: str) -> str:
         If it is not a regular file (a folder, a pipe, a device, a link loop), unreadable,
         larger than :data:`MAX_BYTES` or not UTF-8.
     """
-    raw = read_limited(path, what, MAX_BYTES, "rczone.textfiles.MAX_BYTES")
+    raw = read_limited(path, what, MAX_BYTES, "rczone.files.text.MAX_BYTES")
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -210,13 +210,13 @@ def _parsed(text: str, path: str | os.PathLike, what: str, kind: str, parse) -> 
     # The parsers recurse once per nesting level; refuse absurd nesting before they run.
     if _nesting_hint(text) > 4 * MAX_DEPTH:
         raise DataError(
-            f"{what} {os.fspath(path)!r}: nested more than {MAX_DEPTH} levels deep (rczone.textfiles.MAX_DEPTH)"
+            f"{what} {os.fspath(path)!r}: nested more than {MAX_DEPTH} levels deep (rczone.files.text.MAX_DEPTH)"
         )
     try:
         doc = parse(text)
     except RecursionError:
         raise DataError(
-            f"{what} {os.fspath(path)!r}: nested more than {MAX_DEPTH} levels deep (rczone.textfiles.MAX_DEPTH)"
+            f"{what} {os.fspath(path)!r}: nested more than {MAX_DEPTH} levels deep (rczone.files.text.MAX_DEPTH)"
         ) from None
     except (tomllib.TOMLDecodeError, json.JSONDecodeError, ValueError) as exc:
         first = " ".join(str(exc).split())
@@ -224,11 +224,11 @@ def _parsed(text: str, path: str | os.PathLike, what: str, kind: str, parse) -> 
     depth, huge = _depth(doc)
     if depth > MAX_DEPTH:
         raise DataError(
-            f"{what} {os.fspath(path)!r}: nested more than {MAX_DEPTH} levels deep (rczone.textfiles.MAX_DEPTH)"
+            f"{what} {os.fspath(path)!r}: nested more than {MAX_DEPTH} levels deep (rczone.files.text.MAX_DEPTH)"
         )
     if huge is not None:
         raise DataError(
-            f"{what} {os.fspath(path)!r}: {huge}: an integer beyond 64 bits (rczone.textfiles.INT_LIMIT);"
+            f"{what} {os.fspath(path)!r}: {huge}: an integer beyond 64 bits (rczone.files.text.INT_LIMIT);"
             " write a number in range (with an exponent for a float: 1e6)"
         )
     return doc

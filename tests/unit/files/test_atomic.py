@@ -7,9 +7,9 @@ import os
 
 import pytest
 
-import rczone.atomic as atomic
-from rczone.atomic import ensure_folder, write_json_atomic, write_text_atomic
+import rczone.files.atomic as atomic
 from rczone.errors import OutputError, RczoneError
+from rczone.files.atomic import ensure_folder, write_json_atomic, write_text_atomic
 
 
 def test_a_folder_where_a_file_is_expected(tmp_path):

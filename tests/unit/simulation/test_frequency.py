@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from rczone.errors import InputShapeError
-from rczone.frequency import frequency_response, gain_error
+from rczone.simulation.frequency import frequency_response, gain_error
 from tests.netfactory import one_r_one_c, thirteen_state
 
 

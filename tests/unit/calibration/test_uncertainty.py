@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rczone.calibrate import calibrate, prediction, saved_covariance
+from rczone.calibration import calibrate, prediction, saved_covariance
 from rczone.errors import DataError
 from tests.unit.selection.synthetic import TRUE_MODEL, prbs_zone
 

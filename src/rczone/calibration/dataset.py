@@ -1,0 +1,147 @@
+"""A model's data set: its signals picked from a frame by name, on the frame's time axis.
+
+Shared by the fit, the prediction, diagnose and select: the model's own conventions for inputs the
+data lack (:class:`~rczone.models.zone.ModelInputs`), the frame's DatetimeIndex kept, and the
+longest complete stretch of a record.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from rczone.errors import DataError
+from rczone.estimation import Dataset
+from rczone.models import ZoneModel, load_model
+from rczone.network import RCNetwork
+
+ModelLike = ZoneModel | RCNetwork | str | os.PathLike
+
+
+def as_model(model: ModelLike) -> ZoneModel:
+    """A :class:`ZoneModel` from a model, a bare network, a built-in name or a model file."""
+    return load_model(model)
+
+
+def frame_from(data: pd.DataFrame) -> pd.DataFrame:
+    """A frame with a ``time`` column in seconds; a DatetimeIndex (or datetime ``time``) is converted.
+
+    Every API entry point accepts a frame indexed by time stamps: the time becomes seconds since
+    the first sample (only differences of time enter the models).
+    """
+    if not isinstance(data, pd.DataFrame):
+        raise DataError(f"data must be a pandas DataFrame, got {type(data).__name__}")
+    if "time" in data:
+        t = data["time"]
+        if pd.api.types.is_datetime64_any_dtype(t):
+            out = data.copy()
+            out["time"] = (t - t.iloc[0]).dt.total_seconds()
+            return out
+        return data
+    if isinstance(data.index, pd.DatetimeIndex):
+        out = data.reset_index(drop=True)
+        out.insert(0, "time", (data.index - data.index[0]).total_seconds().to_numpy())
+        return out
+    raise DataError(
+        "the data have no 'time' column and no DatetimeIndex; give time in seconds or index the"
+        " frame by time stamps"
+    )
+
+
+def time_index(frame: pd.DataFrame, t: np.ndarray) -> pd.DatetimeIndex | None:
+    """The time stamps of the samples at ``t`` (as :func:`frame_from` made them), in the data's time zone.
+
+    A frame indexed by time stamps (or with a datetime ``time`` column) gives them from its first
+    stamp; UTC epoch seconds (a loaded trend log) give UTC stamps, converted to the zone of the
+    frame's DatetimeIndex when it has one. None when the data have no clock time.
+    """
+    index = frame.index if isinstance(frame.index, pd.DatetimeIndex) else None
+    t = np.asarray(t, dtype=float)
+    if "time" in frame and pd.api.types.is_datetime64_any_dtype(frame["time"]):
+        return pd.DatetimeIndex(frame["time"].iloc[0] + pd.to_timedelta(t, unit="s"), name="timestamp")
+    if "time" in frame:
+        if not (t.size and t[0] > EPOCH_SECONDS):
+            return None
+        stamps = pd.to_datetime(t, unit="s", utc=True)
+        if index is not None and index.tz is not None:
+            stamps = stamps.tz_convert(index.tz)
+        return pd.DatetimeIndex(stamps, name="timestamp")
+    if index is not None and len(index):
+        return pd.DatetimeIndex(index[0] + pd.to_timedelta(t, unit="s"), name="timestamp")
+    return None
+
+
+#: Times above this (s) are UTC epoch seconds (after 1973), not seconds from the start of the data.
+EPOCH_SECONDS = 1e8
+
+
+def complete_stretch(u: np.ndarray, m: np.ndarray, y: np.ndarray) -> slice:
+    """The longest run of samples where every input and flow is known and some output is measured.
+
+    The model needs its inputs at every sample (an unknown input is not a missing measurement);
+    outputs may be missing inside the run. Returns ``slice(start, stop)``.
+    """
+    ok = np.isfinite(u).all(axis=1) & np.isfinite(m).all(axis=1)
+    best, start = (0, 0), None
+    for i, good in enumerate(np.r_[ok, False]):
+        if good and start is None:
+            start = i
+        elif not good and start is not None:
+            if i - start > best[1] - best[0] and np.isfinite(y[start:i]).any():
+                best = (start, i)
+            start = None
+    return slice(*best)
+
+
+MIN_USED_FRACTION = 0.5
+"""Where inputs have gaps, the longest complete stretch is used only if it holds at least this
+fraction of the samples; below, the data are refused (exit code 2) rather than silently cut to a
+small part. The fraction used is in the fitted model's provenance (``stretch``) and in fit's JSON."""
+
+
+def dataset(
+    model: ModelLike,
+    frame: pd.DataFrame,
+    constants: Mapping[str, float] | None = None,
+    stretch: str = "longest",
+) -> Dataset:
+    """The model's signals from a frame (see :meth:`ZoneModel.signals`) as an estimation data set.
+
+    Parameters
+    ----------
+    stretch : {"longest", "all"}
+        ``"longest"``: where an input has gaps, the longest stretch without any
+        (:func:`complete_stretch`; :func:`dataset_note` says which was used); ``"all"``: every
+        sample (an input gap is then an error naming the sample).
+    """
+    zm = as_model(model)
+    t, u, m, y = zm.signals(frame_from(frame), constants)
+    if stretch == "longest":
+        sl = complete_stretch(u, m, y)
+        if sl.stop - sl.start < 2:
+            bad = [
+                n
+                for j, n in enumerate((*zm.network.input_names, *zm.network.flow_names))
+                if not np.isfinite(np.column_stack([u, m])[:, j]).any()
+            ]
+            raise DataError(
+                "no stretch of at least 2 samples where every input is known"
+                + (f" ({', '.join(bad)} never are)" if bad else "")
+                + "; check the column map and the data's gaps"
+            )
+        if (sl.stop - sl.start) < MIN_USED_FRACTION * len(t):
+            raise DataError(
+                f"only {sl.stop - sl.start} of {len(t)} samples ({(sl.stop - sl.start) / len(t):.0%}) form the"
+                " longest stretch where every input is known, less than the"
+                f" {MIN_USED_FRACTION:.0%} rczone uses without asking (rczone.calibration.dataset.MIN_USED_FRACTION):"
+                " fill the inputs' gaps, hold a missing input constant (--const), or select the stretch"
+                " with the column map's [time] start and end"
+            )
+        t, u, m, y = t[sl], u[sl], m[sl], y[sl]
+    elif stretch != "all":
+        raise DataError(f"stretch must be 'longest' or 'all', got {stretch!r}")
+    net = zm.network
+    return Dataset(t, u, m if m.shape[1] else None, y, net.input_names, net.flow_names, net.outputs)
