@@ -21,14 +21,14 @@ import numpy as np
 
 from rczone import datasets
 from rczone.calibration import calibrate
-from rczone.models.comparison import FrequencyComparison, compare_frequency, input_variation
 from rczone.construction import ashrae_construction, office_241
 from rczone.construction.room import AIR_CP
-from rczone.demo import PAPER_FREE
 from rczone.models import get_model, surface_elements
+from rczone.models.comparison import FrequencyComparison, compare_frequency, input_variation
 from rczone.models.reduction import F_PER_K, PAPER_DU_K, band_matched, band_matched_model
 from rczone.models.split import exact_wall_response
 from rczone.report import figures as figs
+from rczone.study import PAPER_FREE
 from rczone.virtual.operation import Operation
 from rczone.virtual.scenarios import generate_night
 

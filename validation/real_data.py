@@ -22,12 +22,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from rczone.files.atomic import write_json_atomic
 from rczone.data import load_zone_data
 from rczone.data.quality import RczoneWarning
 from rczone.diagnostics import diagnose
 from rczone.estimation import Dataset, fit
-from rczone.estimation.validation import open_loop_error
+from rczone.estimation.openloop import open_loop_error
+from rczone.files.atomic import write_json_atomic
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 
 HERE = Path(__file__).resolve().parent

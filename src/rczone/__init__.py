@@ -40,7 +40,7 @@ _EXPORTS = {
     "TrendLog": "rczone.workflow.datasource",
     "BuiltinNight": "rczone.workflow.datasource",
     "VirtualNight": "rczone.workflow.datasource",
-    "simulate": "rczone.simulation",
+    "simulate": "rczone.workflow.api",
     "diagnose": "rczone.workflow.api",
     "design_test": "rczone.workflow.api",
     "select_models": "rczone.workflow.api",

@@ -4,7 +4,7 @@ Two independent references, neither produced by a fit:
 
 * :func:`steady_state_equivalent` -- the paper's aggregation (parallel conductances, summed
   capacities) applied to the virtual building's *true* constructions
-  (:func:`rczone.demo.true_equivalent`). It keeps every steady-state gain, so it is the right value
+  (:func:`rczone.study.true_equivalent`). It keeps every steady-state gain, so it is the right value
   for periods of a day and more.
 * :func:`hour_scale_wall_resistance` -- the ``Rw`` for which the reduced model's wall branch
   ``Rw/2 -- Cw -- Rw/2`` (``Cw`` fixed at its nominal construction value, as in the paper's reduced
@@ -22,9 +22,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from rczone.demo import true_equivalent
 from rczone.models import get_model
 from rczone.models.split import exact_wall_response
+from rczone.study import true_equivalent
 from rczone.virtual.building import true_geometry
 
 
@@ -32,7 +32,7 @@ def steady_state_equivalent() -> dict[str, float]:
     """``Cr`` and ``Rw`` aggregated from the virtual building's true construction (J/K, K/W)."""
     out = true_equivalent()
     if out is None:  # pragma: no cover - the virtual building always ships
-        raise RuntimeError("rczone.demo.true_equivalent() returned None: no virtual building")
+        raise RuntimeError("rczone.study.true_equivalent() returned None: no virtual building")
     return out
 
 

@@ -11,7 +11,7 @@ belongs to (``rczone.estimation.costs`` -> ``estimation``, ``rczone.control`` ->
   import nothing of rczone but ``errors``;
 * ``estimation`` reaches no ``report``, ``cli`` or ``calibration``, not even through another
   unit; ``diagnostics`` reaches no ``report``; ``workflow`` (what the CLI and the API share)
-  reaches no ``report`` or ``cli``;
+  and ``study`` (the paper's study) reach no ``report`` or ``cli``;
 * the units import each other without cycles;
 * importing ``rczone.control`` does not load matplotlib (checked in a fresh interpreter).
 """
@@ -42,6 +42,7 @@ FORBIDDEN_REACH = {
     "estimation": {"report", "cli", "calibration"},
     "diagnostics": {"report"},
     "workflow": {"report", "cli"},
+    "study": {"report", "cli"},
 }
 
 
@@ -178,7 +179,7 @@ def test_the_checks_see_imports_inside_functions_and_relative_ones(tmp_path: Pat
 
 
 #: Modules allowed at the package root (everything else lives in a package that names its concept).
-ROOT_MODULES = {"__init__.py", "errors.py", "demo.py"}  # demo.py: being split into virtual/ and report/
+ROOT_MODULES = {"__init__.py", "errors.py"}
 
 
 def test_no_loose_modules_at_the_package_root() -> None:

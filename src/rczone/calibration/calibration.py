@@ -30,7 +30,7 @@ from rczone.estimation.innovations import (
     open_loop_analysis,
 )
 from rczone.estimation.methods import DEFAULT_METHOD, method_of
-from rczone.estimation.validation import (
+from rczone.estimation.openloop import (
     INITIAL_STATE_PRIOR_K,
     OpenLoopError,
     ResidualTest,
@@ -65,7 +65,7 @@ class Calibration(Result):
     open_loop : OpenLoopError
         Open-loop simulation of the fitted model on the calibration data. The unmeasured nodes
         start where the data say: at the initial state an LS fit estimates with the parameters, and
-        for ML and MAP at :func:`~rczone.estimation.validation.estimate_initial_state` (the
+        for ML and MAP at :func:`~rczone.estimation.openloop.estimate_initial_state` (the
         filter itself needs no estimate).
     residuals : ResidualTest
         Whiteness of the open-loop error of the first output (not expected to be white; see the

@@ -25,7 +25,7 @@ from rczone.calibration.dataset import (
 )
 from rczone.errors import DataError
 from rczone.estimation.methods import REGISTRY
-from rczone.estimation.validation import (
+from rczone.estimation.openloop import (
     InitialStateEstimate,
     OpenLoopError,
     open_loop_error,
@@ -254,7 +254,7 @@ def prediction(
     initial_state : {"estimated", "steady"}
         Open loop: where the unmeasured nodes start. ``"estimated"`` (default): their initial
         temperatures estimated from these data around the conditional steady state
-        (:func:`~rczone.estimation.validation.estimate_initial_state`, prior standard deviation
+        (:func:`~rczone.estimation.openloop.estimate_initial_state`, prior standard deviation
         the model's ``sigma_x0`` or 1 K), and the band starts from the estimate's uncertainty;
         ``"steady"``: at the steady state for the first sample's inputs, which shows a slow node's
         unknown start as a bias lasting its time constant.

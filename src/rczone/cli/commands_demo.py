@@ -19,7 +19,7 @@ def demo(
     ] = Path("demo-output"),
 ) -> None:
     """Reproduce the paper's study on the virtual building and write a report."""
-    from rczone.demo import run_demo
+    from rczone.report.demo import run_demo
 
     console = Console(stderr=True)
     t0 = time.perf_counter()

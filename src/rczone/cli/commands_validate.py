@@ -24,7 +24,7 @@ def vdi6007(
 ) -> None:
     """VDI 6007-1 test cases: hourly mean air temperatures against the VDI and Dymola references."""
     from rczone.files.atomic import write_json_atomic
-    from rczone.validation.vdi6007 import CASES, TOL_DYMOLA_K, TOL_VDI_K, run_case
+    from rczone.reference.vdi6007 import CASES, TOL_DYMOLA_K, TOL_VDI_K, run_case
 
     names = case or list(CASES)
     for n in names:  # check all names before the (seconds-long) work

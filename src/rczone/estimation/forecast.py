@@ -5,7 +5,7 @@ Two sources of uncertainty are separated, as they answer different questions:
 * **process and measurement noise** (the stochastic model of an ML fit): the Kalman filter's
   k-step prediction covariance ``C P_{j|j-k} C' + R``, where ``P_{j|j-k}`` propagates the filtered
   covariance ``k`` steps with the process noise. Open loop is the filter conditioned on the
-  first measurement only (:func:`rczone.estimation.validation.open_loop_band`);
+  first measurement only (:func:`rczone.estimation.openloop.open_loop_band`);
 * **the estimates' uncertainty**: the covariance ``Sigma`` of the fitted parameters carried to the
   prediction by linearization, ``var_theta(y_j) = J_j Sigma J_j'`` with ``J_j = d y_hat_j / d theta``
   by central differences of the predictor (first-order delta method [1]_).
@@ -31,7 +31,7 @@ from rczone.errors import ParameterError
 from rczone.estimation.costs import filter_arrays
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
-from rczone.estimation.validation import open_loop_band
+from rczone.estimation.openloop import open_loop_band
 from rczone.network import RCNetwork
 
 #: Central-difference step of the parameter sensitivities, in standard errors.

@@ -12,8 +12,8 @@ import pandas as pd
 import pytest
 
 from rczone.cli.main import main
+from rczone.reference import vdi6007
 from rczone.simulation import simulate
-from rczone.validation import vdi6007
 
 DATA = Path(__file__).parent / "data"
 

@@ -18,7 +18,7 @@ from rczone.estimation.innovations import (
     ljung_box_lags,
     ljung_box_q,
 )
-from rczone.estimation.validation import ljung_box
+from rczone.estimation.openloop import ljung_box
 
 from .nets import NET1
 

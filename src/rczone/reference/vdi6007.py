@@ -158,7 +158,7 @@ class CaseResult:
 
 
 def _table(case: str, name: str) -> pd.DataFrame:
-    path = resources.files("rczone.validation") / "data" / "vdi6007" / f"TestCase{case[2:]}_{name}.csv"
+    path = resources.files("rczone.reference") / "data" / "vdi6007" / f"TestCase{case[2:]}_{name}.csv"
     with resources.as_file(path) as p:
         return pd.read_csv(p)
 

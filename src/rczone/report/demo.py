@@ -1,7 +1,7 @@
-"""The demo job: the paper's study reproduced on the built-in virtual building.
+"""The page of ``rczone demo``: the paper's study (:mod:`rczone.study.paper`) laid out as a report.
 
-Section III (which model order is enough) runs on data sets A, B and C; the results go to a
-folder with ``report.html``, the figures as PNG and ``results.json``.
+The computation lives in :mod:`rczone.study.paper`; this module only writes prose, tables and
+figures around its numbers, and ``results.json`` with every number.
 """
 
 from __future__ import annotations
@@ -11,113 +11,28 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from rczone import datasets
 from rczone.files.atomic import write_json_atomic
-from rczone.models import get_model
-from rczone.models.comparison import TimeComparison, compare_frequency, compare_time, input_variation
-from rczone.models.paper import Q_PAPER
-from rczone.models.reduction import F_PER_K, PAPER_DU_K, band_matched_model
-from rczone.network import RCNetwork
-from rczone.network.stochastic import measurement_noise_names, process_noise_name
 from rczone.report import Report
 from rczone.report import figures as figs
-from rczone.virtual.operation import Operation
-
-ORDERS = ("full-scale", "second-order", "first-order")
-SCENARIOS = {
-    "A": "A: summer night, normal closed-loop control",
-    "B": "B: winter night, normal closed-loop control",
-    "C": "C: autumn night, forced-response test",
-}
-#: The paper's yardstick for section III, in K (1 F and 3 F).
-PAPER_SECOND_ORDER_K = 1.0 / F_PER_K
-PAPER_FIRST_ORDER_K = 3.0 / F_PER_K
-#: Low-order variants judged at the paper's weights: parallel aggregation and band-matched values.
-VARIANTS = (
-    "second-order",
-    "second-order-band",
-    "second-order-paper",
-    "second-order-paper-band",
-    "first-order",
-    "first-order-band",
+from rczone.study.paper import (
+    METHODS,
+    ORDERS,
+    SCENARIOS,
+    VARIANTS,
+    ClosedLoopStudy,
+    IdentificationStudy,
+    ModelOrderStudy,
+    PaperStudy,
+    run_paper_study,
 )
-#: The paper's unknowns (section IV: theta = [Cr, Rw], the initial state taken from the data), plus
-#: the noise levels a likelihood fit needs (of the one output and state Ti).
-_PAPER_NOISE = (*measurement_noise_names(("Ti",)), process_noise_name("Ti"))
-PAPER_FREE = {
-    "ls": ("Cr", "Rw"),
-    "ml": ("Cr", "Rw", *_PAPER_NOISE),
-    "map": ("Cr", "Rw", *_PAPER_NOISE),
-}
 
 
-def true_equivalent() -> dict[str, float] | None:
-    """The reduced model's parameters aggregated from the virtual building's true construction."""
-    try:
-        from rczone.virtual.building import true_geometry
-    except ImportError:  # pragma: no cover - the virtual building always ships with rczone
-        return None
-    from rczone.models import get_model as gm
-
-    vals = gm("second-order-paper", true_geometry()).values()
-    return {"Cr": vals["Cr"], "Rw": vals["Rw"]}
-
-
-def model_order_study(report: Report, progress: Callable[[str], None]) -> dict[str, Any]:
-    """Section III of the paper on the virtual building; adds to ``report``, returns the numbers."""
-    models = {k: get_model(k) for k in ORDERS}
-    frames = {s: datasets.load(s) for s in SCENARIOS}
-    results: dict[str, Any] = {"time_domain": {}, "frequency_domain": {}}
-    comps = []
-    for s, label in SCENARIOS.items():
-        progress(f"simulating the three models on data set {s}")
-        c = compare_time(models, frames[s], label=label, constants={"Q": Q_PAPER})
-        comps.append(c)
-        rmse, mx, diff = c.rmse(), c.max_error(), c.max_difference_to("full-scale")
-        results["time_domain"][s] = {
-            k: {"rmse_K": rmse[k], "max_error_K": mx[k], "max_diff_to_full_scale_K": diff.get(k, 0.0)}
-            for k in ORDERS
-        }
-    progress("frequency responses at m = 0.12 kg/s")
-    du = input_variation(list(frames.values()))
-    fc = compare_frequency(models, "full-scale", du, m=0.12)
-    maxe = fc.max_errors()
-    results["frequency_domain"] = {
-        "m_kg_s": 0.12,
-        "band_hz": [float(fc.freq_hz[0]), float(fc.freq_hz[-1])],
-        "du_K": du,
-        "max_error_K": maxe,
-    }
-    ok2 = max(maxe["second-order"].values()) <= PAPER_SECOND_ORDER_K
-    ok1 = max(maxe["first-order"].values()) <= PAPER_FIRST_ORDER_K
-    results["frequency_domain"]["agrees_with_paper"] = {"second-order": ok2, "first-order": ok1}
-    # e_i scales with du_i: the same models judged with each night's own input variation
-    per_set = {}
-    for s, f in frames.items():
-        dus = input_variation([f])
-        per_set[s] = {
-            "du_K": dus,
-            "max_error_K": compare_frequency(models, "full-scale", dus, m=0.12).max_errors(),
-        }
-    results["frequency_domain"]["per_data_set"] = per_set
-    # relative gain error: |H_ref - H_k| / |H_ref(0)| (independent of du), and where it peaks
-    rel = {}
-    for k, errs in fc.errors.items():
-        rel[k] = {}
-        for i, e in errs.items():
-            g0 = float(fc.gains["full-scale"][i][0])
-            j = int(e.argmax())
-            rel[k][i] = {
-                "max_relative": float(e[j] / du[i] / g0) if du[i] and g0 else 0.0,
-                "at_hz": float(fc.freq_hz[j]),
-            }
-    results["frequency_domain"]["relative_gain_error"] = rel
-
-    progress("frequency responses at the paper's weights, parallel and band-matched values")
-    fcp, results["frequency_domain"]["paper_weights"] = paper_weights_study()
-
+def model_order_section(report: Report, study: ModelOrderStudy) -> None:
+    """Section III: the three orders against the data and in the frequency domain."""
+    results, comps, fc = study.results, study.time, study.frequency
+    fd = results["frequency_domain"]
+    maxe, per_set, rel = fd["max_error_K"], fd["per_data_set"], fd["relative_gain_error"]
+    ok2, ok1 = fd["agrees_with_paper"]["second-order"], fd["agrees_with_paper"]["first-order"]
     report.heading("III. Which model order is enough?")
     report.paragraph(
         "The paper compares a 13-state RC model of the office (every wall a 3R-2C element) with a "
@@ -190,31 +105,7 @@ def model_order_study(report: Report, progress: Callable[[str], None]) -> dict[s
         "neighbours vary little overnight."
     )
     report.paragraph(verdict, "note")
-    _report_paper_weights(report, fcp, results["frequency_domain"]["paper_weights"])
-    return results
-
-
-def _variant_model(name: str) -> RCNetwork:
-    base = name.removesuffix("-band")
-    return band_matched_model(base) if name.endswith("-band") else get_model(base)
-
-
-def paper_weights_study() -> tuple[Any, dict[str, Any]]:
-    """Eq.-7 errors at the paper's input amplitudes, parallel against band-matched values."""
-    models = {"full-scale": get_model("full-scale"), **{k: _variant_model(k) for k in VARIANTS}}
-    fc = compare_frequency(models, "full-scale", PAPER_DU_K, m=0.12)
-    maxe = fc.max_errors()
-    limit = {k: PAPER_FIRST_ORDER_K if k.startswith("first") else PAPER_SECOND_ORDER_K for k in VARIANTS}
-    out = {
-        "du_K": dict(PAPER_DU_K),
-        "du_F": {k: v * F_PER_K for k, v in PAPER_DU_K.items()},
-        "max_error_K": maxe,
-        "max_error_F": {k: {i: e * F_PER_K for i, e in v.items()} for k, v in maxe.items()},
-        "paper_bound_F": {k: v * F_PER_K for k, v in limit.items()},
-        "agrees_with_paper": {k: max(maxe[k].values()) <= limit[k] for k in VARIANTS},
-        "values": {k: models[k].values() for k in VARIANTS},
-    }
-    return fc, out
+    _report_paper_weights(report, study.paper_weights, fd["paper_weights"])
 
 
 def _report_paper_weights(report: Report, fc: Any, pw: dict[str, Any]) -> None:
@@ -248,65 +139,9 @@ def _report_paper_weights(report: Report, fc: Any, pw: dict[str, Any]) -> None:
     )
 
 
-ATTEMPTS = {"1": ("A", ("B", "C")), "2": ("C", ("A", "B"))}
-METHODS = ("ls", "ml", "map")
-
-
-def identification_study(
-    report: Report,
-    progress: Callable[[str], None],
-    true_equivalent: dict[str, float] | None = None,
-) -> dict[str, Any]:
-    """Section IV of the paper: calibrate on one night, validate on the others."""
-    from rczone.calibration import calibrate, predict
-    from rczone.diagnostics import diagnose
-
-    net = get_model("second-order-paper")
-    frames = {s: datasets.load(s) for s in SCENARIOS}
-    const = {"Q": Q_PAPER}
-    out: dict[str, Any] = {"attempts": {}, "diagnose": {}}
-    for s, f in frames.items():
-        progress(f"diagnosing data set {s}")
-        d = diagnose(net, f, free=["Cr", "Rw"], constants=const)
-        out["diagnose"][s] = {k: {"verdict": v.verdict, "reason": v.reason} for k, v in d.parameters.items()}
-    for att, (cal_set, val_sets) in ATTEMPTS.items():
-        res: dict[str, Any] = {"calibration": cal_set, "methods": {}}
-        preds: dict[str, dict[str, Any]] = {s: {} for s in (cal_set, *val_sets)}
-        for meth in METHODS:
-            progress(f"attempt {att}: calibrating on {cal_set} by {meth.upper()}")
-            cal = calibrate(net, frames[cal_set], meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const)
-            entry = {
-                "parameters": {
-                    n: {
-                        "unit": net.parameters[n].unit,
-                        "estimate": cal.result.estimates[n],
-                        "std_error": cal.result.std_errors[n],
-                        "construction": cal.result.parameters[n].construction,
-                        "true_equivalent": (true_equivalent or {}).get(n),
-                    }
-                    for n in ("Cr", "Rw")
-                },
-                "validation": {},
-            }
-            for s in (cal_set, *val_sets):
-                ol = predict(cal.model, frames[s], const)
-                entry["validation"][s] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}
-                preds[s][meth] = ol.y_hat[:, 0]
-            res["methods"][meth] = entry
-        out["attempts"][att] = res
-        comps = [
-            TimeComparison(
-                f"{'calibration' if s == cal_set else 'validation'}: {SCENARIOS[s]}",
-                frames[s]["time"].to_numpy(float),
-                frames[s]["Ti"].to_numpy(float),
-                {f"{m.upper()}": p for m, p in preds[s].items()},
-            )
-            for s in (cal_set, *val_sets)
-        ]
-        res["_figure"] = figs.time_comparison(comps)
-
-    out["map_prior"] = _map_prior_study(net, frames, const, progress)
-
+def identification_section(report: Report, study: IdentificationStudy) -> None:
+    """Section IV: diagnose, the two attempts, and the MAP prior's construction values."""
+    out = study.results
     report.heading("IV. Can R and C be identified from the data?")
     report.paragraph(
         "The paper fits the reduced 2nd-order model (free: room capacitance Cr and wall resistance Rw; "
@@ -322,7 +157,7 @@ def identification_study(
         rows.append({"data set": s, **{f"{k} verdict": v["verdict"] for k, v in d.items()}})
     report.table(rows, "rczone diagnose, before any fit")
     for att, res in out["attempts"].items():
-        fig = res.pop("_figure")
+        fig = figs.time_comparison(study.attempts[att])
         cal_set = res["calibration"]
         report.heading(f"Attempt {att}: calibrate on {cal_set}", 3)
         trows = []
@@ -331,8 +166,9 @@ def identification_study(
             for meth in METHODS:
                 row[meth.upper()] = res["methods"][meth]["parameters"][n]["estimate"]
             row["construction"] = res["methods"]["ls"]["parameters"][n]["construction"]
-            if true_equivalent:
-                row["true equivalent"] = true_equivalent.get(n)
+            true = res["methods"]["ls"]["parameters"][n]["true_equivalent"]
+            if true is not None:
+                row["true equivalent"] = true
             trows.append(row)
         report.table(trows, f"Best-fit parameters when data set {cal_set} is used for calibration", digits=3)
         vrows = [
@@ -373,94 +209,11 @@ def identification_study(
         f"the '{mp['default']}' values as the reduced model's construction values.",
         "note",
     )
-    return out
 
 
-def _map_prior_study(
-    net: Any, frames: dict[str, Any], const: dict[str, float], progress: Callable[[str], None]
-) -> dict[str, Any]:
-    """MAP on the closed-loop nights with each rule's construction values as prior; judged on C."""
-    from rczone.calibration import calibrate, predict
-    from rczone.models.aggregation import REDUCED_RULE
-
-    nets = {"parallel": net, "band": band_matched_model("second-order-paper")}
-    rules: dict[str, Any] = {}
-    for rule, n in nets.items():
-        fits = {}
-        for s in ("A", "B"):
-            progress(f"MAP on {s} with {rule} construction values as prior")
-            cal = calibrate(
-                n, frames[s], "map", PAPER_FREE["map"], n_starts=3, seed=1, constants=const, uncertainty=False
-            )
-            fits[s] = {
-                "Rw": cal.result.estimates["Rw"],
-                "Cr": cal.result.estimates["Cr"],
-                "own_rmse_K": cal.open_loop.rmse_K,
-                "C_rmse_K": predict(cal.model, frames["C"], const).rmse_K,
-            }
-        v = n.values()
-        rules[rule] = {"construction": {k: v[k] for k in ("Cr", "Rw", "Cw", "Rwin")}, "fits": fits}
-    score = {r: float(np.mean([f["C_rmse_K"] for f in v["fits"].values()])) for r, v in rules.items()}
-    return {
-        "rules": rules,
-        "mean_C_rmse_K": score,
-        "better": min(score, key=score.get),
-        "default": REDUCED_RULE,
-    }
-
-
-#: The strongest honest closed-loop case found (docs/paper.md): the thermostat in the supply jet.
-CLOSED_LOOP_CASES = {"as shipped": Operation(), "thermostat at the diffuser": Operation(sensor="diffuser")}
-#: Nights of the closed-loop study: the A-style and C-style nights (season, mode, seed).
-CLOSED_LOOP_NIGHTS = {"A": ("summer", "closed-loop", 20110802), "C": ("autumn", "forced", 20111024)}
-
-
-def closed_loop_study(report: Report, progress: Callable[[str], None]) -> dict[str, Any]:
-    """Closed-loop (A-style) against forced (C-style) LS and ML fits for today's operation and the strongest case."""
-    from rczone.calibration import calibrate, predict
-    from rczone.virtual.scenarios import generate_night
-
-    net = get_model("second-order-paper")
-    const = {"Q": Q_PAPER}
-    out: dict[str, Any] = {}
-    comps = []
-    for case, op in CLOSED_LOOP_CASES.items():
-        frames = {}
-        for s, (season, mode, seed) in CLOSED_LOOP_NIGHTS.items():
-            progress(f"closed-loop study ({case}): night {s}")
-            frames[s] = (
-                datasets.load(s) if op.is_default else generate_night(season, mode, seed, operation=op)
-            )
-        res: dict[str, Any] = {"operation": op.label()}
-        for meth in ("ls", "ml"):
-            fits = {}
-            for s, f in frames.items():
-                cal = calibrate(
-                    net, f, meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const, uncertainty=False
-                )
-                other = "C" if s == "A" else "A"
-                fits[s] = {
-                    "Rw": cal.result.estimates["Rw"],
-                    "Cr": cal.result.estimates["Cr"],
-                    "at_bound": [k for k, e in cal.result.parameters.items() if e.at_bound],
-                    "own_rmse_K": cal.open_loop.rmse_K,
-                    f"{other}_rmse_K": predict(cal.model, frames[other], const).rmse_K,
-                }
-                if meth == "ls" and s == "A":
-                    comps.append(
-                        TimeComparison(
-                            f"{case}: LS fit to the A-style night, predicting the C-style night",
-                            frames["C"]["time"].to_numpy(float),
-                            frames["C"]["Ti"].to_numpy(float),
-                            {"A-fit": predict(cal.model, frames["C"], const).y_hat[:, 0]},
-                        )
-                    )
-            fits["rw_ratio_C_over_A"] = fits["C"]["Rw"] / fits["A"]["Rw"]
-            res[meth] = fits
-        ls = res["ls"]
-        res["paper_strength"] = bool(ls["rw_ratio_C_over_A"] >= 5.0 and ls["A"]["own_rmse_K"] <= 0.2)
-        out[case] = res
-
+def closed_loop_section(report: Report, study: ClosedLoopStudy) -> None:
+    """The closed-loop study: A-style against C-style fits, as shipped and at the paper's strength."""
+    out, comps = study.results, study.comparisons
     report.heading("Closed-loop data at the paper's strength", 3)
     report.paragraph(
         "The paper's Tables I and II put the closed-loop fit's Rw 15.5 (LS) and 8.9 (ML) times below the forced "
@@ -495,7 +248,6 @@ def closed_loop_study(report: Report, progress: Callable[[str], None]) -> dict[s
     report.figure(
         "fig9_closed_loop", figs.time_comparison(comps), "The A-style LS fits predicting the forced night"
     )
-    return out
 
 
 def _identification_summary(out: dict[str, Any]) -> str:
@@ -620,17 +372,48 @@ def _summary(title: str, results: dict[str, Any]) -> Report:
     return report
 
 
-def run_demo(out: str | os.PathLike, progress: Callable[[str], None] | None = None) -> Path:
-    """Run the demo and write ``report.html``, PNG figures and ``results.json`` into ``out``."""
-    progress = progress or (lambda _msg: None)
+def write_demo(study: PaperStudy, out: str | os.PathLike) -> Path:
+    """Write the study's ``report.html``, PNG figures and ``results.json`` into ``out``.
+
+    Parameters
+    ----------
+    study : PaperStudy
+        What :func:`rczone.study.paper.run_paper_study` returned.
+    out : path
+        The output folder (created; files written atomically).
+
+    Returns
+    -------
+    Path
+        The report's path.
+    """
     out = Path(out)
     title = "rczone demo: the paper's study on the virtual building"
     body = Report(title)
-    results = {"model_order": model_order_study(body, progress)}
-    results["identification"] = identification_study(body, progress, true_equivalent())
-    results["closed_loop"] = closed_loop_study(body, progress)
+    model_order_section(body, study.model_order)
+    identification_section(body, study.identification)
+    closed_loop_section(body, study.closed_loop)
+    results = study.results
     report = _summary(title, results)
     report.extend(body)
     report.write(out)
     write_json_atomic(out / "results.json", results)
     return out / "report.html"
+
+
+def run_demo(out: str | os.PathLike, progress: Callable[[str], None] | None = None) -> Path:
+    """Run the paper's study and write its report (``rczone demo``).
+
+    Parameters
+    ----------
+    out : path
+        The output folder.
+    progress : callable, optional
+        Called with a short message before each step.
+
+    Returns
+    -------
+    Path
+        The report's path.
+    """
+    return write_demo(run_paper_study(progress), out)

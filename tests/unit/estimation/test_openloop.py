@@ -6,7 +6,7 @@ import pytest
 from rczone.errors import ParameterError
 from rczone.estimation import Dataset
 from rczone.estimation.forecast import k_step_band
-from rczone.estimation.validation import (
+from rczone.estimation.openloop import (
     ljung_box,
     open_loop_error,
     per_output_errors,
@@ -71,7 +71,7 @@ def test_a_non_finite_prediction_is_an_error_not_a_perfect_fit(monkeypatch) -> N
     import pytest
 
     from rczone.errors import InputShapeError
-    from rczone.estimation import validation
+    from rczone.estimation import openloop as validation
 
     from .nets import NET1, data1
 
