@@ -85,6 +85,7 @@ def kalman_filter_reference(problem: FilterProblem) -> FilterOutput:
     xp_all = np.empty((N, n), dtype)
     xf_all = np.empty((N, n), dtype)
     Pp_all = np.empty((N, n, n), dtype)
+    Pf_all = np.empty((N, n, n), dtype)
     x = np.array(x0, dtype=dtype)
     P = np.array(P0, dtype=dtype)
     nll = 0.0
@@ -101,10 +102,20 @@ def kalman_filter_reference(problem: FilterProblem) -> FilterOutput:
             nll = nll + 0.5 * (np.log(s) + e * e / s)
             n_obs += 1
         xf_all[k] = x
+        Pf_all[k] = P
         if k < N - 1:
             x, P = predict_step(x, P, Phi[which[k]], Qd[which[k]], drive[k])
     nll = nll + 0.5 * n_obs * _LOG_2PI
-    return FilterOutput(nll, e_all, S_all, xp_all, xf_all, Pp_all, n_obs)
+    return FilterOutput(
+        nll=nll,
+        innovations=e_all,
+        S=S_all,
+        x_pred=xp_all,
+        x_filt=xf_all,
+        P_pred=Pp_all,
+        n_obs=n_obs,
+        P_filt=Pf_all,
+    )
 
 
 # ----------------------------------------------------------------------------- the simulation loop
