@@ -44,9 +44,11 @@ _EXPORTS = {
     "diagnose": "rczone.workflow.api",
     "design_test": "rczone.workflow.api",
     "select_models": "rczone.workflow.api",
+    "smooth": "rczone.workflow.smoothing",
     # results
     "Calibration": "rczone.calibration",
     "Prediction": "rczone.calibration",
+    "SmoothedStates": "rczone.estimation.smoother",
     "FitResult": "rczone.estimation.result",
     "Estimate": "rczone.results",
     "Verdict": "rczone.results.verdict",

@@ -9,7 +9,14 @@ fit from the model's values and its open-loop and residual checks, :class:`Calib
 """
 
 from rczone.calibration.calibration import Calibration, calibrate, parameter_covariance
-from rczone.calibration.dataset import ModelLike, as_model, complete_stretch, dataset, frame_from
+from rczone.calibration.dataset import (
+    ModelLike,
+    as_model,
+    complete_stretch,
+    dataset,
+    frame_from,
+    time_index,
+)
 from rczone.calibration.prediction import (
     INITIAL_STATES,
     Prediction,
@@ -34,4 +41,5 @@ __all__ = [
     "predict",
     "prediction",
     "saved_covariance",
+    "time_index",
 ]

@@ -38,27 +38,6 @@ from rczone.network import RCNetwork
 SENSITIVITY_STEP = 0.01
 
 
-def filtered_covariances(P_pred: np.ndarray, S: np.ndarray, C: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``P_{k|k}`` from the predicted covariances: ``P - P C_o' S_o^{-1} C_o P`` over the observed outputs.
-
-    Parameters
-    ----------
-    P_pred : ndarray, shape (N, n, n)
-    S : ndarray, shape (N, ny, ny)
-        Innovation covariances ``C P C' + R``.
-    C : ndarray, shape (ny, n)
-    y : ndarray, shape (N, ny)
-        NaN marks an output that was not measured (no update from it).
-    """
-    P = np.array(P_pred, dtype=float)
-    obs = np.isfinite(y)
-    for k in np.flatnonzero(obs.any(axis=1)):
-        o = obs[k]
-        PC = P_pred[k] @ C[o].T
-        P[k] = P_pred[k] - PC @ np.linalg.solve(S[k][np.ix_(o, o)], PC.T)
-    return 0.5 * (P + np.swapaxes(P, 1, 2))
-
-
 def k_step_band(
     network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int, hold: str = "zoh"
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -86,7 +65,7 @@ def k_step_band(
     drive = input_drive(args.G0, args.G1, which, u)
     origin = np.arange(N - k)
     x = out.x_filt[origin].copy()
-    P = filtered_covariances(out.P_pred, out.S, C, y)[origin]
+    P = out.P_filt[origin]
     for i in range(k):
         w = which[origin + i]
         x = np.einsum("kij,kj->ki", Phi[w], x) + drive[origin + i]

@@ -149,6 +149,8 @@ class FilterOutput:
     P_pred : ndarray, shape (N, n, n)
     n_obs : int
         Number of observed scalars.
+    P_filt : ndarray, shape (N, n, n)
+        Filtered covariances (what :mod:`rczone.estimation.smoother` needs).
     """
 
     nll: float
@@ -158,6 +160,7 @@ class FilterOutput:
     x_filt: np.ndarray
     P_pred: np.ndarray
     n_obs: int
+    P_filt: np.ndarray
 
 
 # --------------------------------------------------------------------------- the compiled filter
@@ -203,8 +206,17 @@ def kalman_filter_arrays(problem: FilterProblem) -> FilterOutput:
     in the likelihood). The observed outputs of each sample are processed one at a time;
     missing ones (NaN in ``y``) are skipped.
     """
-    nll, n_obs, (e, _, xp, xf, Pp, S) = _compiled(problem, keep=True)
-    return FilterOutput(nll, e, S, xp, xf, Pp, n_obs)
+    nll, n_obs, trace = _compiled(problem, keep=True)
+    return FilterOutput(
+        nll=nll,
+        innovations=trace.e,
+        S=trace.S,
+        x_pred=trace.xp,
+        x_filt=trace.xf,
+        P_pred=trace.Pp,
+        n_obs=n_obs,
+        P_filt=trace.Pf,
+    )
 
 
 def kalman_nll(problem: FilterProblem) -> float:

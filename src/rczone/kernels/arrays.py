@@ -102,6 +102,7 @@ class FilterTrace(NamedTuple):
     xf: np.ndarray  #: (N, n) filtered states
     Pp: np.ndarray  #: (N, n, n) predicted covariances
     S: np.ndarray  #: (N, ny, ny) innovation covariances ``C P C' + R``
+    Pf: np.ndarray  #: (N, n, n) filtered covariances (what the smoother's backward pass needs)
 
 
 class FilterValue(NamedTuple):

@@ -89,7 +89,8 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> Filt
     """The ``trace`` argument of :func:`kalman_filter`, empty where not wanted.
 
     ``errors``: the innovations or output errors (NaN where missing) and their derivatives;
-    ``states``: the innovations, predicted and filtered states, covariances, ``S``.
+    ``states``: the innovations, predicted and filtered states, predicted and filtered
+    covariances, ``S``.
     """
     ne = N if errors or states else 0
     nd = N if errors else 0
@@ -101,6 +102,7 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> Filt
         np.empty((ns, n)),
         np.empty((ns, n, n)),
         np.empty((ns, ny, ny)),
+        np.empty((ns, n, n)),
     )
 
 
@@ -134,7 +136,8 @@ def kalman_filter(
         Each array is filled when its first axis has N entries (:func:`outputs` makes them):
         innovations ``y - C x_pred - D u`` (the output errors in open loop), their derivatives
         (open loop only), predicted and filtered states, predicted covariances, innovation
-        covariances. Entries of missing outputs are left as they are.
+        covariances, innovation covariances, filtered covariances (not in open loop). Entries of
+        missing outputs are left as they are.
 
     Returns
     -------
@@ -164,7 +167,7 @@ def kalman_filter(
     x0, P0, dx0, dP0 = prior
     u, y, which = series
     foh, open_loop, steady_rtol = opts
-    e_out, de_out, xp_out, xf_out, Pp_out, S_out = trace
+    e_out, de_out, xp_out, xf_out, Pp_out, S_out, Pf_out = trace
     N, ny = y.shape
     n = x0.shape[0]
     p = u.shape[1]
@@ -223,6 +226,7 @@ def kalman_filter(
     keep_xf = xf_out.shape[0] == N
     keep_P = Pp_out.shape[0] == N
     keep_S = S_out.shape[0] == N
+    keep_Pf = Pf_out.shape[0] == N and not open_loop
     nll = 0.0
     n_obs = 0
     for k in range(N):
@@ -363,6 +367,11 @@ def kalman_filter(
         if keep_xf:
             for i in range(n):
                 xf_out[k, i] = x[i]
+        if keep_Pf:
+            # P_filt: the filtered covariance, also while the steady state holds P at its prediction
+            for i in range(n):
+                for j in range(n):
+                    Pf_out[k, i, j] = P_filt[i, j]
         if k == N - 1:
             break
         w = which[k]

@@ -8,7 +8,7 @@ import pytest
 from rczone.errors import ParameterError
 from rczone.estimation import Dataset
 from rczone.estimation.costs import filter_arrays, run_filter, simulate_output
-from rczone.estimation.forecast import filtered_covariances, k_step_band, noise_band, parameter_sd
+from rczone.estimation.forecast import k_step_band, noise_band, parameter_sd
 from tests.oracles import k_step_prediction_error
 from tests.unit.selection.synthetic import simulate_sde
 
@@ -69,7 +69,7 @@ def test_filtered_covariance_equals_the_joseph_update():
     args = filter_arrays(NET1, values, data)
     C, R = args[9], args[11]
     out = run_filter(NET1, values, data)
-    Pf = filtered_covariances(out.P_pred, out.S, C, data.y)
+    Pf = out.P_filt
     for k in (0, 10, 59):
         P = out.P_pred[k]
         K = P @ C.T @ np.linalg.inv(C @ P @ C.T + R)
