@@ -63,6 +63,7 @@ from rczone.estimation.engines import (
 from rczone.estimation.methods import METHODS as _REGISTERED
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec, make_spec
+from rczone.kernels.adjoint import gradient_fused
 from rczone.kernels.arrays import Problem
 from rczone.kernels.problem import cost_and_gradient, value_kernel
 from rczone.network import RCNetwork
@@ -304,6 +305,8 @@ class Objective:
         object.__setattr__(self, "_packed", packed if engine in ("rc2-fused", "compiled") else None)
         # the compiled value kernel of the engine, chosen once (rczone.kernels.problem.value_kernel)
         object.__setattr__(self, "_value", None if self._packed is None else value_kernel(self._packed))
+        # the adjoint gradient of the 2-state likelihood (rczone.kernels.adjoint); least squares keeps the forward one
+        object.__setattr__(self, "_adjoint", engine == "rc2-fused" and method_of(self.method).kernel != "ls")
 
     @property
     def compiled(self) -> Problem | None:
@@ -368,12 +371,18 @@ class Objective:
     def value_and_gradient(self, eta: np.ndarray) -> tuple[float, np.ndarray]:
         """Cost at optimizer values ``eta`` and its exact gradient with respect to ``eta``.
 
-        The gradient comes from forward sensitivities (see :mod:`rczone.kernels.kalman`), so
-        it costs about one evaluation, not ``2 d + 1``. ``(inf, zeros)`` where the model is
-        invalid.
+        The gradient comes from forward sensitivities (see :mod:`rczone.kernels.kalman`), or for
+        the likelihood of a 2-state model (engine ``"rc2-fused"``) from one backward pass
+        (:mod:`rczone.kernels.adjoint`, about three likelihoods whatever the number of
+        parameters), so it costs a few evaluations, not ``2 d + 1``. ``(inf, zeros)`` where the
+        model is invalid.
         """
         eta = np.asarray(eta, dtype=float)
-        j, g, _ = self.theta_value_and_gradient(self.spec.to_theta(eta))
+        theta = self.spec.to_theta(eta)
+        if self._adjoint:
+            j, g = gradient_fused(np.asarray(theta, dtype=np.float64), self._packed)
+        else:
+            j, g, _ = self.theta_value_and_gradient(theta)
         if not math.isfinite(j):
             return math.inf, np.zeros(eta.size)
         return j, g * self.spec.jacobian(eta)
