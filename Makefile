@@ -31,6 +31,7 @@ format: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python bench/first_run.py
 	$(BIN)/python bench/run.py
+	$(BIN)/python bench/limit.py
 	$(BIN)/python bench/batch.py
 
 # The API reference (Sphinx + numpydoc) into docs/api/_build/html; warnings are errors.

@@ -62,10 +62,17 @@ from rczone.estimation.engines import (
 )
 from rczone.estimation.methods import METHODS as _REGISTERED
 from rczone.estimation.methods import method_of
-from rczone.estimation.parameters import ParameterSpec
+from rczone.estimation.parameters import ParameterSpec, make_spec
+from rczone.kernels.adjoint import gradient_fused
 from rczone.kernels.arrays import Problem
 from rczone.kernels.problem import cost_and_gradient, value_kernel
 from rczone.network import RCNetwork
+from rczone.network.stochastic import (
+    initial_spread_names,
+    initial_state_names,
+    measurement_noise_names,
+    process_noise_names,
+)
 
 __all__ = [
     "MAP_CORRELATION_TIME",
@@ -99,18 +106,107 @@ METHODS = _REGISTERED
 def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> float:
     """``J_LS = int (y - y_hat)^2 dt`` (K^2 s) of the open-loop simulation; see the module notes.
 
-    Computed by the general engine (:func:`rczone.estimation.engines.general_cost`).
+    Computed as an :class:`Objective` would (see :func:`public_cost`).
     """
-    return general_cost(network, values, data, hold, "ls")[0]
+    return public_cost(network, values, data, hold, "ls")
 
 
 def ml_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> float:
     """``J_ML = -log L`` including ``0.5 n log(2 pi)``.
 
-    Computed by the general engine (:func:`rczone.estimation.engines.general_cost`: the
-    compiled discretization and filter on the state space of ``values``).
+    Computed as an :class:`Objective` would (see :func:`public_cost`).
     """
-    return general_cost(network, values, data, hold, "ml")[0]
+    return public_cost(network, values, data, hold, "ml")
+
+
+#: Objectives kept per data set for :func:`public_cost` (one per network, hold, method and value names).
+PUBLIC_KEPT = 8
+
+
+def public_cost(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str, method: str
+) -> float:
+    """``J_LS`` or ``J_ML`` at parameter ``values`` by the compiled engines, their structure built once.
+
+    :func:`ml_cost` and :func:`ls_cost` are called in loops (an MPC, an emulator, a user's own
+    optimizer) with new values on the same network and data. The first call packs the problem
+    into an :class:`Objective` whose free parameters are the names in ``values``
+    (:func:`_public_objective`); it is kept on the (immutable) data set, keyed by the network,
+    hold, method and the names of ``values``, so later calls only pass the values to the
+    compiled kernel. Problems that do not pack, and values where the compiled cost is not finite
+    (an invalid value, which the general engine then reports), take the general engine
+    (:func:`rczone.estimation.engines.general_cost`): the results are the same to rounding.
+
+    Parameters
+    ----------
+    network : RCNetwork
+    values : mapping of name to float
+        Base parameters (the network's values for those missing), noise levels (ML), ``x0_*``.
+    data : Dataset
+    hold : {"zoh", "foh"}
+    method : {"ls", "ml"}
+    """
+    if isinstance(data, Dataset) and hold in ("zoh", "foh"):
+        kept = data.__dict__.setdefault("_public_objectives", {})
+        key = (id(network), hold, method, tuple(values))
+        entry = kept.get(key)
+        if entry is None or entry[0] is not network:  # the entry holds its network: ids are not reused
+            if len(kept) >= PUBLIC_KEPT:
+                kept.pop(next(iter(kept)))
+            entry = kept[key] = (network, *_public_objective(network, values, data, hold, method))
+        objective, names = entry[1], entry[2]
+        if objective is not None:
+            try:
+                theta = np.array([values[n] for n in names], dtype=np.float64)
+            except (TypeError, ValueError):
+                theta = None
+            if theta is not None:
+                j = objective.theta_cost(theta)
+                if math.isfinite(j):
+                    return float(j)
+    return general_cost(network, values, data, hold, method)[0]
+
+
+def _public_objective(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str, method: str
+) -> tuple[Objective | None, tuple[str, ...]]:
+    """The compiled :class:`Objective` of :func:`public_cost` and its parameter names, or ``(None, ())``.
+
+    Its free parameters are the network's base parameters given in ``values``, the noise
+    levels (ML) and the given ``x0_*``; the other base parameters are fixed at the network's
+    values, as the general engine takes them. Start and bounds play no part (the cost is taken
+    at ``theta``): every start is 1 inside the widest bounds.
+    """
+    states = network.state_names
+    names = [n for n in network.free_parameter_names if n in values]
+    if method == "ml":
+        noise = (
+            *measurement_noise_names(network.outputs),
+            *process_noise_names(states),
+            *initial_spread_names(states),
+        )
+        if any(n not in values for n in noise):
+            return None, ()
+        names += noise
+    names += [n for n in initial_state_names(states) if n in values]
+    declared = network.values()
+    fixed = {
+        n: declared[n]
+        for n in network.free_parameter_names
+        if n not in values and declared.get(n) is not None
+    }
+    try:
+        spec = make_spec(
+            network,
+            names,
+            bounds={n: (1e-300, 1e300) for n in names},
+            start=dict.fromkeys(names, 1.0),
+            fixed=fixed,
+        )
+        objective = Objective(network, data, spec, method, hold)
+    except ParameterError:
+        return None, ()
+    return (objective, tuple(names)) if objective.compiled is not None else (None, ())
 
 
 def log_prior_penalty(spec: ParameterSpec, theta: np.ndarray, spread: float = PRIOR_SPREAD) -> float:
@@ -209,6 +305,8 @@ class Objective:
         object.__setattr__(self, "_packed", packed if engine in ("rc2-fused", "compiled") else None)
         # the compiled value kernel of the engine, chosen once (rczone.kernels.problem.value_kernel)
         object.__setattr__(self, "_value", None if self._packed is None else value_kernel(self._packed))
+        # the adjoint gradient of the 2-state likelihood (rczone.kernels.adjoint); least squares keeps the forward one
+        object.__setattr__(self, "_adjoint", engine == "rc2-fused" and method_of(self.method).kernel != "ls")
 
     @property
     def compiled(self) -> Problem | None:
@@ -273,12 +371,18 @@ class Objective:
     def value_and_gradient(self, eta: np.ndarray) -> tuple[float, np.ndarray]:
         """Cost at optimizer values ``eta`` and its exact gradient with respect to ``eta``.
 
-        The gradient comes from forward sensitivities (see :mod:`rczone.kernels.kalman`), so
-        it costs about one evaluation, not ``2 d + 1``. ``(inf, zeros)`` where the model is
-        invalid.
+        The gradient comes from forward sensitivities (see :mod:`rczone.kernels.kalman`), or for
+        the likelihood of a 2-state model (engine ``"rc2-fused"``) from one backward pass
+        (:mod:`rczone.kernels.adjoint`, about three likelihoods whatever the number of
+        parameters), so it costs a few evaluations, not ``2 d + 1``. ``(inf, zeros)`` where the
+        model is invalid.
         """
         eta = np.asarray(eta, dtype=float)
-        j, g, _ = self.theta_value_and_gradient(self.spec.to_theta(eta))
+        theta = self.spec.to_theta(eta)
+        if self._adjoint:
+            j, g = gradient_fused(np.asarray(theta, dtype=np.float64), self._packed)
+        else:
+            j, g, _ = self.theta_value_and_gradient(theta)
         if not math.isfinite(j):
             return math.inf, np.zeros(eta.size)
         return j, g * self.spec.jacobian(eta)

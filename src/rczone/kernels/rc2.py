@@ -47,6 +47,30 @@ def symmetric_rc2(A0: np.ndarray, N: np.ndarray, cap: np.ndarray, rtol: float) -
     return True
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def flow_matrix(A0: np.ndarray, N: np.ndarray, m: np.ndarray, k: int) -> tuple[float, float, float, float]:
+    """``A = A0 + sum_f m[k, f] N_f`` of a 2-state model as ``(a00, a01, a10, a11)``."""
+    a, a01, a10, d = A0[0, 0], A0[0, 1], A0[1, 0], A0[1, 1]
+    for f in range(N.shape[0]):
+        mf = m[k, f]
+        a += mf * N[f, 0, 0]
+        a01 += mf * N[f, 0, 1]
+        a10 += mf * N[f, 1, 0]
+        d += mf * N[f, 1, 1]
+    return a, a01, a10, d
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def flow_column(B0: np.ndarray, M: np.ndarray, m: np.ndarray, k: int, j: int) -> tuple[float, float]:
+    """Column ``j`` of ``B = B0 + sum_f m[k, f] M_f`` of a 2-state model."""
+    b0 = B0[0, j]
+    b1 = B0[1, j]
+    for f in range(M.shape[0]):
+        b0 += m[k, f] * M[f, 0, j]
+        b1 += m[k, f] * M[f, 1, j]
+    return b0, b1
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def nll_rc2(
     A0: np.ndarray,
@@ -144,23 +168,13 @@ def nll_rc2(
         if ready[g]:
             continue
         ready[g] = True
-        a, a01, a10, d = A0[0, 0], A0[0, 1], A0[1, 0], A0[1, 1]
-        for f in range(nf):
-            mf = m[k, f]
-            a += mf * N[f, 0, 0]
-            a01 += mf * N[f, 0, 1]
-            a10 += mf * N[f, 1, 0]
-            d += mf * N[f, 1, 1]
+        a, a01, a10, d = flow_matrix(A0, N, m, k)
         mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], qc[0], qc[1], foh)
         Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3] = mt.phi00, mt.phi01, mt.phi10, mt.phi11
         Qd[g, 0], Qd[g, 1], Qd[g, 2] = mt.qd00, mt.qd01, mt.qd11
         for j in range(p):
             # B(m) = B0 + sum m_f M_f, column j
-            b0 = B0[0, j]
-            b1 = B0[1, j]
-            for f in range(nf):
-                b0 += m[k, f] * M[f, 0, j]
-                b1 += m[k, f] * M[f, 1, j]
+            b0, b1 = flow_column(B0, M, m, k, j)
             G0[g, 0, j] = mt.h0_00 * b0 + mt.h0_01 * b1
             G0[g, 1, j] = mt.h0_10 * b0 + mt.h0_11 * b1
             if foh:
@@ -271,3 +285,119 @@ def nll_rc2(
     if n_steady:
         log_sum += n_steady * math.log(s)
     return 0.5 * (log_sum + math.log(prod) + sq_sum), n_obs
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def simulate_rc2(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    cap: np.ndarray,
+    C: np.ndarray,
+    D: np.ndarray,
+    t: np.ndarray,
+    m: np.ndarray,
+    u: np.ndarray,
+    x0: np.ndarray,
+    foh: bool,
+    rtol: float,
+    x: np.ndarray,
+    y: np.ndarray,
+) -> int:
+    """Exact simulation of a 2-state RC model, checks of the inputs included; ``0`` when done.
+
+    The discrete matrices (:func:`rczone.kernels.discretize.rc2_discretize`) are computed at
+    each interval whose length or flows differ from the previous one, as in :func:`nll_rc2`,
+    so a regularly sampled LTI model is discretized once. Nothing is computed for inputs that
+    the public checks would refuse: the caller then runs them for their message.
+
+    Parameters
+    ----------
+    A0, N, B0, M, cap
+        As :func:`nll_rc2`.
+    C, D : ndarray, shapes (ny, 2), (ny, p)
+        Output equation.
+    t, m, u : ndarray, shapes (N,), (N, nf), (N, p)
+    x0 : ndarray, shape (2,) or (0,)
+        Initial state; empty: the steady state at the first inputs and flows.
+    foh : bool
+    rtol : float
+        Symmetry tolerance of :func:`symmetric_rc2`.
+    x, y : ndarray, shapes (N, 2), (N, ny)
+        Receive the states and outputs.
+
+    Returns
+    -------
+    int
+        ``0`` done; ``1`` times not finite or not increasing, or inputs or flows not finite;
+        ``2`` not a symmetric 2-state RC model; ``3`` a singular steady state.
+    """
+    n_t = t.shape[0]
+    nf = N.shape[0]
+    p = B0.shape[1]
+    for k in range(n_t):
+        if not abs(t[k]) < math.inf or (k > 0 and not t[k] > t[k - 1]):
+            return 1
+        for j in range(p):
+            if not abs(u[k, j]) < math.inf:
+                return 1
+        for f in range(nf):
+            if not abs(m[k, f]) < math.inf:
+                return 1
+    if not symmetric_rc2(A0, N, cap, rtol):
+        return 2
+    s0 = math.sqrt(cap[0])
+    s1 = math.sqrt(cap[1])
+    is0 = 1.0 / s0
+    is1 = 1.0 / s1
+    if x0.shape[0] == 2:
+        x[0, 0], x[0, 1] = x0[0], x0[1]
+    else:
+        # steady state: A(m0) x = -B(m0) u0
+        a, a01, a10, d = flow_matrix(A0, N, m, 0)
+        r0 = r1 = 0.0
+        for j in range(p):
+            b0, b1 = flow_column(B0, M, m, 0, j)
+            r0 -= b0 * u[0, j]
+            r1 -= b1 * u[0, j]
+        det = a * d - a01 * a10
+        if not (det != 0.0 and abs(det) < math.inf):
+            return 3
+        x[0, 0] = (r0 * d - a01 * r1) / det
+        x[0, 1] = (a * r1 - a10 * r0) / det
+    G0 = np.zeros((2, p))
+    G1 = np.zeros((2, p))
+    f00 = f01 = f10 = f11 = 0.0
+    for k in range(n_t - 1):
+        fresh = k == 0 or t[k + 1] - t[k] != t[k] - t[k - 1]
+        for f in range(nf):
+            fresh = fresh or m[k, f] != m[k - 1, f]
+        if fresh:
+            a, a01, a10, d = flow_matrix(A0, N, m, k)
+            mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], 0.0, 0.0, foh)
+            f00, f01, f10, f11 = mt.phi00, mt.phi01, mt.phi10, mt.phi11
+            for j in range(p):
+                b0, b1 = flow_column(B0, M, m, k, j)
+                G0[0, j] = mt.h0_00 * b0 + mt.h0_01 * b1
+                G0[1, j] = mt.h0_10 * b0 + mt.h0_11 * b1
+                G1[0, j] = mt.h1_00 * b0 + mt.h1_01 * b1
+                G1[1, j] = mt.h1_10 * b0 + mt.h1_11 * b1
+        xn0 = f00 * x[k, 0] + f01 * x[k, 1]
+        xn1 = f10 * x[k, 0] + f11 * x[k, 1]
+        for j in range(p):
+            xn0 += G0[0, j] * u[k, j]
+            xn1 += G0[1, j] * u[k, j]
+        if foh:
+            for j in range(p):
+                xn0 += G1[0, j] * u[k + 1, j]
+                xn1 += G1[1, j] * u[k + 1, j]
+        x[k + 1, 0] = xn0
+        x[k + 1, 1] = xn1
+    for k in range(n_t):
+        for i in range(C.shape[0]):
+            v = C[i, 0] * x[k, 0] + C[i, 1] * x[k, 1]
+            for j in range(p):
+                v += D[i, j] * u[k, j]
+            y[k, i] = v
+    return 0

@@ -46,7 +46,8 @@ from rczone.files.atomic import write_json_atomic
 from rczone.network import BilinearStateSpace, LinearStateSpace, RCNetwork
 from rczone.network.serialize import network_from_dict, network_to_dict
 from rczone.network.stochastic import is_reserved
-from rczone.simulation import SimulationResult, foh, simulate, zoh
+from rczone.simulation import SimulationResult, simulate
+from rczone.simulation.discretize import interval_discretization
 
 FORMAT = "rczone-model/1"
 
@@ -330,8 +331,11 @@ class ZoneModel:
 
     # ------------------------------------------------------------ matrices
     def state_space(self) -> BilinearStateSpace:
-        """The bilinear state space at these parameter values."""
-        return self.network.state_space(self.theta)
+        """The bilinear state space at these parameter values (built once: the model is immutable)."""
+        ss = self.__dict__.get("_state_space")
+        if ss is None:
+            ss = self.__dict__["_state_space"] = self.network.state_space(self.theta)
+        return ss
 
     def _flows(self, m: float | np.ndarray | None) -> np.ndarray:
         if m is None:
@@ -367,14 +371,16 @@ class ZoneModel:
             raise InputShapeError(f"sample time dt must be a number of seconds, got {dt!r}") from None
         if not (math.isfinite(dt) and dt > 0):
             raise InputShapeError(f"sample time dt must be finite and > 0 s, got {dt!r}")
-        c = self.continuous(m)
-        if hold == "zoh":
-            Ad, Bd = zoh(c.A, c.B, dt)
-            Bd1 = None
-        elif hold == "foh":
-            Ad, Bd, Bd1 = foh(c.A, c.B, dt)
-        else:
+        if hold not in ("zoh", "foh"):
             raise InputShapeError(f"hold must be 'zoh' or 'foh', got {hold!r}")
+        c = self.continuous(m)
+        # the exact spectral formulas of an RC network (a matrix exponential otherwise), on the kept state space
+        ss = self.state_space()
+        flows = self._flows(m) if self.network.flow_names else ()
+        Phi, G0, G1, _ = interval_discretization(
+            ss.A, ss.N, ss.B, ss.M, ss.capacities, np.array([[dt, *flows]]), hold
+        )
+        Ad, Bd, Bd1 = Phi[0], G0[0], (G1[0] if hold == "foh" else None)
         _finite_matrices(f"the discretization of {self.name!r} at dt = {dt:g} s", Ad, Bd, Bd1)
         return DiscreteModel(
             Ad,

@@ -13,6 +13,10 @@ symmetric eigen-decomposition otherwise) instead of one matrix exponential each;
 state space uses the matrix exponential. The sample loop runs compiled
 (:mod:`rczone.kernels.propagate`); its plain twin is in the tests (``tests/oracles.py``).
 
+A symmetric 2-state model runs one compiled loop (:func:`rczone.kernels.rc2.simulate_rc2`:
+the closed-form discretization at each interval that differs from the previous one, and the
+steps), with no batching and no Python between the checks and the result.
+
 When the flow changes at nearly every sample (more than :data:`FEW_KEYS` distinct
 ``(dt, m)``) and the model has one supply-air flow and three or more states,
 :func:`simulate` instead steps the exact rank-one-update eigen-decomposition of
@@ -29,6 +33,7 @@ import numpy as np
 from rczone.errors import InputShapeError
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import (
+    SYMMETRY_RTOL,
     RankOneForm,
     interval_discretization,
     rank_one_form,
@@ -185,6 +190,48 @@ def _simulate_rank_one(
     return simulate_rank_one(form, ss.B, ss.M[0], t, m[:, 0], u, x0, hold)
 
 
+def _float_array(a: object, shape: tuple[int, ...]) -> np.ndarray | None:
+    """``a`` as a C-contiguous float64 array when it already is one of ``shape`` (no conversion), else None."""
+    if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == shape:
+        return np.ascontiguousarray(a)
+    return None
+
+
+def _simulate_rc2(
+    ss: BilinearStateSpace, t: object, u: object, m: object, x0: object, hold: str
+) -> SimulationResult | None:
+    """The compiled 2-state simulation (:func:`rczone.kernels.rc2.simulate_rc2`), or None where it does not apply.
+
+    It applies to a symmetric 2-state RC model given float64 arrays of the right shapes and
+    inputs that the checks of :func:`simulate` accept (the kernel checks them itself and
+    declines otherwise, so the general path reports the error). The model's arrays are made
+    contiguous once and kept on the (immutable) state space: a model simulated in a loop (an
+    MPC, an emulator) pays only the kernel.
+    """
+    if ss.n_states != 2 or hold not in HOLDS or not isinstance(t, np.ndarray) or t.ndim != 1 or t.size < 2:
+        return None
+    n = t.size
+    ta = _float_array(t, (n,))
+    ua = _float_array(u, (n, ss.n_inputs))
+    ma = _float_array(m, (n, ss.n_flows)) if ss.n_flows else np.zeros((n, 0))
+    xa = np.empty(0) if x0 is None else _float_array(x0, (2,))
+    if ta is None or ua is None or ma is None or xa is None:
+        return None
+    arrays = ss.__dict__.get("_rc2_arrays")
+    if arrays is None:
+        f = np.ascontiguousarray
+        arrays = ss.__dict__["_rc2_arrays"] = tuple(
+            f(a, dtype=np.float64) for a in (ss.A, ss.N, ss.B, ss.M, ss.capacities, ss.C, ss.D)
+        )
+    from rczone.kernels.rc2 import simulate_rc2  # numba loads lazily, see propagate
+
+    x = np.empty((n, 2))
+    y = np.empty((n, ss.C.shape[0]))
+    if simulate_rc2(*arrays, ta, ma, ua, xa, hold == "foh", SYMMETRY_RTOL, x, y) != 0:
+        return None
+    return SimulationResult(ta, x, y, ss.state_names, ss.output_names)
+
+
 def simulate(
     ss: BilinearStateSpace,
     t: np.ndarray,
@@ -229,6 +276,9 @@ def simulate(
     >>> bool(np.allclose(res.y[:, 0], 10 + 10 * np.exp(-t / (1e6 * 0.01))))
     True
     """
+    fast = _simulate_rc2(ss, t, u, m, x0, hold)
+    if fast is not None:
+        return fast
     t = check_time(t)
     u = check_inputs(u, t.size, ss.input_names, "u")
     if ss.n_flows:

@@ -131,3 +131,30 @@ def test_ml_cost_from_parameter_values_equals_the_reference_filter(hold) -> None
             ref = reference_cost(net, values, data, hold, "ml")
             assert ml_cost(net, values, data, hold) == pytest.approx(ref, rel=1e-10)
             assert run_filter(net, values, data, hold).nll == pytest.approx(ref, rel=1e-10)
+
+
+def test_public_costs_with_new_values_on_the_same_problem_stay_exact_and_refuse_invalid_values() -> None:
+    """ml_cost/ls_cost reuse the compiled problem of the first call: later values are still the reference's."""
+    from rczone.errors import ParameterError
+    from tests.oracles import reference_cost
+
+    rng = np.random.default_rng(24)
+    data = data2(noise=0.05, rng=rng)
+    noise = {"sigma_v": 0.05, "sigma_w_Ti": 2e-3, "sigma_w_Tw": 1e-4, "sigma_x0_Ti": 0.1, "sigma_x0_Tw": 1.0}
+    for _ in range(3):
+        values = {
+            "Rw": 0.01 * np.exp(rng.uniform(-0.5, 0.5)),
+            "Cr": 8e5 * np.exp(rng.uniform(-0.5, 0.5)),
+            **noise,
+        }
+        assert ml_cost(NET2, values, data) == pytest.approx(
+            reference_cost(NET2, values, data, "zoh", "ml"), rel=1e-10
+        )
+        ls_values = {"Rw": values["Rw"], "Cr": values["Cr"], "x0_Tw": 21.0 + rng.uniform()}
+        assert ls_cost(NET2, ls_values, data) == pytest.approx(
+            reference_cost(NET2, ls_values, data, "zoh", "ls"), rel=1e-10
+        )
+    with pytest.raises(ParameterError, match="sigma_v"):
+        ml_cost(NET2, {**values, "sigma_v": -0.1}, data)
+    with pytest.raises(ParameterError):
+        ml_cost(NET2, {**values, "Rw": -0.01}, data)

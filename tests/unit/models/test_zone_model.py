@@ -44,6 +44,14 @@ def test_discrete_matrices_are_the_exact_exponential():
     arr = zm.arrays(0.12)
     np.testing.assert_allclose(arr["A"], c.A)
     assert d.input_names == ("To", "Tsd", "Ts", "Q")
+    # FOH from the block exponential of [[A, B, 0], [0, 0, I/dt], [0, 0, 0]] dt
+    f = zm.discrete(300.0, m=0.12, hold="foh")
+    n, p = c.B.shape
+    blk = np.zeros((n + 2 * p, n + 2 * p))
+    blk[:n, :n], blk[:n, n : n + p], blk[n : n + p, n + p :] = c.A * 300.0, c.B * 300.0, np.eye(p)
+    E = expm(blk)
+    np.testing.assert_allclose(f.Bd1, E[:n, n + p :], rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(f.Bd, E[:n, n : n + p] - E[:n, n + p :], rtol=1e-9, atol=1e-15)
 
 
 @pytest.mark.parametrize(

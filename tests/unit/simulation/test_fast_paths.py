@@ -172,3 +172,57 @@ def test_rank_one_form_is_kept_per_state_space_and_flow_range():
     for k in range(_FORMS_KEPT + 3):  # the store stays bounded
         _rank_one_form_of(ss, 1.0 + k)
     assert len(kept) == _FORMS_KEPT
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+@pytest.mark.parametrize("given_x0", [True, False])
+def test_compiled_two_state_simulation_equals_the_matrix_exponential_loop(hold, given_x0) -> None:
+    """The compiled 2-state path against one scipy expm per interval and a Python loop (irregular t, m varying)."""
+    from scipy.linalg import expm
+
+    rng = np.random.default_rng(24)
+    ss = NET2.state_space()
+    n = 60
+    t = np.cumsum(rng.choice([60.0, 60.0, 120.0], n))
+    m = np.repeat(rng.uniform(0.02, 0.3, (n // 3, 1)), 3, axis=0)
+    u = np.column_stack(
+        [rng.normal(28, 2, n), rng.normal(22, 1, n), rng.normal(300, 50, n), rng.normal(14, 1, n)]
+    )
+    A0, B0 = ss.matrices(m[0])
+    x0 = np.array([23.0, 25.0]) if given_x0 else np.linalg.solve(A0, -B0 @ u[0])
+    got = simulate(ss, t, u, m, x0=x0 if given_x0 else None, hold=hold)
+    p = ss.n_inputs
+    Phi, G0, G1 = np.empty((n - 1, 2, 2)), np.empty((n - 1, 2, p)), np.zeros((n - 1, 2, p))
+    for k in range(n - 1):
+        A, B = ss.matrices(m[k])
+        blk = np.zeros((2 + 2 * p, 2 + 2 * p))
+        dt = t[k + 1] - t[k]
+        blk[:2, :2], blk[:2, 2 : 2 + p], blk[2 : 2 + p, 2 + p :] = A * dt, B * dt, np.eye(p)
+        E = expm(blk)
+        Phi[k] = E[:2, :2]
+        if hold == "foh":
+            G0[k], G1[k] = E[:2, 2 : 2 + p] - E[:2, 2 + p :], E[:2, 2 + p :]
+        else:
+            G0[k] = E[:2, 2 : 2 + p]
+    x = propagate_reference(Phi, G0, G1, np.arange(n - 1), u, x0)
+    np.testing.assert_allclose(got.x, x, rtol=1e-10)
+    np.testing.assert_allclose(got.y, x @ ss.C.T + u @ ss.D.T, rtol=1e-10)
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        (lambda t, u, m: (t[::-1].copy(), u, m), "strictly increasing"),
+        (
+            lambda t, u, m: (t, np.where(np.arange(t.size)[:, None] == 5, np.nan, u), m),
+            "not finite at sample 5",
+        ),
+        (lambda t, u, m: (t, u, np.full_like(m, np.inf)), "not finite at sample 0"),
+    ],
+)
+def test_compiled_two_state_simulation_leaves_bad_inputs_to_the_checks(change, match) -> None:
+    ss = NET2.state_space()
+    n = 20
+    t, u, m = change(np.arange(n) * 60.0, np.full((n, ss.n_inputs), 20.0), np.full((n, 1), 0.1))
+    with pytest.raises(InputShapeError, match=match):
+        simulate(ss, t, u, m)

@@ -1,0 +1,268 @@
+"""The gradient of the 2-state likelihood by one backward (adjoint) pass: a few evaluations, whatever the parameters.
+
+Forward sensitivities (:func:`rczone.kernels.kalman.kalman_filter`) carry ``dx`` and ``dP`` along
+every parameter direction through every sample: the gradient of ``q`` parameters costs about
+``q`` times the work of the likelihood. Reverse mode [1]_ runs the filter once, keeps what each
+step produced (filtered state and covariance, innovation, its variance, ``P c``), then runs the
+steps backward with the adjoints ``x_bar = dJ/dx`` and ``P_bar = dJ/dP``, accumulating the
+adjoints of the discrete matrices of each distinct interval (``Phi, G0, G1, Qd``), of the
+measurement variance and of the prior. The gradient in the parameters is then their contraction
+with the derivatives of those few matrices (:func:`rczone.kernels.discretize.interval_derivatives`,
+once per distinct interval) and of the prior, so it costs about three likelihoods for any
+number of parameters.
+
+The backward step of one sample, for a scalar output ``y = c'x`` with ``e = y - c'x-``,
+``s = c'P-c + r``, ``g = P-c``, ``x+ = x- + g e/s``, ``P+ = P- - g g'/s`` and the term
+``0.5 (log s + e^2/s)``, given the adjoints ``(b, B)`` of ``(x+, P+)``:
+
+* ``e_bar = e/s + b'g/s``, ``s_bar = 0.5/s - 0.5 e^2/s^2 - (b'g) e/s^2 + g'Bg/s^2``,
+  ``g_bar = b e/s - (B + B') g/s``;
+* ``x-_bar = b - e_bar c``, ``P-_bar = B + g_bar c' + s_bar c c'``, ``r_bar += s_bar``.
+
+The time step ``x- = Phi x+ + G0 u_k + G1 u_k+1``, ``P- = Phi P+ Phi' + Qd`` with adjoints
+``(a, A)`` of its results gives ``b = Phi' a``, ``B = Phi' A Phi`` and adds ``a x+' + (A + A') Phi P+``
+to ``Phi_bar``, ``a u_k'`` to ``G0_bar``, ``a u_k+1'`` to ``G1_bar`` and ``A`` to ``Qd_bar`` [2]_.
+
+The recursion runs to the end (no steady state): the value differs from that of the fused
+value kernel (:func:`rczone.kernels.rc2.nll_rc2`) by at most its steady-state tolerance.
+
+References
+----------
+.. [1] A. Griewank, A. Walther, *Evaluating Derivatives: Principles and Techniques of
+   Algorithmic Differentiation*, 2nd ed., SIAM, 2008, chapter 3 (the reverse mode).
+.. [2] M. B. Giles, "Collected matrix derivative results for forward and reverse mode
+   algorithmic differentiation", in *Advances in Automatic Differentiation*, Springer, 2008,
+   pp. 35-44 (adjoints of matrix products).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from rczone.kernels.discretize import interval_derivatives
+from rczone.kernels.problem import LS, MAP, assembled, with_prior
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def nll_rc2_adjoint(
+    Phi: np.ndarray,
+    G0: np.ndarray,
+    G1: np.ndarray,
+    Qd: np.ndarray,
+    which: np.ndarray,
+    c: np.ndarray,
+    r: float,
+    x0: np.ndarray,
+    P0: np.ndarray,
+    u: np.ndarray,
+    y: np.ndarray,
+    foh: bool,
+    bars: tuple,
+) -> tuple[float, int]:
+    """``-log L`` (without ``0.5 n log 2 pi``) of a 2-state, 1-output model and the adjoints of its inputs.
+
+    Parameters
+    ----------
+    Phi, G0, G1, Qd : ndarray, shapes (K, 2, 2), (K, 2, p), (K, 2, p), (K, 2, 2)
+        Discrete matrices of each distinct interval; interval ``k`` uses ``which[k]``.
+    c : ndarray, shape (2,)
+        Output row.
+    r : float
+        Measurement-noise variance.
+    x0, P0 : ndarray, shapes (2,), (2, 2)
+        Prior at the first sample.
+    u, y : ndarray, shapes (N, p), (N,)
+        Inputs; measurements (NaN where missing).
+    foh : bool
+    bars : tuple of ndarray
+        ``(Phi_bar, G0_bar, G1_bar, Qd_bar, x0_bar, P0_bar, r_bar)`` of shapes (K, 2, 2),
+        (K, 2, p), (K, 2, p), (K, 2, 2), (2,), (2, 2), (1,), zeroed by the caller; they receive
+        the derivatives of ``-log L``.
+
+    Returns
+    -------
+    nll : float
+        NaN for a non-positive innovation variance.
+    n_obs : int
+        Observed samples; -1 for an invalid model.
+    """
+    Phi_bar, G0_bar, G1_bar, Qd_bar, x0_bar, P0_bar, r_bar = bars
+    n_t = y.shape[0]
+    p = u.shape[1]
+    c0, c1 = c[0], c[1]
+    # forward: the filter, keeping the filtered state and covariance, e, s and g = P- c of each sample
+    xf = np.empty((n_t, 2))
+    pf = np.empty((n_t, 3))
+    es = np.empty((n_t, 4))  # e, s, g0, g1
+    x_0, x_1 = x0[0], x0[1]
+    p00, p01, p11 = P0[0, 0], 0.5 * (P0[0, 1] + P0[1, 0]), P0[1, 1]
+    nll = 0.0
+    n_obs = 0
+    for k in range(n_t):
+        yk = y[k]
+        if yk == yk:
+            e = yk - c0 * x_0 - c1 * x_1
+            g0 = p00 * c0 + p01 * c1
+            g1 = p01 * c0 + p11 * c1
+            s = r + c0 * g0 + c1 * g1
+            if not s > 0.0:
+                return math.nan, -1
+            inv = 1.0 / s
+            x_0 += g0 * e * inv
+            x_1 += g1 * e * inv
+            p00 -= g0 * g0 * inv
+            p01 -= g0 * g1 * inv
+            p11 -= g1 * g1 * inv
+            nll += 0.5 * (math.log(s) + e * e * inv)
+            n_obs += 1
+            es[k, 0], es[k, 1], es[k, 2], es[k, 3] = e, s, g0, g1
+        xf[k, 0], xf[k, 1] = x_0, x_1
+        pf[k, 0], pf[k, 1], pf[k, 2] = p00, p01, p11
+        if k == n_t - 1:
+            break
+        w = which[k]
+        n0 = Phi[w, 0, 0] * x_0 + Phi[w, 0, 1] * x_1
+        n1 = Phi[w, 1, 0] * x_0 + Phi[w, 1, 1] * x_1
+        for j in range(p):
+            n0 += G0[w, 0, j] * u[k, j]
+            n1 += G0[w, 1, j] * u[k, j]
+            if foh:
+                n0 += G1[w, 0, j] * u[k + 1, j]
+                n1 += G1[w, 1, j] * u[k + 1, j]
+        x_0, x_1 = n0, n1
+        f00, f01, f10, f11 = Phi[w, 0, 0], Phi[w, 0, 1], Phi[w, 1, 0], Phi[w, 1, 1]
+        a0 = f00 * p00 + f01 * p01
+        a1 = f00 * p01 + f01 * p11
+        b0 = f10 * p00 + f11 * p01
+        b1 = f10 * p01 + f11 * p11
+        p00 = Qd[w, 0, 0] + a0 * f00 + a1 * f01
+        p01 = 0.5 * (Qd[w, 0, 1] + Qd[w, 1, 0]) + a0 * f10 + a1 * f11
+        p11 = Qd[w, 1, 1] + b0 * f10 + b1 * f11
+    # backward: (a, A) adjoints of the predicted state and covariance of sample k + 1
+    a_0 = a_1 = 0.0
+    A00 = A01 = A10 = A11 = 0.0
+    for k in range(n_t - 1, -1, -1):
+        if k < n_t - 1:
+            w = which[k]
+            f00, f01, f10, f11 = Phi[w, 0, 0], Phi[w, 0, 1], Phi[w, 1, 0], Phi[w, 1, 1]
+            q00, q01, q11 = pf[k, 0], pf[k, 1], pf[k, 2]
+            # Phi_bar += a x+' + (A + A') Phi P+
+            s00, s01, s10, s11 = A00 + A00, A01 + A10, A10 + A01, A11 + A11
+            t00 = f00 * q00 + f01 * q01  # Phi P+
+            t01 = f00 * q01 + f01 * q11
+            t10 = f10 * q00 + f11 * q01
+            t11 = f10 * q01 + f11 * q11
+            Phi_bar[w, 0, 0] += a_0 * xf[k, 0] + s00 * t00 + s01 * t10
+            Phi_bar[w, 0, 1] += a_0 * xf[k, 1] + s00 * t01 + s01 * t11
+            Phi_bar[w, 1, 0] += a_1 * xf[k, 0] + s10 * t00 + s11 * t10
+            Phi_bar[w, 1, 1] += a_1 * xf[k, 1] + s10 * t01 + s11 * t11
+            for j in range(p):
+                G0_bar[w, 0, j] += a_0 * u[k, j]
+                G0_bar[w, 1, j] += a_1 * u[k, j]
+                if foh:
+                    G1_bar[w, 0, j] += a_0 * u[k + 1, j]
+                    G1_bar[w, 1, j] += a_1 * u[k + 1, j]
+            Qd_bar[w, 0, 0] += A00
+            Qd_bar[w, 0, 1] += A01
+            Qd_bar[w, 1, 0] += A10
+            Qd_bar[w, 1, 1] += A11
+            # b = Phi' a, B = Phi' A Phi
+            b_0 = f00 * a_0 + f10 * a_1
+            b_1 = f01 * a_0 + f11 * a_1
+            m00 = A00 * f00 + A01 * f10  # A Phi
+            m01 = A00 * f01 + A01 * f11
+            m10 = A10 * f00 + A11 * f10
+            m11 = A10 * f01 + A11 * f11
+            B00 = f00 * m00 + f10 * m10
+            B01 = f00 * m01 + f10 * m11
+            B10 = f01 * m00 + f11 * m10
+            B11 = f01 * m01 + f11 * m11
+        else:
+            b_0 = b_1 = 0.0
+            B00 = B01 = B10 = B11 = 0.0
+        yk = y[k]
+        if yk == yk:
+            e, s, g0, g1 = es[k, 0], es[k, 1], es[k, 2], es[k, 3]
+            inv = 1.0 / s
+            bg = b_0 * g0 + b_1 * g1
+            gBg = g0 * (B00 * g0 + B01 * g1) + g1 * (B10 * g0 + B11 * g1)
+            e_bar = e * inv + bg * inv
+            s_bar = 0.5 * inv - 0.5 * e * e * inv * inv - bg * e * inv * inv + gBg * inv * inv
+            gb0 = b_0 * e * inv - ((B00 + B00) * g0 + (B01 + B10) * g1) * inv
+            gb1 = b_1 * e * inv - ((B10 + B01) * g0 + (B11 + B11) * g1) * inv
+            a_0 = b_0 - e_bar * c0
+            a_1 = b_1 - e_bar * c1
+            A00 = B00 + gb0 * c0 + s_bar * c0 * c0
+            A01 = B01 + gb0 * c1 + s_bar * c0 * c1
+            A10 = B10 + gb1 * c0 + s_bar * c1 * c0
+            A11 = B11 + gb1 * c1 + s_bar * c1 * c1
+            r_bar[0] += s_bar
+        else:
+            a_0, a_1 = b_0, b_1
+            A00, A01, A10, A11 = B00, B01, B10, B11
+    x0_bar[0], x0_bar[1] = a_0, a_1
+    P0_bar[0, 0], P0_bar[0, 1], P0_bar[1, 0], P0_bar[1, 1] = A00, A01, A10, A11
+    return nll, n_obs
+
+
+@njit(cache=True, error_model="numpy")
+def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
+    """``J_ML`` or ``J_MAP`` of a packed 2-state, 1-output problem and its gradient in ``theta``, by the adjoint pass.
+
+    ``(inf, zeros)`` where the model is invalid. Least squares is not handled here (the caller
+    takes :func:`rczone.kernels.problem.value_and_gradient`).
+    """
+    d = theta.shape[0]
+    grad = np.zeros(d)
+    mod, der, ok = assembled(theta, prob, d)
+    if not ok or prob.kind == LS:
+        return math.inf, grad
+    _, _, u, y, keys, which, _ = prob.data
+    foh = prob.consts.foh
+    p = mod.B0.shape[1]
+    K = keys.shape[0]
+    mats, dmats = interval_derivatives(
+        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
+        np.sqrt(mod.cap), foh, True,
+    )  # fmt: skip
+    Phi, G0, G1, Qd = mats
+    dPhi, dG0, dG1, dQd = dmats
+    bars = (
+        np.zeros((K, 2, 2)),
+        np.zeros((K, 2, p)),
+        np.zeros((K, 2, p)),
+        np.zeros((K, 2, 2)),
+        np.zeros(2),
+        np.zeros((2, 2)),
+        np.zeros(1),
+    )
+    nll, n_obs = nll_rc2_adjoint(
+        Phi, G0, G1, Qd, which, mod.C[0], mod.r[0], mod.x0, mod.P0, u, y[:, 0], foh, bars
+    )
+    if n_obs < 0:
+        return math.inf, grad
+    Phi_bar, G0_bar, G1_bar, Qd_bar, x0_bar, P0_bar, r_bar = bars
+    for i in range(d):
+        acc = r_bar[0] * der.dr[0, i]
+        for a in range(2):
+            acc += x0_bar[a] * der.dx0[i, a]
+            for b in range(2):
+                acc += P0_bar[a, b] * der.dP0[i, a, b]
+        for w in range(K):
+            for a in range(2):
+                for b in range(2):
+                    acc += Phi_bar[w, a, b] * dPhi[w, i, a, b] + Qd_bar[w, a, b] * dQd[w, i, a, b]
+                for j in range(p):
+                    acc += G0_bar[w, a, j] * dG0[w, i, a, j]
+                    if foh:
+                        acc += G1_bar[w, a, j] * dG1[w, i, a, j]
+        grad[i] = acc
+    j = nll + 0.5 * n_obs * _LOG_2PI
+    if prob.kind == MAP:
+        j = with_prior(j, theta, prob.penalty, grad, np.zeros(d), True)
+    return j, grad
