@@ -198,7 +198,7 @@ def filter_arrays(
     ss = network.state_space(network_theta(network, values))
     sw, sx, sv = noise_values(ss, values)
     x0 = initial_state(ss, values, data)
-    dynamics = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2), hold)
+    dynamics = stochastic_matrices(ss, data.t, data.m, np.diag(sw**2 + ss.diffusion), hold)
     return FilterProblem(*dynamics, data.u, data.y, x0, np.diag(sx**2), ss.C, ss.D, np.diag(sv**2))
 
 
@@ -311,12 +311,15 @@ def general_cost(
             if w in sv_names:
                 j = sv_names.index(w)
                 dr[j, k] = 2.0 * sv[j]
+        for k, d in enumerate(derivs):  # the disturbances' diffusion follows their hyper-parameters
+            if d is not None and d.dQ is not None:
+                dqc[k] += d.dQ
     x0, dx0 = _initial_state_derivatives(ss, derivs, values, data, wrt)
     keys, which = data.intervals
     foh = hold == "foh"
     f = np.ascontiguousarray
     A, N, B, M = f(ss.A), f(ss.N), f(ss.B), f(ss.M)
-    qc = sw**2
+    qc = sw**2 + (0.0 if ls else ss.diffusion)
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     if q:
         scale = np.empty(0) if scale is None else scale

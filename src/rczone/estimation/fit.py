@@ -95,7 +95,8 @@ def default_free(
     measured = measured_states(network)
     if method_of(method).stochastic:
         free += measurement_noise_names(network.outputs)
-        free += process_noise_names(measured if noise == "measured" else network.state_names)
+        # a disturbance's latent states have the diffusion of their GP, not a sigma_w_ of their own
+        free += process_noise_names(measured if noise == "measured" else network.node_state_names)
     elif initial_state == "estimate":
         free += initial_state_names(s for s in network.state_names if s not in measured)
     return tuple(free)

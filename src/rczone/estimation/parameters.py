@@ -50,7 +50,7 @@ LOG_BOUND_FACTOR = 1000.0
 #: Default half-width (K) of the bounds of an initial state.
 X0_HALF_WIDTH = 20.0
 
-_LOG_KINDS = ("resistance", "capacitance", "noise")
+_LOG_KINDS = ("resistance", "capacitance", "magnitude", "time", "noise")
 
 
 def noise_parameter_names(network: RCNetwork) -> tuple[str, ...]:

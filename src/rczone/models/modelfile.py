@@ -35,12 +35,21 @@ errors with a suggestion, so a typo never drops a setting silently::
     temperature = "Ts"                 # degC
     # cp = 1005                        # J/(kg K)
 
+    [[disturbance]]                    # an unmeasured heat input with a GP prior (docs/disturbances.md)
+    name = "Qx"                        # its latent states: Qx, Qx_d1 (matern32)
+    kind = "matern32"                  # or "matern52", "periodic" (then also period = "Pd")
+    to = { Ti = 1.0 }                  # nodes and dimensionless gains; or to = "Ti"
+    magnitude = "sx"                   # standard deviation of the heat flow, a parameter (W)
+    length_scale = "lx"                # a parameter (s)
+
     [parameters]                       # values in the given unit, converted to SI on reading
     Ci  = { value = 1.2, unit = "MJ/K", bounds = [0.01, 100] }
     Ce  = { value = 15, unit = "MJ/K" }
     Rie = { value = 2, unit = "K/kW" }
     Rea = { value = 20, unit = "K/kW", fixed = true }   # held unless a fit frees it
     Aw  = { value = 2, unit = "m2", bounds = [0, 50] }
+    sx  = { value = 200, unit = "W" }
+    lx  = { value = 3, unit = "h" }
     # R1 = { expr = "Rw/2" }           # a tie: follows other parameters, never estimated
     # Rie = { value = 2, unit = "K/kW", prior = { dist = "lognormal", median = 2, sigma = 0.7 } }
 
@@ -51,7 +60,8 @@ errors with a suggestion, so a typo never drops a setting silently::
 A parameter's kind (resistance, capacitance, gain) follows from where it is used; a
 parameter used only in ties takes the kind of the ties that use it. Units: resistances
 ``K/W``, ``K/kW``; capacities ``J/K``, ``kJ/K``, ``MJ/K``, ``Wh/K``, ``kWh/K``; gains ``1`` or
-``m2`` (an aperture for an irradiance input); heat inputs ``W`` or ``W/m2``. Bounds are in the
+``m2`` (an aperture for an irradiance input); heat inputs ``W`` or ``W/m2``; a disturbance's
+magnitude ``W`` or ``kW``, its length scale and period ``s``, ``min``, ``h`` or ``d``. Bounds are in the
 parameter's unit. The free parameters of a fit are, by default, every resistance, capacitance and
 gain not marked ``fixed`` (and the noise levels for ML). A parameter's ``prior`` table declares
 its prior distribution (:mod:`rczone.network.prior`: ``lognormal`` with ``median``, ``sigma``;
@@ -73,6 +83,7 @@ from typing import Any
 from rczone.errors import ModelFileError, RczoneError, did_you_mean
 from rczone.models.zone import ModelInputs, ZoneModel, read_model_document
 from rczone.network import CP_AIR, HeatInput, Node, Parameter, Prior, RCNetwork, Resistor, SupplyAir
+from rczone.network.disturbance import ROLE_KINDS, Disturbance
 from rczone.network.network import HEAT_INPUT_UNITS
 from rczone.network.parameters import expression_names
 
@@ -85,12 +96,14 @@ TOP_KEYS = (
     "resistors",
     "heat_inputs",
     "supply_air",
+    "disturbance",
     "parameters",
     "inputs",
 )
 NODE_KEYS = ("capacity", "description")
 HEAT_KEYS = ("to", "unit", "description")
 AIR_KEYS = ("node", "flow", "temperature", "cp")
+DISTURBANCE_KEYS = ("name", "kind", "to", "magnitude", "length_scale", "period")
 PARAMETER_KEYS = ("value", "unit", "bounds", "fixed", "expr", "kind", "description", "prior")
 INPUT_KEYS = ("default", "mean_of", "description")
 
@@ -99,6 +112,8 @@ PARAMETER_UNITS: dict[str, dict[str, float]] = {
     "resistance": {"K/W": 1.0, "K/kW": 1e-3, "mK/W": 1e-3},
     "capacitance": {"J/K": 1.0, "kJ/K": 1e3, "MJ/K": 1e6, "Wh/K": 3600.0, "kWh/K": 3.6e6},
     "gain": {"1": 1.0, "m2": 1.0, "%": 0.01},
+    "magnitude": {"W": 1.0, "kW": 1e3},
+    "time": {"s": 1.0, "min": 60.0, "h": 3600.0, "d": 86400.0},
     "other": {"": 1.0, "J/(kg K)": 1.0},
 }
 _SI_GAIN_UNIT = {"1": "1", "m2": "m2", "%": "1"}
@@ -151,6 +166,15 @@ class _Reader:
         if not math.isfinite(x):
             raise self.err(where, f"must be finite, got {v!r}")
         return x
+
+    def gains(self, to: object, where: str) -> dict[str, str | float]:
+        """Where a heat flow goes: a node name (all of it), or a table of node -> gain."""
+        if isinstance(to, str):
+            return {self.text(to, where): 1.0}
+        to = self.table(to, where)
+        if not to:
+            raise self.err(where, "names no node")
+        return {k: self.element(v, f"{where}.{k}") for k, v in to.items()}
 
     def element(self, v: object, where: str) -> str | float:
         """An element value: a parameter name or a number."""
@@ -237,14 +261,7 @@ def model_from_document(
             spec = {"to": spec}
         spec = r.table(spec, where)
         r.keys(spec, HEAT_KEYS, where)
-        to = spec.get("to")
-        if isinstance(to, str):
-            split: dict[str, str | float] = {r.text(to, f"{where}.to"): 1.0}
-        else:
-            to = r.table(to, f"{where}.to")
-            if not to:
-                raise r.err(f"{where}.to", "names no node")
-            split = {k: r.element(v, f"{where}.to.{k}") for k, v in to.items()}
+        split = r.gains(spec.get("to"), f"{where}.to")
         unit = spec.get("unit", "W")
         if unit not in HEAT_INPUT_UNITS:
             raise r.err(f"{where}.unit", f"{unit!r} is not one of {', '.join(HEAT_INPUT_UNITS)}")
@@ -271,12 +288,15 @@ def model_from_document(
             )
         )
 
-    params = _parameters(r, r.table(doc["parameters"], "[parameters]"), nodes, resistors, heat, air)
+    dists = _disturbances(r, doc.get("disturbance", []))
+    params = _parameters(r, r.table(doc["parameters"], "[parameters]"), nodes, resistors, heat, air, dists)
     inputs = _inputs(r, r.table(doc.get("inputs", {}), "[inputs]"))
     boundaries = r.names(doc.get("boundaries", []), "boundaries")
     outputs = r.names(doc["outputs"], "outputs") if "outputs" in doc else None
     try:
-        net = RCNetwork(name, nodes, boundaries, resistors, params, heat, air, outputs, description)
+        net = RCNetwork(
+            name, nodes, boundaries, resistors, params, heat, air, outputs, description, disturbances=dists
+        )
         return ZoneModel(net, inputs=inputs, source=source)
     except ModelFileError as exc:
         raise ModelFileError(f"model file {source}: {str(exc).removeprefix('model: ')}") from None
@@ -284,8 +304,45 @@ def model_from_document(
         raise ModelFileError(f"model file {source}: {exc}") from None
 
 
+def _disturbances(r: _Reader, items: object) -> list[Disturbance]:
+    """The ``[[disturbance]]`` tables (see the module notes)."""
+    if isinstance(items, Mapping):
+        items = [items]
+    if not isinstance(items, list):
+        raise r.err("disturbance", f"must be [[disturbance]] tables, got {_type(items)}")
+    if len(items) > MAX_ELEMENTS:
+        raise r.err("disturbance", f"has {len(items)} entries, more than the limit of {MAX_ELEMENTS}")
+    out = []
+    for i, spec in enumerate(items):
+        where = f"disturbance[{i}]"
+        spec = r.table(spec, where)
+        r.keys(spec, DISTURBANCE_KEYS, where)
+        for key in ("name", "kind", "to", "magnitude", "length_scale"):
+            if key not in spec:
+                raise r.err(where, f"needs {key} (see docs/disturbances.md)")
+        gains = r.gains(spec["to"], f"{where}.to")
+        kw = {
+            k: r.element(spec[k], f"{where}.{k}")
+            for k in ("magnitude", "length_scale", "period")
+            if k in spec
+        }
+        try:
+            out.append(
+                Disturbance(
+                    r.text(spec["name"], f"{where}.name"), r.text(spec["kind"], f"{where}.kind"), gains, **kw
+                )
+            )
+        except RczoneError as exc:
+            raise r.err(where, str(exc)) from None
+    return out
+
+
 def _usage_kinds(
-    nodes: list[Node], resistors: list[Resistor], heat: list[HeatInput], air: list[SupplyAir]
+    nodes: list[Node],
+    resistors: list[Resistor],
+    heat: list[HeatInput],
+    air: list[SupplyAir],
+    dists: Sequence[Disturbance] = (),
 ) -> dict[str, set[str]]:
     """Kinds implied by where each parameter name is used."""
     used: dict[str, set[str]] = {}
@@ -302,6 +359,13 @@ def _usage_kinds(
     for s in air:
         if isinstance(s.cp, str):
             used.setdefault(s.cp, set()).add("other")
+    for d in dists:
+        for _, g in d.gains:
+            if isinstance(g, str):
+                used.setdefault(g, set()).add("gain")
+        for role, v in d.hyperparameters:
+            if isinstance(v, str):
+                used.setdefault(v, set()).add(ROLE_KINDS[role])
     return used
 
 
@@ -312,6 +376,7 @@ def _parameters(
     resistors: list[Resistor],
     heat: list[HeatInput],
     air: list[SupplyAir],
+    dists: Sequence[Disturbance] = (),
 ) -> list[Parameter]:
     specs: dict[str, Mapping[str, Any]] = {}
     for p, spec in table.items():
@@ -320,7 +385,7 @@ def _parameters(
             spec = {"value": spec}
         r.keys(spec, PARAMETER_KEYS, where)
         specs[p] = spec
-    used = _usage_kinds(nodes, resistors, heat, air)
+    used = _usage_kinds(nodes, resistors, heat, air, dists)
     for p, kinds in used.items():
         if len(kinds) > 1:
             raise r.err(
@@ -494,6 +559,12 @@ def model_to_toml(model: ZoneModel | RCNetwork, header: str = "") -> str:
             f"{k} = {_toml_value(v)}"
             for k, v in (("node", s.node), ("flow", s.flow), ("temperature", s.temperature), ("cp", s.cp))
         ]
+    for d in net.disturbances:
+        lines += ["", "[[disturbance]]"]
+        lines += [
+            f"{k} = {_toml_value(v)}" for k, v in (("name", d.name), ("kind", d.kind), ("to", dict(d.gains)))
+        ]
+        lines += [f"{role} = {_toml_value(v)}" for role, v in d.hyperparameters]
     lines += ["", "[parameters]"]
     for p in net.parameters.values():
         ps: dict[str, object] = {}

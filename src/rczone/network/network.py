@@ -33,10 +33,12 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
 from rczone.errors import NetworkError, ParameterError, did_you_mean
+from rczone.network.disturbance import ROLE_KINDS, Disturbance, latent_sde
 from rczone.network.parameters import (
     ESTIMATED_KINDS,
     Parameter,
@@ -186,6 +188,17 @@ class ConductanceForm:
     output_state: tuple[int, ...]
 
 
+class Assembled(NamedTuple):
+    """What :meth:`RCNetwork._assemble` builds: the bilinear matrices and the per-state constants."""
+
+    matrices: tuple[np.ndarray, ...]
+    """``(A, N, B, M, C, D)``."""
+    capacities: np.ndarray
+    """Heat capacity per state, J/K (NaN for a latent state of a disturbance)."""
+    diffusion: np.ndarray
+    """Per-state diffusion intensity the network itself declares (the disturbances' SDEs), 1/s."""
+
+
 RESERVED_NAMES = frozenset({"time"})
 """Names no node or signal may take: ``time`` is the data's time-stamp column."""
 MAX_STATES = 200
@@ -215,6 +228,9 @@ class RCNetwork:
         Nodes that are measured; default: the first node.
     description : str
         What the network models, in words (for listings and reports).
+    disturbances : sequence of Disturbance
+        Unmeasured heat inputs with a Gaussian-process prior (:mod:`rczone.network.disturbance`);
+        their latent states follow the nodes' states.
 
     Examples
     --------
@@ -242,6 +258,7 @@ class RCNetwork:
     supply_air: tuple[SupplyAir, ...] = ()
     outputs: tuple[str, ...] = ()
     description: str = ""
+    disturbances: tuple[Disturbance, ...] = ()
 
     def __init__(
         self,
@@ -254,6 +271,8 @@ class RCNetwork:
         supply_air: Iterable[SupplyAir] = (),
         outputs: Iterable[str] | None = None,
         description: str = "",
+        *,
+        disturbances: Iterable[Disturbance] = (),
     ) -> None:
         nodes = tuple(nodes)
         set_ = object.__setattr__
@@ -266,6 +285,7 @@ class RCNetwork:
         set_(self, "supply_air", tuple(supply_air))
         set_(self, "outputs", tuple(outputs) if outputs is not None else (nodes[0].name,) if nodes else ())
         set_(self, "description", description)
+        set_(self, "disturbances", tuple(disturbances))
         self._validate()
 
     def __hash__(self) -> int:  # parameters is a dict; identity hash suffices for caching
@@ -274,8 +294,18 @@ class RCNetwork:
     # ------------------------------------------------------------------ names
     @cached_property
     def state_names(self) -> tuple[str, ...]:
-        """Names of the capacitive nodes, i.e. the states, in order."""
+        """Names of the states, in order: the capacitive nodes, then the disturbances' latent states."""
+        return self.node_state_names + self.latent_state_names
+
+    @cached_property
+    def node_state_names(self) -> tuple[str, ...]:
+        """Names of the capacitive nodes (the thermal states), in order."""
         return tuple(n.name for n in self.nodes if n.capacity is not None)
+
+    @cached_property
+    def latent_state_names(self) -> tuple[str, ...]:
+        """Names of the disturbances' latent states (:mod:`rczone.network.disturbance`), in order."""
+        return tuple(s for d in self.disturbances for s in d.state_names)
 
     @cached_property
     def massless_names(self) -> tuple[str, ...]:
@@ -360,11 +390,11 @@ class RCNetwork:
                     f"network {self.name!r}: supply air at {sa.node!r} uses {sa.flow!r} as both its flow and"
                     " its temperature; give them different names"
                 )
-        if not self.state_names:
+        if not self.node_state_names:
             raise NetworkError(f"network {self.name!r} has no capacitive node, so no states")
-        if len(self.state_names) > MAX_STATES:
+        if len(self.node_state_names) > MAX_STATES:
             raise NetworkError(
-                f"network {self.name!r} has {len(self.state_names)} capacitive nodes (states), more than the"
+                f"network {self.name!r} has {len(self.node_state_names)} capacitive nodes (states), more than the"
                 f" limit of {MAX_STATES} (rczone.network.network.MAX_STATES); lump thin layers into fewer nodes"
             )
         known = set(node_names) | set(self.boundaries)
@@ -431,8 +461,38 @@ class RCNetwork:
             check_value(s.cp, f"supply air {s.flow!r} cp", "positive")
         for o in self.outputs:
             check_node(o, "output", node_names)
+        self._check_disturbances(set(seen) | input_seen | set(self.flow_names), check_node, check_value)
         self._check_floating()
         _ = self._tie_order
+
+    def _check_disturbances(self, taken: set[str], check_node, check_value) -> None:
+        """Disturbances: unique names, known nodes, hyper-parameters of the right kind and sign."""
+        node_names = [n.name for n in self.nodes]
+        for d in self.disturbances:
+            if not isinstance(d, Disturbance):
+                raise NetworkError(f"disturbances must be Disturbance objects, got {type(d).__name__}")
+            where = f"disturbance {d.name!r}"
+            for s in d.state_names:
+                if s in taken or s in RESERVED_NAMES:
+                    raise NetworkError(
+                        f"{where}: its state {s!r} reuses a node, input or state name; rename it"
+                    )
+                taken.add(s)
+            for nd, g in d.gains:
+                check_node(nd, where, node_names)
+                check_value(g, f"{where} gain at {nd!r}", "")
+            for role, v in d.hyperparameters:
+                if isinstance(v, str):
+                    check_value(v, f"{where} {role}", "")
+                    if self.parameters[v].kind not in (ROLE_KINDS[role], "other"):
+                        raise NetworkError(
+                            f"{where} {role} uses {v!r}, declared as a {self.parameters[v].kind}, not a"
+                            f" {ROLE_KINDS[role]}"
+                        )
+                else:
+                    check_value(v, f"{where} {role}", "" if role == "magnitude" else "positive")
+                    if role == "magnitude" and float(v) < 0:
+                        raise ParameterError(f"{where} magnitude must be >= 0 W, got {float(v):g}")
 
     def _check_floating(self) -> None:
         """Every connected group of nodes must reach a boundary or a supply-air element."""
@@ -481,7 +541,8 @@ class RCNetwork:
         -------
         BilinearStateSpace
         """
-        A, N, B, M, C, D, cap = self._assemble(self.values(theta), float)
+        built = self._assemble(self.values(theta), float)
+        A, N, B, M, C, D = built.matrices
         return BilinearStateSpace(
             A=A,
             N=N,
@@ -493,7 +554,8 @@ class RCNetwork:
             input_names=self.input_names,
             flow_names=self.flow_names,
             output_names=self.outputs,
-            capacities=cap,
+            capacities=built.capacities,
+            diffusion=built.diffusion,
         )
 
     def state_space_derivatives(
@@ -517,7 +579,7 @@ class RCNetwork:
         Returns
         -------
         list of StateSpaceDerivative
-            One per name in ``wrt``: ``(dA, dN, dB, dM, dC, dD)``.
+            One per name in ``wrt``: ``(dA, dN, dB, dM, dC, dD, dQ)`` (``dQ``: of the diffusion).
 
         References
         ----------
@@ -536,7 +598,8 @@ class RCNetwork:
             step = h * (vals[name] if log else 1.0)
             vals[name] = vals[name] + 1j * step
             vals = evaluate_ties(self.parameters, vals, self._tie_order)
-            mats = self._assemble(vals, complex)[:6]
+            built = self._assemble(vals, complex)
+            mats = (*built.matrices, built.diffusion)
             out.append(StateSpaceDerivative(*(np.imag(m_) / h for m_ in mats)))
         return out
 
@@ -559,7 +622,7 @@ class RCNetwork:
                 i = ia if ia >= 0 else ib
                 L[k, i] = P[k, i] = 1.0
                 E[k, iidx[r.a if ia < 0 else r.b]] = 1.0
-        xs = np.array([idx[n] for n in self.state_names], dtype=int)
+        xs = np.array([idx[n] for n in self.node_state_names], dtype=int)
         zs = np.array([idx[n] for n in self.massless_names], dtype=int)
         out = [idx[o] for o in self.outputs]
         Cfull = np.zeros((len(out), nn))
@@ -597,10 +660,11 @@ class RCNetwork:
             "Cx": Cfull[:, xs],
             "Cz": Cfull[:, zs],
             "cap": [nd.capacity for nd in self.nodes if nd.capacity is not None],
+            "dist": [[(idx[nd], g) for nd, g in d.gains] for d in self.disturbances],
         }
 
-    def _assemble(self, vals: Mapping[str, float | complex], dtype: type) -> tuple[np.ndarray, ...]:
-        """Matrices ``(A, N, B, M, C, D, capacities)`` from resolved parameter values."""
+    def _assemble(self, vals: Mapping[str, float | complex], dtype: type) -> Assembled:
+        """The state space's matrices and per-state constants from resolved parameter values."""
         st = self._structure
 
         def v(x: Value) -> float | complex:
@@ -621,12 +685,15 @@ class RCNetwork:
                 Nf[k, i, i] -= v(cp)
                 Mf[k, i, j] += v(cp)
         # energy balance: Cap dT/dt = -G T + Gb u + sum_k m_k (Nf_k T + Mf_k u)
-        Axx, Bx = -G[st["xx"]], Gb[xs]
-        C, D = st["Cx"].astype(dtype), np.zeros((st["Cx"].shape[0], Gb.shape[1]), dtype)
+        # the disturbances' heat flows (W per unit of their latent states) enter like inputs
+        Gd, F, qd = self._latent_blocks(vals, dtype, st["nn"])
+        p, nl = Gb.shape[1], Gd.shape[1]
+        Axx, Bx = -G[st["xx"]], np.concatenate([Gb[xs], Gd[xs]], axis=1)
+        C, D = st["Cx"].astype(dtype), np.zeros((st["Cx"].shape[0], p + nl), dtype)
         if zs.size:
             # Kron reduction: z = Kz x + Lz u  from  0 = -G_zx x - G_zz z + Gb_z u
             Gzz = G[st["zz"]]
-            KL = np.linalg.solve(Gzz, np.concatenate([-G[st["zx"]], Gb[zs]], axis=1))
+            KL = np.linalg.solve(Gzz, np.concatenate([-G[st["zx"]], Gb[zs], Gd[zs]], axis=1))
             Kz, Lz = KL[:, : xs.size], KL[:, xs.size :]
             Axz = -G[st["xz"]]
             Axx = Axx + Axz @ Kz
@@ -637,7 +704,49 @@ class RCNetwork:
         _check_positive(cap, st["cap"], "capacity")
         inv = (1.0 / cap)[:, None]
         Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
-        return (Axx * inv, Nx, Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
+        A, B, M = Axx * inv, Bx[:, :p] * inv, Mf[:, xs] * inv[None]
+        if not nl:
+            return Assembled((A, Nx, B, M, C, D), cap, np.zeros(xs.size))
+        # state (x, s): dx = (A x + Bd s + B u) dt, ds = F s dt + noise; y = C x + Cd s + D u
+        nx = xs.size
+        A = np.block([[A, Bx[:, p:] * inv], [np.zeros((nl, nx), dtype), F]])
+        Nx = np.concatenate([Nx, np.zeros((Nx.shape[0], nx, nl), dtype)], axis=2)
+        Nx = np.concatenate([Nx, np.zeros((Nx.shape[0], nl, nx + nl), dtype)], axis=1)
+        B = np.concatenate([B, np.zeros((nl, p), dtype)])
+        M = np.concatenate([M, np.zeros((M.shape[0], nl, p), dtype)], axis=1)
+        C = np.concatenate([C, D[:, p:]], axis=1)
+        cap = np.concatenate([cap, np.full(nl, np.nan)])
+        diffusion = np.concatenate([np.zeros(nx, dtype), qd])
+        return Assembled((A, Nx, B, M, C, D[:, :p]), cap, diffusion)
+
+    def _latent_blocks(
+        self, vals: Mapping[str, float | complex], dtype: type, nn: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(Gd, F, qd)``: node heat flow per latent state (W, shape (nn, nl)), drift, diffusion."""
+
+        def v(x: Value) -> float | complex:
+            return vals[x] if isinstance(x, str) else float(x)
+
+        nl = len(self.latent_state_names)
+        Gd, F, qd = np.zeros((nn, nl), dtype), np.zeros((nl, nl), dtype), np.zeros(nl, dtype)
+        k = 0
+        for d, entries in zip(self.disturbances, self._structure["dist"], strict=True):
+            sigma = v(d.magnitude)
+            if (sigma.real if isinstance(sigma, complex) else sigma) < 0:
+                raise ParameterError(f"disturbance {d.name!r}: magnitude must be >= 0 W, got {sigma:g}")
+            ell = v(d.length_scale)
+            period = None if d.period is None else v(d.period)
+            for x, what in ((ell, "length scale"), (period, "period")):
+                if x is not None and not (x.real if isinstance(x, complex) else x) > 0:
+                    raise ParameterError(f"disturbance {d.name!r}: {what} must be > 0 s, got {x:g}")
+            sde = latent_sde(d.kind, ell, period)
+            m = sde.F.shape[0]
+            F[k : k + m, k : k + m] = sde.F
+            qd[k : k + m] = sde.qc
+            for i, g in entries:
+                Gd[i, k] += sigma * v(g)
+            k += m
+        return Gd, F, qd
 
     @cached_property
     def conductance_form(self) -> ConductanceForm | None:
@@ -649,7 +758,7 @@ class RCNetwork:
         are numbers; None otherwise.
         """
         st = self._structure
-        if st["zs"].size or st["heat"] or st["air"]:
+        if st["zs"].size or st["heat"] or st["air"] or self.disturbances:
             return None
         return ConductanceForm(
             L=st["L"],
@@ -690,4 +799,5 @@ class RCNetwork:
             self.supply_air,
             self.outputs,
             self.description,
+            disturbances=self.disturbances,
         )

@@ -31,16 +31,17 @@ from rczone.errors import ParameterError, did_you_mean
 from rczone.network.prior import Prior
 from rczone.network.stochastic import RESERVED_PREFIXES, is_reserved
 
-#: Kinds of parameter; ``resistance`` and ``capacitance`` must be strictly positive.
-KINDS = ("resistance", "capacitance", "gain", "other")
+#: Kinds of parameter; those in :data:`POSITIVE_KINDS` must be strictly positive. ``magnitude`` (W)
+#: and ``time`` (s) are the hyper-parameters of a disturbance (:mod:`rczone.network.disturbance`).
+KINDS = ("resistance", "capacitance", "gain", "magnitude", "time", "other")
 
 #: Kinds estimated by default (unless declared ``fixed``).
-ESTIMATED_KINDS = ("resistance", "capacitance", "gain")
+ESTIMATED_KINDS = ("resistance", "capacitance", "gain", "magnitude", "time")
 
-#: Kinds whose values are strictly positive (and may have a log-normal prior).
-POSITIVE_KINDS = ("resistance", "capacitance")
+#: Kinds whose values are strictly positive (estimated in log space; may have a log-normal prior).
+POSITIVE_KINDS = ("resistance", "capacitance", "magnitude", "time")
 
-_UNITS = {"resistance": "K/W", "capacitance": "J/K", "gain": "1", "other": ""}
+_UNITS = {"resistance": "K/W", "capacitance": "J/K", "gain": "1", "magnitude": "W", "time": "s", "other": ""}
 
 _BINOPS = {
     ast.Add: operator.add,
@@ -66,8 +67,8 @@ class Parameter:
     ----------
     name : str
         Identifier used by the network elements and in ``theta`` mappings.
-    kind : {"resistance", "capacitance", "gain", "other"}
-        Physical role; resistances and capacitances must be > 0.
+    kind : {"resistance", "capacitance", "gain", "magnitude", "time", "other"}
+        Physical role; resistances, capacitances, magnitudes and times must be > 0.
     value : float, optional
         Default (construction) value in SI units, used when ``theta`` omits it.
     expr : str, optional
@@ -158,8 +159,8 @@ def _check_prior(p: Parameter, prior: object) -> None:
         )
     if prior.needs_positive and p.kind not in POSITIVE_KINDS:
         raise ParameterError(
-            f"parameter {p.name!r}: a {prior.dist} prior needs a positive parameter (a resistance or a"
-            f" capacitance), not a {p.kind}; use a normal or uniform prior"
+            f"parameter {p.name!r}: a {prior.dist} prior needs a positive parameter (a resistance, a"
+            f" capacitance, a magnitude or a time), not a {p.kind}; use a normal or uniform prior"
         )
 
 
@@ -175,7 +176,7 @@ def _check_bounds(p: Parameter, bounds: object) -> tuple[float, float]:
             f"parameter {p.name!r}: bounds [{lo:g}, {hi:g}] must be finite with lower < upper"
             " (they are never swapped)"
         )
-    if p.kind in ("resistance", "capacitance") and lo <= 0:
+    if p.kind in POSITIVE_KINDS and lo <= 0:
         raise ParameterError(
             f"parameter {p.name!r}: the lower bound of a {p.kind} must be > 0, got {lo:g}"
             " (it is estimated in log space)"
@@ -191,7 +192,7 @@ def _check_bounds(p: Parameter, bounds: object) -> tuple[float, float]:
 def _check_value(p: Parameter, v: float) -> None:
     if not math.isfinite(v):
         raise ParameterError(f"parameter {p.name!r} = {v!r} is not finite")
-    if p.kind in ("resistance", "capacitance") and v <= 0.0:
+    if p.kind in POSITIVE_KINDS and v <= 0.0:
         raise ParameterError(
             f"parameter {p.name!r} = {v:g} {p.unit}: a {p.kind} must be > 0"
             " (use a very small or very large value to approximate a short or an open)"

@@ -11,6 +11,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from rczone.errors import NetworkError, ParameterError
+from rczone.network.disturbance import Disturbance
 from rczone.network.network import HeatInput, Node, RCNetwork, Resistor, SupplyAir
 from rczone.network.parameters import Parameter
 from rczone.network.prior import Prior
@@ -49,12 +50,59 @@ def network_to_dict(net: RCNetwork) -> dict[str, Any]:
             }
             for p in net.parameters.values()
         ],
+        # written only when declared, so a model without disturbances keeps its JSON
+        **({"disturbances": [disturbance_to_dict(x) for x in net.disturbances]} if net.disturbances else {}),
     }
+
+
+def disturbance_to_dict(d: Disturbance) -> dict[str, Any]:
+    """A JSON-ready description of one disturbance (:mod:`rczone.network.disturbance`)."""
+    out: dict[str, Any] = {
+        "name": d.name,
+        "kind": d.kind,
+        "gains": dict(d.gains),
+        "magnitude": d.magnitude,
+        "length_scale": d.length_scale,
+    }
+    if d.period is not None:
+        out["period"] = d.period
+    return out
+
+
+_DISTURBANCE_KEYS = ("name", "kind", "gains", "magnitude", "length_scale", "period")
+
+
+def _disturbance(x: object, i: int) -> Disturbance:
+    where = f"disturbances[{i}]"
+    x = _known(x, _DISTURBANCE_KEYS, where)
+    gains = _table(x.get("gains"), f"{where}.gains")
+    values = {}
+    for key in ("magnitude", "length_scale", "period"):
+        values[key] = _value(x.get(key), f"{where}.{key}")
+        if values[key] is None and key != "period":
+            raise NetworkError(f"network description: {where} has no {key!r}")
+    return Disturbance(
+        _text(x, "name", where),
+        _text(x, "kind", where),
+        {str(k): _value(v, f"{where}.gains.{k}") for k, v in gains.items()},
+        magnitude=values["magnitude"],
+        length_scale=values["length_scale"],
+        period=values["period"],
+    )
 
 
 def _table(d: object, where: str) -> Mapping[str, Any]:
     if not isinstance(d, Mapping):
         raise NetworkError(f"network description: {where} must be an object, got {type(d).__name__}")
+    return d
+
+
+def _known(d: object, keys: tuple[str, ...], where: str) -> Mapping[str, Any]:
+    """``d`` as an object whose keys are all among ``keys``."""
+    d = _table(d, where)
+    unknown = [k for k in d if k not in keys]
+    if unknown:
+        raise NetworkError(f"network description: {where} has unknown key {unknown[0]!r}")
     return d
 
 
@@ -91,10 +139,7 @@ def _value(v: object, where: str) -> str | float | None:
 
 def _parameter(p: object, i: int) -> Parameter:
     where = f"parameters[{i}]"
-    p = _table(p, where)
-    unknown = [k for k in p if k not in _PARAMETER_KEYS]
-    if unknown:
-        raise NetworkError(f"network description: {where} has unknown key {unknown[0]!r}")
+    p = _known(p, _PARAMETER_KEYS, where)
     name = _text(p, "name", where)
     kw: dict[str, Any] = {"name": name, "kind": _text(p, "kind", where, "other")}
     for key in ("unit", "description", "expr"):
@@ -169,6 +214,7 @@ def network_from_dict(d: object) -> RCNetwork:
             )
         )
     params = [_parameter(p, i) for i, p in enumerate(_list(d, "parameters", "network"))]
+    dists = [_disturbance(x, i) for i, x in enumerate(_list(d, "disturbances", "network", required=False))]
     outputs = d.get("outputs")
     if outputs is not None and (not isinstance(outputs, list) or not outputs):
         raise NetworkError("network description: outputs must be a non-empty list of node names")
@@ -183,6 +229,7 @@ def network_from_dict(d: object) -> RCNetwork:
             supply_air=air,
             outputs=outputs,
             description=_text(d, "description", "network", ""),
+            disturbances=dists,
         )
     except (TypeError, AttributeError) as exc:
         raise NetworkError(f"network description is malformed: {exc}") from None

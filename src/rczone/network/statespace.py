@@ -35,6 +35,8 @@ class StateSpaceDerivative(NamedTuple):
     dM: np.ndarray
     dC: np.ndarray
     dD: np.ndarray
+    dQ: np.ndarray | None = None
+    """Derivative of :attr:`BilinearStateSpace.diffusion` (None: zero)."""
 
 
 def _flows(m: float | Sequence[float] | np.ndarray, nf: int) -> np.ndarray:
@@ -102,7 +104,12 @@ class BilinearStateSpace:
     C, D : ndarray
         Output matrices (``D`` is non-zero when an output is a massless node).
     capacities : ndarray, shape (n,)
-        Heat capacity of each state node, J/K (for energy balances).
+        Heat capacity of each state node, J/K (for energy balances); NaN for the latent states of
+        a disturbance (:mod:`rczone.network.disturbance`).
+    diffusion : ndarray, shape (n,), optional
+        Diffusion intensity each state has by declaration (variance per second): the latent
+        states' Gaussian-process SDEs; zero for the nodes. Added to the estimation's process noise
+        ``sigma_w_<state>**2``. Default: zeros.
     """
 
     A: np.ndarray
@@ -116,6 +123,11 @@ class BilinearStateSpace:
     flow_names: tuple[str, ...]
     output_names: tuple[str, ...]
     capacities: np.ndarray
+    diffusion: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.diffusion is None:
+            object.__setattr__(self, "diffusion", np.zeros(self.A.shape[0]))
 
     @property
     def n_states(self) -> int:

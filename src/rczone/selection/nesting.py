@@ -19,7 +19,12 @@ capacity ``C -> 0``  its node becomes massless (an algebraic node, eliminated ex
 ``R -> inf``         the resistor is removed
 gain ``g = 0``       the heat input no longer reaches that node (only where ``g = 0`` is in the
                      declared bounds, e.g. a solar aperture ``Aw``)
+magnitude ``-> 0``   a disturbance (:mod:`rczone.network.disturbance`) no longer reaches any node:
+                     its latent states are invisible and it is removed with its hyper-parameters
 ==================  =====================================================================
+
+A disturbance of ``A`` must be one of ``B``'s, declared identically (same name, kind, gains and
+hyper-parameters); ``B``'s other disturbances are restricted by a zero magnitude.
 
 The restricted network is then reduced by exact eliminations, repeated until none applies: a
 massless node joined by one resistor passes its heat inputs to the neighbour and disappears; a
@@ -51,6 +56,11 @@ decide. The mixture for independent boundary restrictions, ``sum_i C(s, i) 2^-s 
 with ``s`` of them, is reported beside it. Where a restriction leaves parameters without effect
 (the split of ``Rie + Rea`` when ``Ce -> 0``), those are unidentified under the simpler model and
 the asymptotic theory holds only approximately (Davies 1987); the p-values are then a guide.
+A disturbance removed by its magnitude is such a case: its magnitude sits on the boundary (one of
+the ``s`` restrictions) and its length scale (and period) are unidentified under ``A``; the
+chi-bar-squared p-value treats them as fixed at their estimates, so it is a lower bound, and the
+decision uses ``chi2(d)``, conservative for the boundary but not guaranteed so for the unidentified
+length scale (Davies 1987): a p-value near the level is not evidence either way.
 
 References
 ----------
@@ -516,6 +526,15 @@ def nesting(
         return None
     if any(p.is_tied for net in (simple, rich) for p in net.parameters.values()):
         return None
+    removed = _removed_disturbances(simple, rich, free_b)
+    if removed is None:
+        return None
+    gone = {v for d in removed for _, v in (*d.hyperparameters, *d.gains) if isinstance(v, str)}
+    if gone & ({*free_a} | _element_parameters(rich)):
+        return None  # a removed disturbance's parameter is used elsewhere: not a clean removal
+    gone &= free_b
+    free_b = free_b - gone
+    removal = tuple((d.magnitude, "0") for d in removed)
     va = {**simple.values(), **dict(values_simple or {})}
     vb = {**rich.values(), **dict(values_rich or {})}
     a = _Skeleton.of(simple, free_a, va)
@@ -524,7 +543,7 @@ def nesting(
     except _Invalid:  # pragma: no cover - a valid network reduces
         return None
     options = _moves(rich, free_b)
-    for size in range(0, min(len(options), df, MAX_RESTRICTIONS) + 1):
+    for size in range(0, min(len(options), df - len(gone), MAX_RESTRICTIONS) + 1):
         for chosen in itertools.combinations(options, size):
             for moves in itertools.product(*chosen):
                 b = _Skeleton.of(rich, free_b, vb)
@@ -537,19 +556,37 @@ def nesting(
                 if found is None or not _noise_matches(free_a, free_b, found[0]):
                     continue
                 phi, pairs = found
-                kinds = tuple(rich.parameters[p].kind for p, _ in moves)
+                kinds = tuple(rich.parameters[p].kind for p, _ in moves) + ("magnitude",) * len(removal)
                 return Nesting(
                     simple.name,
                     rich.name,
-                    tuple(moves),
+                    tuple(moves) + removal,
                     tuple((_text(x), _text(y)) for x, y in pairs if _params(x) or _params(y)),
                     phi,
                     df,
-                    sum(_at_boundary(rich, p, k) for (p, _), k in zip(moves, kinds)),
+                    sum(_at_boundary(rich, p, k) for (p, _), k in zip(moves, kinds)) + len(removal),
                     kinds,
                     tuple(pairs),
                 )
     return None
+
+
+def _removed_disturbances(simple: RCNetwork, rich: RCNetwork, free_b: set[str]) -> list | None:
+    """``rich``'s disturbances that ``simple`` lacks, each removable by a free magnitude; None if none fits."""
+    mine = set(simple.disturbances)
+    if not mine <= set(rich.disturbances):
+        return None  # a disturbance of the simpler model must be the richer model's, declared identically
+    removed = [d for d in rich.disturbances if d not in mine]
+    if any(not isinstance(d.magnitude, str) or d.magnitude not in free_b for d in removed):
+        return None
+    return removed
+
+
+def _element_parameters(net: RCNetwork) -> set[str]:
+    """Parameter names the network's thermal elements use (nodes, resistors, heat inputs, supply air)."""
+    used = {n.capacity for n in net.nodes} | {r.resistance for r in net.resistors}
+    used |= {g for h in net.heat_inputs for _, g in h.split} | {s.cp for s in net.supply_air}
+    return {v for v in used if isinstance(v, str)}
 
 
 def _at_boundary(net: RCNetwork, name: str, kind: str) -> bool:
@@ -593,4 +630,5 @@ def realize(
             give(b, value(a))
     for (p, to), kind in zip(nest.restriction, nest.kinds):
         out[p] = 0.0 if kind == "gain" else rich_values[p] * (eps if to == "0" else 1.0 / eps)
+    # a removed disturbance's magnitude is at eps times its value: the simpler model to O(eps^2)
     return out
