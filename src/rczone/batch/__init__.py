@@ -8,9 +8,9 @@ storing each result atomically as it arrives so that a rerun resumes
 """
 
 from rczone.batch.manifest import Manifest, Task, parse_manifest, read_manifest
-from rczone.batch.runner import BatchRun, run_batch
+from rczone.batch.runner import run_batch
 from rczone.batch.store import ResultStore
-from rczone.batch.summary import summarize, write_summary
+from rczone.batch.summary import BatchRun, summarize, write_summary
 from rczone.batch.task import run_task
 
 __all__ = [

@@ -8,6 +8,8 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
     methods = ["ls", "ml"]           # one task per zone and method
     optimizer = "auto"
     n_starts = "auto"                # global search (rczone fit's default); 1 = one local search
+    # seed = 0                       # seed of the global search
+    # noise = "measured"             # ML and MAP: process noise on the measured states, or "all"
     diagnose = true                  # identifiability verdicts per zone
     # free = ["Cr", "Rw"]            # default: the method's usual set for the model
     # columns = "maps/bms.toml"      # default column map for data files
@@ -30,7 +32,10 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
     seeds = "0..249"                 # inclusive range, or a list of integers
 
 ``model`` is a built-in name or a model file (``.toml``, or ``.json`` saved by ``rczone fit
---save-model``) relative to the manifest's folder.
+--save-model``) relative to the manifest's folder. The fit options of a zone become the one
+settings object of a fit, :class:`~rczone.workflow.settings.FitSettings` (the command line's and
+the Python API's), and its data a :class:`~rczone.workflow.datasource.DataSource`: a task carries
+paths and seeds, never frames, so a worker reads its zone's data where it runs.
 
 Unknown keys, duplicate zone ids, unknown methods or models are errors naming the place in
 the file, with a suggestion where one is close. A manifest that would expand into more than
@@ -50,9 +55,12 @@ from dataclasses import asdict, dataclass, field
 from functools import lru_cache
 from pathlib import Path
 
-from rczone.errors import DataError, did_you_mean
+from rczone.errors import DataError, RczoneError, did_you_mean
 from rczone.estimation.methods import METHODS as REGISTERED_METHODS
+from rczone.estimation.optimize import OPTIMIZERS as LOCAL_OPTIMIZERS
 from rczone.files.text import nfkc, read_toml, regular_file
+from rczone.workflow.datasource import BuiltinNight, DataSource, TrendLog, VirtualNight
+from rczone.workflow.settings import NOISE_PLACEMENTS, FitSettings
 
 MAX_TASKS = 200_000
 """Most calibrations (zones x methods) one manifest may ask for."""
@@ -60,10 +68,21 @@ MAX_STARTS = 1000
 """Most optimizer starts per calibration."""
 MODEL_FILE_SUFFIXES = (".toml", ".json")
 METHODS = REGISTERED_METHODS
-OPTIMIZERS = ("auto", "nelder-mead", "powell", "lbfgs")
+OPTIMIZERS = ("auto", *LOCAL_OPTIMIZERS)
 SEASONS = ("summer", "winter", "autumn")
 MODES = ("closed-loop", "forced")
-SETTINGS = ("model", "methods", "optimizer", "n_starts", "diagnose", "free", "columns", "constants")
+SETTINGS = (
+    "model",
+    "methods",
+    "optimizer",
+    "n_starts",
+    "seed",
+    "noise",
+    "diagnose",
+    "free",
+    "columns",
+    "constants",
+)
 ZONE_KEYS = ("id", "data", "virtual", *SETTINGS)
 GENERATE_KEYS = ("prefix", "seasons", "modes", "seeds", *SETTINGS)
 TOP_KEYS = (*SETTINGS, "zone", "generate")
@@ -72,6 +91,8 @@ DEFAULTS: dict[str, object] = {
     "methods": ("ls", "ml"),
     "optimizer": "auto",
     "n_starts": "auto",
+    "seed": 0,
+    "noise": "measured",
     "diagnose": True,
     "free": None,
     "columns": None,
@@ -81,20 +102,33 @@ DEFAULTS: dict[str, object] = {
 
 @dataclass(frozen=True)
 class Task:
-    """One calibration: a zone's data, a model and one method.
+    """One calibration: a zone's data, a model and the settings of one fit.
 
-    ``source`` is ``("file", path, column_map or None)`` or ``("virtual", season, mode, seed)``.
+    Attributes
+    ----------
+    zone : str
+        The zone's id.
+    model : str
+        A built-in model name or a model file (resolved).
+    source : DataSource
+        Where the zone's data come from (a trend log, a built-in night, a virtual night): paths
+        and seeds, read where the task runs.
+    settings : FitSettings
+        The fit (method, free parameters, search), as ``rczone fit`` and :func:`rczone.fit` take it.
+    diagnose : bool
+        Identifiability verdicts for the zone at the fitted values.
     """
 
     zone: str
-    method: str
     model: str
-    source: tuple
-    optimizer: str = "auto"
-    n_starts: int | None = None
+    source: DataSource
+    settings: FitSettings
     diagnose: bool = True
-    free: tuple[str, ...] | None = None
-    constants: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def method(self) -> str:
+        """The estimation method of the fit."""
+        return self.settings.method
 
     @property
     def key(self) -> str:
@@ -109,10 +143,17 @@ class Task:
         column map, a model file): a stored result is reused only for the same fingerprint, so
         a changed setting or an edited file is computed anew, never resumed.
         """
-        files = [self.source[1], self.source[2]] if self.source[0] == "file" else []
+        files = list(self.source.files)
         if Path(self.model).suffix.lower() in MODEL_FILE_SUFFIXES:
             files.append(self.model)
-        doc = {"task": asdict(self), "files": [file_digest(f) for f in files if f]}
+        doc = {
+            "zone": self.zone,
+            "model": self.model,
+            "source": {"kind": type(self.source).__name__, **asdict(self.source)},
+            "settings": asdict(self.settings),
+            "diagnose": self.diagnose,
+            "files": [file_digest(f) for f in files],
+        }
         text = json.dumps(doc, sort_keys=True, default=str)
         return hashlib.sha256(text.encode("utf-8")).hexdigest()[:32]
 
@@ -196,6 +237,13 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
             where,
             f'n_starts must be "auto" or an integer from 1 to {MAX_STARTS} (rczone.batch.manifest.MAX_STARTS),'
             f" got {n_starts!r}",
+        )
+    seed = out["seed"]
+    if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed < 2**63:
+        raise _err(where, f"seed must be a non-negative integer, got {seed!r}")
+    if out["noise"] not in NOISE_PLACEMENTS:
+        raise _err(
+            where, f"unknown noise {out['noise']!r}; " + did_you_mean(str(out["noise"]), NOISE_PLACEMENTS)
         )
     if not isinstance(out["diagnose"], bool):
         raise _err(where, f"diagnose must be true or false, got {out['diagnose']!r}")
@@ -304,7 +352,7 @@ def _names(value: object, allowed: tuple[str, ...], what: str, where: str) -> li
     return value
 
 
-def _virtual(spec: object, where: str) -> tuple:
+def _virtual(spec: object, where: str) -> VirtualNight:
     if not isinstance(spec, dict):
         raise _err(
             where,
@@ -318,32 +366,45 @@ def _virtual(spec: object, where: str) -> tuple:
         raise _err(where, f"unknown mode {mode!r}; " + did_you_mean(str(mode), MODES))
     if not isinstance(seed, int) or isinstance(seed, bool):
         raise _err(where, f"seed must be an integer, got {seed!r}")
-    return ("virtual", season, mode, seed)
+    return VirtualNight(season, mode, seed)
 
 
-def _tasks(zone: str, source: tuple, s: Mapping[str, object]) -> list[Task]:
-    return [
-        Task(
-            zone=zone,
-            method=m,
-            model=str(s["model"]),
-            source=source,
-            optimizer=str(s["optimizer"]),
-            n_starts=None if s["n_starts"] == "auto" else int(s["n_starts"]),
-            diagnose=bool(s["diagnose"]),
-            free=tuple(s["free"]) if s["free"] else None,
-            constants=tuple(sorted((k, float(v)) for k, v in (s["constants"] or {}).items())),
-        )
-        for m in s["methods"]
-    ]
+def _tasks(zone: str, source: DataSource, s: Mapping[str, object], where: str) -> list[Task]:
+    """One task per method, each with the fit's settings (:class:`FitSettings`)."""
+    try:
+        return [
+            Task(
+                zone=zone,
+                model=str(s["model"]),
+                source=source,
+                settings=FitSettings(
+                    method=str(m),
+                    free=tuple(s["free"]) if s["free"] else None,
+                    optimizer=str(s["optimizer"]),
+                    n_starts=None if s["n_starts"] == "auto" else int(s["n_starts"]),
+                    seed=int(s["seed"]),
+                    noise=str(s["noise"]),
+                    constants={k: float(v) for k, v in sorted((s["constants"] or {}).items())},
+                    checks=False,  # the batch's own check is `diagnose`, once per zone
+                    profiles=False,
+                ),
+                diagnose=bool(s["diagnose"]),
+            )
+            for m in s["methods"]
+        ]
+    except RczoneError as exc:  # checked above already; a setting FitSettings refuses is still one line
+        raise _err(where, str(exc)) from None
 
 
-def _data_path(folder: Path, data: str) -> str:
-    """A data file relative to the manifest's folder, or a built-in data set name (A, B, C)."""
+def _data_source(folder: Path, data: str, columns: object, where: str) -> DataSource:
+    """A data file relative to the manifest's folder (with its column map), or a built-in data set."""
     from rczone import datasets
 
-    p = Path(data) if Path(data).is_absolute() else _resolve(folder / data, "data file", str(folder))
-    return data if not p.exists() and data in datasets.names() else str(p)
+    path = Path(data) if Path(data).is_absolute() else _resolve(folder / data, "data file", where)
+    if not path.exists() and data in datasets.names():
+        return BuiltinNight(data)
+    cols = str(_resolve(folder / str(columns), "column map", where)) if columns else None
+    return TrendLog(str(path), cols)
 
 
 def _tables(doc: Mapping, name: str, where: str) -> list[Mapping]:
@@ -364,11 +425,11 @@ def parse_manifest(doc: Mapping, path: Path) -> Manifest:
     tasks: list[Task] = []
     ids: set[str] = set()
 
-    def add(zone: str, source: tuple, s: Mapping[str, object], w: str) -> None:
+    def add(zone: str, source: DataSource, s: Mapping[str, object], w: str) -> None:
         if zone in ids:
             raise _err(w, f"duplicate zone id {zone!r}")
         ids.add(zone)
-        tasks.extend(_tasks(zone, source, s))
+        tasks.extend(_tasks(zone, source, s, w))
 
     def check_size(extra: int, w: str) -> None:
         if len(tasks) + extra > MAX_TASKS:
@@ -390,12 +451,8 @@ def parse_manifest(doc: Mapping, path: Path) -> Manifest:
         if ("data" in z) == ("virtual" in z):
             raise _err(f"{w} ({zid})", 'give exactly one of data = "file" or virtual = { ... }')
         if "data" in z:
-            cols = s["columns"]
-            source = (
-                "file",
-                _data_path(folder, _text(z["data"], "data", f"{w} ({zid})")),
-                str(_resolve(folder / str(cols), "column map", f"{w} ({zid})")) if cols else None,
-            )
+            data = _text(z["data"], "data", f"{w} ({zid})")
+            source = _data_source(folder, data, s["columns"], f"{w} ({zid})")
         else:
             source = _virtual(z["virtual"], f"{w} ({zid})")
         add(zid, source, s, f"{w} ({zid})")

@@ -19,12 +19,12 @@ import time
 from collections import Counter, deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, Future, ProcessPoolExecutor, wait
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from rczone.batch.manifest import Manifest, Task
 from rczone.batch.store import ResultStore
-from rczone.batch.summary import write_summary
+from rczone.batch.summary import BatchRun, write_summary
 from rczone.batch.task import run_tasks
 from rczone.errors import RczoneError
 from rczone.files.atomic import immediate
@@ -33,44 +33,6 @@ CONNECT_TIMEOUT = 20.0
 """Seconds to wait for a Dask scheduler to answer."""
 WORKER_TIMEOUT = 60.0
 """Seconds to wait for the first Dask worker to join the scheduler."""
-
-
-@dataclass(frozen=True)
-class BatchRun:
-    """What one run did.
-
-    Attributes
-    ----------
-    total : int
-        Tasks in the manifest.
-    skipped : int
-        Already done by an earlier run (resumed).
-    computed : int
-        Finished in this run (ok or failed with the zone's own error), and stored.
-    failed : int
-        Of the computed, how many failed.
-    lost : int
-        Could not be run (worker died, scheduler lost, no workers): not stored, and computed
-        by the next run.
-    lost_reasons : tuple of str
-        Why, one entry per distinct reason.
-    seconds : float
-        Wall time of this run.
-    results : Path
-        The consolidated table.
-    summary : dict
-        The summary written beside it (:func:`~rczone.batch.summary.summarize`).
-    """
-
-    total: int
-    skipped: int
-    computed: int
-    failed: int
-    lost: int
-    lost_reasons: tuple[str, ...]
-    seconds: float
-    results: Path
-    summary: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -268,6 +230,7 @@ def run_batch(
         done = store.done(manifest.tasks)
         todo = [t for t in manifest.tasks if t.key not in done]
         computed = failed = 0
+        compute = 0.0
         lost: dict[str, str] = {}
         connection = _connect(scheduler, workers) if todo and use_dask else None
         try:
@@ -289,6 +252,7 @@ def run_batch(
                     store.write({**row, "fingerprint": fingerprints[row["key"]]})
                     computed += 1
                     failed += row["status"] != "ok"
+                    compute += float(row.get("seconds") or 0.0)
                     if on_result:
                         on_result(row, computed + len(lost), len(todo))
         finally:
@@ -296,7 +260,7 @@ def run_batch(
                 _close(*connection)
         table = store.table(manifest.tasks)
         path = store.consolidate(table)
-        summary = write_summary(table, store.folder, title=title)
+        totals = write_summary(table, store.folder, title=title)
     return BatchRun(
         total=len(manifest.tasks),
         skipped=len(manifest.tasks) - len(todo),
@@ -306,5 +270,10 @@ def run_batch(
         lost_reasons=tuple(dict.fromkeys(lost.values())),
         seconds=time.perf_counter() - t0,
         results=path,
-        summary=summary,
+        folder=store.folder,
+        totals=totals,
+        table=table,
+        workers=workers,
+        compute_seconds=compute,
+        submitted=len(groups) if todo else 0,
     )

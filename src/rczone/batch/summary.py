@@ -1,7 +1,13 @@
-"""The summary of a batch: what was done, what failed, how the estimates are distributed."""
+"""The summary of a batch: what was done, what failed, how the estimates are distributed.
+
+:class:`BatchRun` is the result of :func:`rczone.batch.run_batch` and follows the result protocol
+(:mod:`rczone.results.protocol`): ``summary()`` is what ``rczone fit-many`` prints, ``to_dict()``
+holds the run's figures and the contents of ``summary.json``, ``to_frame()`` is the results table.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +17,7 @@ from rczone.files.atomic import write_json_in
 from rczone.network.stochastic import is_reserved
 from rczone.report import Report
 from rczone.report.html import ReportFigure as Figure
+from rczone.results.protocol import Result, json_number
 
 VERDICTS = ("identifiable", "weak", "not identifiable")
 
@@ -126,3 +133,143 @@ def write_summary(df: pd.DataFrame, folder: str | Path, title: str = "rczone bat
         )
     rep.write(folder)
     return s
+
+
+#: Failures listed by :meth:`BatchRun.summary` (all are in ``summary.json``).
+SHOWN_FAILURES = 10
+
+
+@dataclass(frozen=True, repr=False)
+class BatchRun(Result):
+    """What one run of a batch did, and the batch's results so far.
+
+    Attributes
+    ----------
+    total : int
+        Calibrations (tasks) in the manifest.
+    skipped : int
+        Already done by an earlier run (resumed).
+    computed : int
+        Finished in this run (ok or failed with the zone's own error), and stored.
+    failed : int
+        Of the computed, how many failed.
+    lost : int
+        Could not be run (worker died, scheduler lost, no workers): not stored, and computed
+        by the next run.
+    lost_reasons : tuple of str
+        Why, one entry per distinct reason.
+    seconds : float
+        Wall time of this run, s.
+    results : Path
+        The consolidated table (``results.parquet``).
+    folder : Path
+        The results folder.
+    totals : dict
+        The summary of every stored result of the manifest (:func:`summarize`; ``summary.json``).
+    table : DataFrame
+        The rows of ``results.parquet``.
+    workers : int
+        Worker processes the run asked for (local) or found (a cluster).
+    compute_seconds : float
+        Sum over the calibrations computed in this run of their own time in the workers, s.
+    submitted : int
+        Units of work sent to the workers (a unit holds one or more zones).
+    """
+
+    total: int
+    skipped: int
+    computed: int
+    failed: int
+    lost: int
+    lost_reasons: tuple[str, ...]
+    seconds: float
+    results: Path
+    folder: Path
+    totals: dict = field(default_factory=dict)
+    table: pd.DataFrame = field(default_factory=pd.DataFrame)
+    workers: int = 1
+    compute_seconds: float = 0.0
+    submitted: int = 0
+
+    @property
+    def overhead(self) -> float:
+        """Share of the workers' time not spent calibrating: ``1 - compute / (wall x workers)``.
+
+        Cluster start, scheduling, transfers and idle workers at the end; NaN when nothing ran.
+        """
+        capacity = self.seconds * self.workers
+        return 1.0 - self.compute_seconds / capacity if self.computed and capacity > 0 else float("nan")
+
+    def summary_lines(self, *, lost: bool = True) -> list:
+        """What ``rczone fit-many`` prints (with ``lost=False``: its standard output only).
+
+        Parameters
+        ----------
+        lost : bool
+            Include :meth:`lost_lines` (the command prints them on its error stream).
+
+        Returns
+        -------
+        list of str
+            Lines with rich markup.
+        """
+        from rich.markup import escape
+
+        s = self.totals
+        lines = [
+            f"{self.computed} computed ({self.failed} failed), {self.skipped} resumed, in {self.seconds:.1f} s;"
+            f" {s.get('ok', 0)}/{self.total} ok in total"
+        ]
+        lines += [
+            f"[red]failed[/] {escape(f['zone'])} ({escape(f['method'])}): {escape(f['error'])}"
+            for f in s.get("failures", [])[:SHOWN_FAILURES]
+        ]
+        if s.get("failed", 0) > SHOWN_FAILURES:
+            lines.append(
+                f"... and {s['failed'] - SHOWN_FAILURES} more (see {escape(str(self.folder / 'summary.json'))})"
+            )
+        lines.append(
+            f"results: {escape(str(self.results))}; report: {escape(str(self.folder / 'report.html'))}"
+        )
+        if s.get("flagged", 0) and not self.lost and not s.get("failed", 0):
+            lines.append(
+                f"[yellow]{s['flagged']} calibration(s) finished but are flagged untrustworthy[/]"
+                " (column 'flags' of the results: an estimate at a bound, no standard error, or starts that"
+                " disagree)"
+            )
+        return lines + (self.lost_lines() if lost else [])
+
+    def lost_lines(self) -> list[str]:
+        """The note on calibrations that could not run (none when every one ran)."""
+        from rich.markup import escape
+
+        if not self.lost:
+            return []
+        return [
+            f"[yellow]{self.lost} calibration(s) could not run[/] ({escape('; '.join(self.lost_reasons[:3]))});"
+            " nothing was stored for them: rerun the same command to compute them"
+        ]
+
+    def to_dict(self) -> dict:
+        """The run's figures (``run``) and the contents of ``summary.json``."""
+        run = {
+            "total": self.total,
+            "skipped": self.skipped,
+            "computed": self.computed,
+            "failed": self.failed,
+            "lost": self.lost,
+            "lost_reasons": list(self.lost_reasons),
+            "seconds": self.seconds,
+            "workers": self.workers,
+            "compute_seconds": self.compute_seconds,
+            "submitted": self.submitted,
+            "overhead": json_number(self.overhead),
+        }
+        return {"run": run, **self.totals}
+
+    def to_frame(self) -> pd.DataFrame:
+        """The results table, one row per calibration (as ``results.parquet``)."""
+        return self.table
+
+    def _repr_line(self) -> str:
+        return f"{self.computed} computed, {self.skipped} resumed, {self.lost} lost of {self.total}"

@@ -12,38 +12,29 @@ from __future__ import annotations
 import math
 import time
 import traceback
+from dataclasses import replace
+from functools import lru_cache
 from pathlib import Path
 
-import pandas as pd
-
-from rczone.batch.manifest import Task
+from rczone.batch.manifest import Task, file_digest
 from rczone.errors import RczoneError
+from rczone.models import ZoneModel
 
 
-def load_task_data(task: Task, zm) -> pd.DataFrame:
-    """The zone's data frame: the signals the model ``zm`` (a ZoneModel) reads, every output checked."""
-    kind = task.source[0]
-    if kind == "virtual":
-        from rczone.virtual.scenarios import generate_night
+def task_model(task: Task) -> ZoneModel:
+    """The task's model: a built-in name or a model file (already resolved by the manifest).
 
-        _, season, mode, seed = task.source
-        return generate_night(season, mode, seed)
-    from rczone.workflow.reader import read_model_frame
-
-    _, path, columns = task.source
-    return read_model_frame(Path(path), Path(columns) if columns else None, zm)
+    Loaded once per worker process and model (a model file again when its contents change), so
+    the zones of a worker share one frozen structure and the caches keyed by it.
+    """
+    return _model(task.model, file_digest(task.model) if Path(task.model).is_absolute() else "")
 
 
-def task_model(task: Task):
-    """The task's model: a built-in name or a model file (already resolved by the manifest)."""
+@lru_cache(maxsize=16)
+def _model(spec: str, digest: str) -> ZoneModel:  # digest: an edited model file is loaded again
     from rczone.models import load_model
 
-    return load_model(task.model)
-
-
-def source_label(task: Task) -> str:
-    s = task.source
-    return f"virtual:{s[1]}/{s[2]}/{s[3]}" if s[0] == "virtual" else str(s[1])
+    return load_model(spec)
 
 
 def run_tasks(tasks: list[Task]) -> list[dict]:
@@ -64,20 +55,19 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
         "zone": task.zone,
         "method": task.method,
         "model": task.model,
-        "source": source_label(task),
+        "source": task.source.label,
         "status": "ok",
         "error": "",
     }
     try:
-        from rczone.calibration import calibrate
+        from rczone.workflow.checks import fit_and_check
 
         zm = task_model(task)
         net = zm.network
-        if "frame" not in cache:
-            cache["frame"] = load_task_data(task, zm)
+        if "frame" not in cache:  # read here, where the task runs: a task carries paths, not frames
+            cache["frame"] = task.source.frame(zm)
         frame = cache["frame"]
-        constants = dict(task.constants) or None
-        cal = calibrate(zm, frame, task.method, task.free, task.optimizer, task.n_starts, constants=constants)
+        cal = fit_and_check(zm, frame, replace(task.settings, checks=False), label=task.source.label)
         r = cal.result
         row.update(
             open_loop_rmse_K=cal.open_loop.rmse_K,

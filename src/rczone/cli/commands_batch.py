@@ -83,28 +83,13 @@ def fit_many(
         raise
     if state.get("started"):
         progress.stop()
-    summary = run.summary
-    say = console()
-    say.print(
-        f"{run.computed} computed ({run.failed} failed), {run.skipped} resumed, in {run.seconds:.1f} s;"
-        f" {summary['ok']}/{run.total} ok in total"
-    )
-    for f in summary["failures"][:10]:
-        say.print(f"[red]failed[/] {escape(f['zone'])} ({escape(f['method'])}): {escape(f['error'])}")
-    if summary["failed"] > 10:
-        say.print(f"... and {summary['failed'] - 10} more (see {escape(folder / 'summary.json')})")
-    say.print(f"results: {escape(run.results)}; report: {escape(folder / 'report.html')}")
+    for line in run.summary_lines(lost=False):
+        console().print(line)
+    for line in run.lost_lines():
+        err.print(line)
     if run.lost:
-        err.print(
-            f"[yellow]{run.lost} calibration(s) could not run[/] ({escape('; '.join(run.lost_reasons[:3]))});"
-            " nothing was stored for them: rerun the same command to compute them"
-        )
         raise typer.Exit(EXIT_TASKS_LOST)
-    if summary["failed"]:
+    if run.totals["failed"]:
         raise typer.Exit(EXIT_ZONES_FAILED)
-    if summary["flagged"]:
-        say.print(
-            f"[yellow]{summary['flagged']} calibration(s) finished but are flagged untrustworthy[/]"
-            " (column 'flags' of the results: an estimate at a bound, no standard error, or starts that disagree)"
-        )
+    if run.totals["flagged"]:
         raise typer.Exit(EXIT_UNTRUSTED)

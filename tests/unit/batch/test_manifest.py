@@ -6,6 +6,8 @@ import pytest
 
 from rczone.batch.manifest import parse_manifest, read_manifest
 from rczone.errors import DataError
+from rczone.workflow.datasource import BuiltinNight, TrendLog, VirtualNight
+from rczone.workflow.settings import FitSettings
 
 
 def parse(text, tmp_path):
@@ -43,11 +45,14 @@ diagnose = false
     assert keys[:3] == ["room::map", "builtin::ls", "builtin::ml"]
     assert len(m.tasks) == 3 + 2 * 3 * 2 and len(m.zones) == 2 + 6
     room = m.tasks[0]
-    assert room.source == ("file", str((tmp_path / "z.csv").resolve()), None)
-    assert room.free == ("Cr", "Rw") and room.n_starts == 2 and room.constants == (("Q", 40.0),)
-    assert m.tasks[1].source == ("file", "C", None)  # a built-in data set by name
+    assert room.source == TrendLog(str((tmp_path / "z.csv").resolve()), None)
+    assert room.settings == FitSettings(
+        method="map", free=("Cr", "Rw"), n_starts=2, constants={"Q": 40.0}, checks=False, profiles=False
+    )
+    assert m.tasks[1].source == BuiltinNight("C")  # a built-in data set by name
     gen = [t for t in m.tasks if t.zone == "g-autumn-forced-4"]
-    assert [t.method for t in gen] == ["ls", "ml"] and gen[0].source == ("virtual", "autumn", "forced", 4)
+    assert [t.method for t in gen] == ["ls", "ml"] and gen[0].source == VirtualNight("autumn", "forced", 4)
+    assert gen[0].source.label == "virtual:autumn/forced/4" and room.source.label == "z.csv"
     assert not gen[0].diagnose and room.diagnose
 
 
@@ -150,6 +155,8 @@ def test_a_folder_in_place_of_the_manifest_is_one_line(tmp_path):
         ),
         ('model = "mine.toml"\n[[zone]]\nid="a"\ndata="C"', r"model file 'mine.toml' does not exist"),
         ('model = 5\n[[zone]]\nid="a"\ndata="C"', r"model must be a non-empty string"),
+        ('seed = -1\n[[zone]]\nid="a"\ndata="C"', r"seed must be a non-negative integer"),
+        ('noise = "al"\n[[zone]]\nid="a"\ndata="C"', r"unknown noise 'al'; did you mean 'all'"),
     ],
 )
 def test_more_bad_manifests(tmp_path, text, match):

@@ -1,5 +1,6 @@
 """Running a batch: failures recorded, resume, the Dask path, and a kill in the middle."""
 
+import json
 import os
 import signal
 import subprocess
@@ -125,3 +126,33 @@ def test_cli_fit_many_prints_summary_and_bad_manifest_is_one_line(tmp_path, mani
     assert main(["fit-many", str(tmp_path / "bad.toml")]) == 2
     err = capsys.readouterr().err
     assert "unknown method 'lsq'; did you mean 'ls'" in err and "Traceback" not in err
+
+
+def test_fit_many_prints_the_runs_summary_and_the_result_follows_the_protocol(
+    tmp_path, manifest, capsys, monkeypatch
+):
+    """Issue 20: the CLI prints ``summary()``; ``to_dict()`` holds summary.json, ``to_frame()`` the table."""
+    import rczone.batch
+
+    runs = []
+
+    def recording(*args, **kwargs):
+        runs.append(run_batch(*args, **kwargs))
+        return runs[-1]
+
+    monkeypatch.setattr(rczone.batch, "run_batch", recording)
+    out = tmp_path / "o"
+    assert main(["fit-many", str(tmp_path / "m.toml"), "--out", str(out), "--backend", "processes"]) == 4
+    (run,) = runs
+    printed = capsys.readouterr().out
+    assert printed == run.summary(width=10_000)  # lines are never wrapped on the console either
+    assert run.lost_lines() == [] and "failed missing (ls)" in printed
+    d = run.to_dict()
+    assert {k: v for k, v in d.items() if k != "run"} == json.loads((out / "summary.json").read_text())
+    assert d["run"]["computed"] == 3 and d["run"]["failed"] == 2 and d["run"]["total"] == 3
+    assert 0 < d["run"]["compute_seconds"] and d["run"]["submitted"] == 3
+    table, stored = run.to_frame(), pd.read_parquet(out / "results.parquet")
+    assert list(table.columns) == list(stored.columns) and table["key"].tolist() == stored["key"].tolist()
+    pd.testing.assert_series_equal(table["Rw"], stored["Rw"])
+    assert "failed missing (ls)" in run._repr_html_() and "<table" in run._repr_html_()
+    assert repr(run) == "<BatchRun: 3 computed, 0 resumed, 0 lost of 3>"

@@ -107,10 +107,12 @@ def test_done_needs_the_same_fingerprint(tmp_path):
     store.write(row("z::ls", fingerprint=task.fingerprint))
     assert ResultStore(tmp_path / "out").done(m.tasks) == {"z::ls"}
     for changed in (
-        replace(task, optimizer="powell"),
-        replace(task, n_starts=3),
-        replace(task, free=("Cr",)),
-        replace(task, constants=(("Q", 10.0),)),
+        replace(task, settings=replace(task.settings, optimizer="powell")),
+        replace(task, settings=replace(task.settings, n_starts=3)),
+        replace(task, settings=replace(task.settings, free=("Cr",))),
+        replace(task, settings=replace(task.settings, constants={"Q": 10.0})),
+        replace(task, settings=replace(task.settings, seed=1)),
+        replace(task, settings=replace(task.settings, noise="all")),
         replace(task, diagnose=False),
         replace(task, model="first-order"),
     ):
