@@ -16,7 +16,8 @@ the close name), so a typo never silently drops a setting::
     min_samples = 10              # fewer usable samples than this is an error (default 2)
 
     [time]
-    column = "Timestamp"          # default "time"
+    column = "Timestamp"          # default "time"; "" is the unnamed column of a table written
+                                  #   with its index (pandas reads its header as "Unnamed: 0")
     format = "auto"               # "auto" | "iso" | "seconds" | "milliseconds" (Unix epoch, UTC)
     timezone = "America/New_York" # IANA zone of naive local stamps and of the night window
                                   # (default "UTC"; a fixed offset is e.g. "Etc/GMT+5" = UTC-5)
@@ -40,6 +41,8 @@ the close name), so a typo never silently drops a setting::
     Q  = { value = 50, unit = "W" }                 # a constant instead of a column
     # Tsd = "Tsurr"                                 # either a Tsd column or [surroundings]
     m2 = { column = "VAV2", unit = "L/s", quantity = "flow" }  # any other channel
+    Qh = { expr = "HC1.Q + HC2.Q", unit = "kW", quantity = "power" }  # derived: a sum of columns
+    m3 = { column = "VAV3", scale = 0.5, unit = "L/s", quantity = "flow" }  # scale * column + offset
 
     [surroundings]                # temperatures around the zone; Tsd = their mean
     Tf  = { column = "RM141.ZN-T", unit = "degF" }
@@ -59,9 +62,15 @@ the close name), so a typo never silently drops a setting::
     end = "06:00"
 
 Channels ``Ti``, ``To``, ``Ts``, ``Tsd`` (temperatures), ``m`` (flow) and ``Q`` (power)
-are known; any other name in ``[columns]`` needs ``quantity = "temperature" | "flow" |
-"power"``. Default units: degC, kg/s, W. Accepted units are listed in
-:mod:`rczone.data.units`. In a long log ``column`` is the point name.
+are known, and so are the signals of the model the data are read for (a heater ``Ph``, the
+sun ``Ps``). A channel the model does not use is ignored (listed in :attr:`ColumnMap.ignored`),
+so one map serves candidates with and without solar gains; without a model, any other name
+needs ``quantity = "temperature" | "flow" | "power"``. Default units: degC, kg/s, W. Accepted
+units are listed in :mod:`rczone.data.units`. In a long log ``column`` is the point name.
+
+A derived channel (``expr``, or ``scale`` and ``offset`` on a column) is a linear combination
+of columns computed in the declared unit before the conversion to SI
+(:mod:`rczone.data.derived`); it is missing where any of its columns is.
 """
 
 from __future__ import annotations
@@ -73,6 +82,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from rczone.data.derived import Combination, parse_expression
 from rczone.data.units import DEFAULT_AIR_DENSITY, SI_UNITS, canonical_unit
 from rczone.errors import DataError, did_you_mean
 from rczone.files.text import nfkc, read_toml
@@ -119,7 +129,7 @@ _SECTION_KEYS = {
     "resample": ("step", "max_gap", "hold_max_gap"),
     "night": ("start", "end"),
 }
-_CHANNEL_KEYS = ("column", "value", "unit", "quantity")
+_CHANNEL_KEYS = ("column", "expr", "value", "unit", "quantity", "scale", "offset")
 
 
 @dataclass(frozen=True)
@@ -131,7 +141,8 @@ class Channel:
     name : str
         Channel name used by models (``"Ti"``, ``"Tf"``...).
     column : str or None
-        Source column (wide log) or point name (long log); None for a constant.
+        Source column (wide log) or point name (long log), or the expression of a derived
+        channel (as written, for messages); None for a constant.
     value : float or None
         Constant value in ``unit`` when there is no column.
     unit : str
@@ -140,6 +151,9 @@ class Channel:
         ``"temperature"``, ``"flow"`` or ``"power"``.
     role : str
         Plausibility role, a key of :data:`rczone.data.units.PLAUSIBLE`.
+    combination : Combination or None
+        How the value is computed from the table's columns (:mod:`rczone.data.derived`); None for
+        a constant. A plain column is the combination of that column alone.
     """
 
     name: str
@@ -148,11 +162,26 @@ class Channel:
     unit: str
     quantity: str
     role: str
+    combination: Combination | None = None
+
+    def __post_init__(self) -> None:
+        if self.combination is None and self.column is not None:
+            object.__setattr__(self, "combination", Combination(((self.column, 1.0),)))
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The table's columns (or a long log's points) this channel reads."""
+        return () if self.combination is None else self.combination.columns
 
 
 @dataclass(frozen=True)
 class ColumnMap:
-    """Validated column map (see the module docstring for the TOML format)."""
+    """Validated column map (see the module docstring for the TOML format).
+
+    ``time_column`` ``""`` is the unnamed column a table written with its index has
+    (:data:`UNNAMED_TIME`); ``ignored`` lists the mapped channels the model the data were read for
+    does not use (they are not loaded).
+    """
 
     channels: tuple[Channel, ...]
     surroundings: tuple[str, ...] = ()
@@ -174,6 +203,7 @@ class ColumnMap:
     na_values: tuple[str, ...] = ()
     min_samples: int = 2
     name: str = ""
+    ignored: tuple[str, ...] = ()
     source: str = field(default="<defaults>", compare=False)
 
     @property
@@ -302,6 +332,23 @@ def check_timezone(tz: str, source: str = "<defaults>") -> str:
     return tz
 
 
+#: ``[time] column = ""``: the column without a name, as pandas writes a frame's index to CSV (its
+#: header cell is empty, which pandas reads back as ``"Unnamed: 0"``).
+UNNAMED_TIME = ""
+_UNNAMED = re.compile(r"^Unnamed: \d+$")
+
+
+def is_unnamed(column: str) -> bool:
+    """Whether ``column`` is a header cell that was empty (pandas reads it as ``"Unnamed: <k>"``)."""
+    return not str(column).strip() or bool(_UNNAMED.match(str(column)))
+
+
+def _time_column(value, source: str) -> str:
+    if isinstance(value, str) and not value.strip():
+        return UNNAMED_TIME
+    return _text(value, "[time] column", source)
+
+
 _CLOCK = re.compile(r"^([01]?\d|2[0-3]):([0-5]\d)$")
 
 
@@ -312,9 +359,76 @@ def check_clock(text: str, what: str, source: str = "<defaults>") -> str:
     return text.strip()
 
 
+def _unknown_channel(name: str, where: str, source: str, signals: Mapping[str, str] | None, mapped) -> None:
+    """Raise for a channel neither rczone nor the model knows, unless the model simply does not use it.
+
+    With the model's ``signals``, a channel it does not use is not an error (one map serves
+    candidates with and without solar gains; the caller ignores it), except when its name is
+    close to one of the model's signals that the map leaves unmapped: that is a typo.
+    """
+    if signals is not None:
+        unmapped = [s for s in signals if s not in mapped and s not in KNOWN_CHANNELS]
+        unmapped += [s for s in KNOWN_CHANNELS if s in signals and s not in mapped]
+        hint = did_you_mean(name, unmapped) if unmapped else ""
+        if hint.startswith("did you mean"):
+            raise DataError(
+                f"column map {source}: channel {name!r} in {where} is not a signal of the model, and the"
+                f" model's {hint.removeprefix('did you mean ').rstrip('?')} is not mapped; {hint}"
+            )
+        return
+    hint = did_you_mean(name, KNOWN_CHANNELS)
+    typo = f" (a typo of {hint.removeprefix('did you mean ').rstrip('?')}?)" if hint.startswith("did") else ""
+    raise DataError(
+        f"column map {source}: unknown channel {name!r} in {where}{typo}: it is neither one of"
+        f" rczone's channels ({', '.join(KNOWN_CHANNELS)}) nor, with no model given, a model's signal;"
+        ' read the data for the model that uses it, or declare quantity = "temperature" | "flow" |'
+        ' "power" to load it anyway'
+    )
+
+
+def _source(
+    spec: Mapping, name: str, where: str, source: str
+) -> tuple[str | None, float | None, Combination | None]:
+    """A channel's column, constant or expression, with its scale and offset."""
+    given = [k for k in ("column", "expr", "value") if k in spec]
+    if len(given) != 1:
+        raise DataError(
+            f"column map {source}: {where}.{name} needs exactly one of 'column', 'expr' or 'value'"
+            + (f", got {' and '.join(given)}" if given else "")
+        )
+    scale = (
+        _number(spec["scale"], f"{where}.{name}.scale", source, positive=False) if "scale" in spec else 1.0
+    )
+    offset = (
+        _number(spec["offset"], f"{where}.{name}.offset", source, positive=False) if "offset" in spec else 0.0
+    )
+    if "value" in spec:
+        if "scale" in spec or "offset" in spec:
+            raise DataError(
+                f"column map {source}: {where}.{name} is a constant; write its value, not a scale or offset"
+            )
+        return None, _number(spec["value"], f"{where}.{name}.value", source, positive=False), None
+    if scale == 0:
+        raise DataError(f"column map {source}: {where}.{name}.scale must not be 0")
+    if "column" in spec:
+        column = _text(spec["column"], f"{where}.{name}.column", source)
+        combo = Combination(((column, 1.0),))
+    else:
+        column = _text(spec["expr"], f"{where}.{name}.expr", source).strip()
+        combo = parse_expression(column, f"column map {source}: {where}.{name}.expr")
+    return column, None, combo.scaled(scale, offset)
+
+
 def _channel(
-    name: str, spec, source: str, where: str, surrounding: bool, signals: Mapping[str, str] | None = None
-) -> Channel:
+    name: str,
+    spec,
+    source: str,
+    where: str,
+    surrounding: bool,
+    signals: Mapping[str, str] | None = None,
+    mapped: Sequence[str] = (),
+) -> Channel | None:
+    """One channel of the map; None for a channel the model (``signals``) does not use."""
     if surrounding:
         quantity, role = "temperature", "room"
     else:
@@ -330,19 +444,12 @@ def _channel(
             raise DataError(f"column map {source}: {where}.{name} is a {quantity}, not a {q}")
         quantity, role = q, role or _ROLE_OF_QUANTITY[q]
     if quantity is None:
-        raise DataError(
-            f"column map {source}: unknown channel {name!r} in {where};"
-            f" {did_you_mean(name, KNOWN_CHANNELS)} (a new channel needs"
-            ' quantity = "temperature" | "flow" | "power")'
-        )
-    has_col, has_val = "column" in spec, "value" in spec
-    if has_col == has_val:
-        raise DataError(f"column map {source}: {where}.{name} needs exactly one of 'column' or 'value'")
-    column = _text(spec["column"], f"{where}.{name}.column", source) if has_col else None
-    value = _number(spec["value"], f"{where}.{name}.value", source, positive=False) if has_val else None
+        _unknown_channel(name, where, source, signals, mapped)
+        return None
+    column, value, combo = _source(spec, name, where, source)
     unit = spec.get("unit", SI_UNITS[quantity])
     unit = canonical_unit(_text(unit, f"{where}.{name}.unit", source), quantity, column or name)
-    return Channel(name, column, value, unit, quantity, role)
+    return Channel(name, column, value, unit, quantity, role, combo)
 
 
 def parse_column_map(
@@ -365,7 +472,9 @@ def parse_column_map(
     for table, where in ((cols, "[columns]"), (surr, "[surroundings]")):
         if not isinstance(table, Mapping):
             raise DataError(f"column map {source}: {where} must be a table, got {type(table).__name__}")
-    channels = [_channel(n, s, source, "[columns]", False, signals) for n, s in cols.items()]
+    read = {n: _channel(n, s, source, "[columns]", False, signals, tuple(cols)) for n, s in cols.items()}
+    channels = [ch for ch in read.values() if ch is not None]
+    ignored = tuple(n for n, ch in read.items() if ch is None)
     if not channels:
         raise DataError(f"column map {source}: [columns] is empty; map at least 'Ti'")
     for n in surr:
@@ -381,13 +490,14 @@ def parse_column_map(
     channels += [_channel(n, s, source, "[surroundings]", True) for n, s in surr.items()]
     by_column: dict[str, str] = {}
     for ch in channels:
-        if ch.column is not None and ch.column in by_column:
+        if ch.combination is None or not ch.combination.is_plain:
+            continue  # a derived channel may share columns (Ph = Ph1 + Ph2 beside Ph1 itself)
+        if ch.column in by_column:
             raise DataError(
                 f"column map {source}: column {ch.column!r} is mapped to both {by_column[ch.column]!r} and"
                 f" {ch.name!r}; each channel needs its own column"
             )
-        if ch.column is not None:
-            by_column[ch.column] = ch.name
+        by_column[ch.column] = ch.name
 
     time = doc.get("time", {})
     long = doc.get("long", {})
@@ -405,7 +515,7 @@ def parse_column_map(
     cmap = ColumnMap(
         channels=tuple(channels),
         surroundings=tuple(surr),
-        time_column=_text(time.get("column", "time"), "[time] column", source),
+        time_column=_time_column(time.get("column", "time"), source),
         time_format=_choice(time.get("format", "auto"), TIME_FORMATS, "[time] format", source),
         timezone=check_timezone(time.get("timezone", "UTC"), source),
         start=_instant(time, "start", time.get("timezone", "UTC"), source),
@@ -425,6 +535,7 @@ def parse_column_map(
         na_values=tuple(na),
         min_samples=min_samples,
         name=str(doc.get("name", "")),
+        ignored=ignored,
         source=source,
     )
     if cmap.start is not None and cmap.end is not None and not cmap.start < cmap.end:
@@ -460,7 +571,7 @@ def default_column_map(
     present = [str(c) for c in columns]
     if signals is not None:
         time = "time"
-        if "time" not in present and present and (present[0].startswith("Unnamed") or not present[0].strip()):
+        if "time" not in present and present and is_unnamed(present[0]):
             time = present[0]
         missing = [c for c in (time, *required) if c not in present]
         if missing:

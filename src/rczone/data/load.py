@@ -42,7 +42,15 @@ import numpy as np
 import pandas as pd
 from pyarrow import ArrowException
 
-from rczone.data.columnmap import DEFAULT_MAX_GAP, ColumnMap, default_column_map, read_column_map
+from rczone.data.columnmap import (
+    DEFAULT_MAX_GAP,
+    UNNAMED_TIME,
+    ColumnMap,
+    default_column_map,
+    is_unnamed,
+    read_column_map,
+)
+from rczone.data.derived import Combination
 from rczone.data.quality import FLAT_SECONDS, RczoneWarning, find_gaps, longest_flat_run
 from rczone.data.resample import hold_previous, interpolate_linear, uniform_grid
 from rczone.data.timestamps import parse_times, rows_text, to_local
@@ -134,6 +142,9 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
 
             _check_rows(pq.ParquetFile(path).metadata.num_rows, path)
             frame = pd.read_parquet(path)
+            if not isinstance(frame.index, pd.RangeIndex):  # a frame saved with its index: a column
+                name = frame.index.name
+                frame = frame.reset_index(names="" if name is None else str(name))
             frame.columns = [nfkc(str(c)) for c in frame.columns]  # names in one Unicode form
             _check_header(frame, list(frame.columns), path, ",")
             return frame
@@ -215,6 +226,35 @@ def _require(columns: list[str], needed: str, what: str, source: str) -> None:
         raise DataError(f"{source}: no {what} {needed!r}; {did_you_mean(needed, columns)}")
 
 
+def _time_column(columns: list[str], cmap: ColumnMap, source: str) -> str:
+    """The table's time column: the map's, or for ``column = ""`` the first column without a name."""
+    unnamed = [c for c in columns if is_unnamed(c)]
+    if cmap.time_column == UNNAMED_TIME:
+        if not unnamed:
+            raise DataError(
+                f'{source}: [time] column = "" names the column without a name (a table written with its'
+                f" index), but every column has one; name the time column ({did_you_mean('time', columns)})"
+            )
+        return unnamed[0]
+    if cmap.time_column not in columns and unnamed:
+        raise DataError(
+            f"{source}: no time column {cmap.time_column!r}; the column {columns.index(unnamed[0]) + 1} has no"
+            f' name (an index written with the table?): to use it, write column = "" under [time] in the'
+            " column map"
+        )
+    _require(columns, cmap.time_column, "time column", source)
+    return cmap.time_column
+
+
+def _combine(combo: Combination, column_values) -> np.ndarray:
+    """``offset + sum(k * column)`` of a derived channel (NaN where any of its columns is)."""
+    total = None
+    for column, k in combo.terms:
+        x = column_values(column)
+        total = k * x if total is None else total + k * x
+    return total + combo.offset if combo.offset else total
+
+
 def _numbers(raw: pd.Series, column: str, rows: np.ndarray, source: str) -> np.ndarray:
     """Column as float; a non-empty entry that is not a number is an error naming its row."""
     if pd.api.types.is_bool_dtype(raw.dtype):
@@ -260,58 +300,72 @@ def _times(source: str, raw: pd.Series, **kwargs) -> tuple[np.ndarray, np.ndarra
 
 def _samples_wide(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list[str]):
     cols = [str(c) for c in frame.columns]
-    _require(cols, cmap.time_column, "time column", source)
+    tcol = _time_column(cols, cmap, source)
     for ch in cmap.channels:
-        if ch.column is not None:
-            _require(cols, ch.column, f"column for channel {ch.name!r}", source)
+        for c in ch.columns:
+            _require(cols, c, f"column for channel {ch.name!r}", source)
     t, keep, dropped = _times(
         source,
-        frame[cmap.time_column],
+        frame[tcol],
         fmt=cmap.time_format,
         tz=cmap.timezone,
         ambiguous=cmap.ambiguous,
         nonexistent=cmap.nonexistent,
-        column=cmap.time_column,
+        column=tcol,
     )
     notes += dropped
     rows = np.flatnonzero(keep)
-    _check_order(t, rows, f"column {cmap.time_column!r}", source)
+    _check_order(t, rows, f"column {tcol!r}", source)
     kept = frame.iloc[rows]
+    numbers: dict[str, np.ndarray] = {}
+
+    def values(column: str) -> np.ndarray:
+        if column not in numbers:
+            numbers[column] = _numbers(kept[column], column, rows, source)
+        return numbers[column]
+
     samples = {}
     for ch in cmap.channels:
-        if ch.column is not None:
-            samples[ch.name] = (t, _numbers(kept[ch.column], ch.column, rows, source), rows)
+        if ch.combination is not None:
+            samples[ch.name] = (t, _combine(ch.combination, values), rows)
     return t, samples
 
 
 def _samples_long(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list[str]):
     cols = [str(c) for c in frame.columns]
+    tcol = _time_column(cols, cmap, source)
     for needed, what in (
-        (cmap.time_column, "time column"),
         (cmap.long_point, "point-name column"),
         (cmap.long_value, "value column"),
     ):
         _require(cols, needed, what, source)
     points = frame[cmap.long_point].astype("string")
     present = [str(p) for p in points.dropna().unique()]
-    wanted = {ch.column for ch in cmap.channels if ch.column is not None}
     for ch in cmap.channels:
-        if ch.column is not None and ch.column not in present:
+        if len(ch.columns) > 1:
             raise DataError(
-                f"{source}: no point {ch.column!r} (channel {ch.name!r}) in column {cmap.long_point!r};"
-                f" {did_you_mean(ch.column, present)}"
+                f"{source}: channel {ch.name!r} combines several points ({ch.column}); in a long log a"
+                " channel is one point (with a scale and offset if needed): sum the points before"
             )
+    wanted = {c for ch in cmap.channels for c in ch.columns}
+    for ch in cmap.channels:
+        for point in ch.columns:
+            if point not in present:
+                raise DataError(
+                    f"{source}: no point {point!r} (channel {ch.name!r}) in column {cmap.long_point!r};"
+                    f" {did_you_mean(point, present)}"
+                )
     rows = np.flatnonzero(points.isin(wanted).fillna(False).to_numpy())
     sub = frame.iloc[rows]
     t, keep, dropped = _times(
         source,
-        sub[cmap.time_column],
+        sub[tcol],
         fmt=cmap.time_format,
         tz=cmap.timezone,
         ambiguous=cmap.ambiguous,
         nonexistent=cmap.nonexistent,
         groups=sub[cmap.long_point].astype(str).to_numpy(),
-        column=cmap.time_column,
+        column=tcol,
     )
     notes += dropped
     rows = rows[keep]
@@ -323,10 +377,14 @@ def _samples_long(frame: pd.DataFrame, cmap: ColumnMap, source: str, notes: list
         sel = np.flatnonzero(pts == p)
         order = np.argsort(t[sel], kind="stable")
         sel = sel[order]
-        _check_order(t[sel], rows[sel], f"column {cmap.time_column!r} for point {p!r}", source)
+        _check_order(t[sel], rows[sel], f"column {tcol!r} for point {p!r}", source)
         by_point[p] = (t[sel], values[sel], rows[sel])
     axis = np.unique(t)
-    samples = {ch.name: by_point[ch.column] for ch in cmap.channels if ch.column is not None}
+    samples = {}
+    for ch in cmap.channels:
+        if ch.combination is not None:
+            t_p, x_p, rows_p = by_point[ch.columns[0]]
+            samples[ch.name] = (t_p, _combine(ch.combination, lambda _, x=x_p: x), rows_p)
     return axis, samples
 
 
@@ -520,6 +578,7 @@ def zone_data_from_frame(
         step=cmap.step,
         max_gaps=limits,
         surroundings=cmap.surroundings,
+        ignored=cmap.ignored,
         gaps=tuple(sorted(gaps, key=lambda g: (g.start, g.channel))),
         warnings=tuple(collected),
     )

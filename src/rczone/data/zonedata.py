@@ -62,6 +62,8 @@ class ZoneData:
         Stretches without values, per channel.
     warnings : tuple of str
         Suspicious-but-usable findings (also emitted as :class:`RczoneWarning`).
+    ignored : tuple of str
+        Channels of the column map that the model the data were read for does not use (not loaded).
     """
 
     t: np.ndarray
@@ -78,6 +80,7 @@ class ZoneData:
     surroundings: tuple[str, ...] = ()
     gaps: tuple[Gap, ...] = ()
     warnings: tuple[str, ...] = field(default=())
+    ignored: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         t = _readonly(self.t)
@@ -137,13 +140,17 @@ class ZoneData:
 
         Column ``time`` (UTC epoch seconds) followed by the channels in SI units -- the
         layout :func:`~rczone.data.columnmap.default_column_map` reads, so the frame can be
-        written to CSV and loaded again without a column map.
+        written to CSV and loaded again without a column map. ``attrs["ignored_channels"]`` lists
+        :attr:`ignored`, when there are any.
         """
         import pandas as pd
 
         cols = {"time": np.array(self.t)}
         cols.update({n: np.array(self.values[:, k]) for k, n in enumerate(self.channels)})
-        return pd.DataFrame(cols)
+        frame = pd.DataFrame(cols)
+        if self.ignored:
+            frame.attrs["ignored_channels"] = list(self.ignored)
+        return frame
 
     def arrays(
         self,

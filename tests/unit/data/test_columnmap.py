@@ -108,7 +108,7 @@ BAD_MAPS = [
     (
         "unknown channel",
         {"columns": {"Tii": "a"}},
-        r"unknown channel 'Tii' in \[columns\]; did you mean 'Ti'",
+        r"unknown channel 'Tii' in \[columns\] \(a typo of 'Ti'\?\)",
     ),
     (
         "unknown channel key",
@@ -118,7 +118,7 @@ BAD_MAPS = [
     (
         "column and value",
         {"columns": {"Ti": {"column": "a", "value": 3}}},
-        r"needs exactly one of 'column' or 'value'",
+        r"needs exactly one of 'column', 'expr' or 'value', got column and value",
     ),
     (
         "Tsd and surroundings",
@@ -203,5 +203,5 @@ def test_the_documented_example_is_valid():
     doc = module.__doc__
     block = doc[doc.index("::\n") + 3 : doc.index("\nChannels ``Ti``")]
     cmap = parse_column_map(tomllib.loads(textwrap.dedent(block)))
-    assert cmap.channel_names == ("Ti", "To", "Ts", "m", "Q", "m2", *DEFAULT_SURROUNDINGS)
+    assert cmap.channel_names == ("Ti", "To", "Ts", "m", "Q", "m2", "Qh", "m3", *DEFAULT_SURROUNDINGS)
     assert (cmap.timezone, cmap.step, cmap.hold_max_gap) == ("America/New_York", 300.0, 7200.0)
