@@ -157,6 +157,21 @@ def fit(
         raise typer.Exit(cal.exit_code)
 
 
+def _split(frame, spec: str | None, column_map: Path | None, *, warmup: bool) -> float | None:
+    """The time a ``--warmup`` ends or a ``--holdout`` starts, on the frame's time axis (None: not given)."""
+    if spec is None:
+        return None
+    from rczone.calibration.holdout import holdout_start, warmup_end
+
+    timezone = "UTC"
+    if column_map is not None:
+        from rczone.data.columnmap import read_column_map
+
+        timezone = read_column_map(column_map).timezone
+    t = frame["time"].to_numpy(float)
+    return (warmup_end if warmup else holdout_start)(t, spec, timezone=timezone)
+
+
 def _save(zm, path: Path) -> None:
     """A fitted model as JSON (everything) or as a model file (structure and values)."""
     from rczone.errors import ParameterError
@@ -212,15 +227,27 @@ def predict(
         str,
         typer.Option(
             "--initial-state",
-            help="Open loop: start the unmeasured nodes (walls, furniture) at temperatures estimated from"
-            " DATA ('estimated') or at the steady state for the first sample ('steady').",
+            help="Open loop: start the unmeasured nodes (walls, furniture) at the Kalman filter's estimate"
+            " after the warm-up ('warmup', default; without --warmup from the first sample only: the others"
+            " at the steady state for its inputs), at that steady state ('steady'), or at temperatures fitted"
+            " to the scored data themselves ('estimated': uses the data it scores, not a held-out score).",
         ),
-    ] = "estimated",
+    ] = "warmup",
+    warmup: Annotated[
+        str | None,
+        typer.Option(
+            "--warmup",
+            help="The first part of DATA only warms the filter up and is not scored: a duration (1d, 6h,"
+            " 30min) or the time the scored part starts (2009-02-09T12:00, in the column map's time zone).",
+        ),
+    ] = None,
 ) -> None:
     """Predict DATA with a model, open loop or k steps ahead: the error, the series and a 2-sigma band.
 
-    The band adds the process and measurement noise of a model fitted by ML (or the RMSE of an
-    LS fit) and the uncertainty of the estimates saved with a fitted model.
+    The band adds the process and measurement noise of a model fitted by ML (widened per horizon
+    by the factors its fit calibrated on its own errors; or the RMSE of an LS fit) and the
+    uncertainty of the estimates saved with a fitted model. No prediction uses a measurement after
+    its start. The series file (-o) also has every node's estimated temperature.
     """
     from rczone.calibration import prediction
     from rczone.errors import ParameterError
@@ -235,7 +262,10 @@ def predict(
             " be predicted; give fewer steps"
         )
     label = data_label(data)
-    pred = prediction(zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label)
+    start = _split(frame, warmup, column_map, warmup=True)
+    pred = prediction(
+        zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label, start=start
+    )
     console = out_console(json_out)
     for line in pred.summary_lines():
         console.print(line)
