@@ -253,21 +253,40 @@ class Prediction(Result):
         }
 
     def write(self, path: str | os.PathLike) -> None:
-        """Write :meth:`series_frame` as ``.csv`` or ``.parquet`` (atomically)."""
-        import io
+        """Write :meth:`series_frame` as ``.csv`` or ``.parquet`` (atomically).
 
-        from rczone.files.atomic import write_bytes_atomic, write_text_atomic
+        Parameters
+        ----------
+        path : str or path
+            Ends in ``.csv`` or ``.parquet``.
+        """
+        write_series(self.series_frame(), path)
 
-        p = os.fspath(path)
-        low = p.lower()
-        if low.endswith(".csv"):
-            write_text_atomic(p, self.series_frame().to_csv(index=False))
-        elif low.endswith((".parquet", ".pq")):
-            buf = io.BytesIO()
-            self.series_frame().to_parquet(buf, index=False)
-            write_bytes_atomic(p, buf.getvalue())
-        else:
-            raise DataError(f"the series file must end in .csv or .parquet, got {p!r}")
+
+def write_series(frame: pd.DataFrame, path: str | os.PathLike) -> None:
+    """Write a series frame as ``.csv`` or ``.parquet`` (atomically, :mod:`rczone.files.atomic`).
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The series.
+    path : str or path
+        Ends in ``.csv`` or ``.parquet``; any other suffix is a DataError.
+    """
+    import io
+
+    from rczone.files.atomic import write_bytes_atomic, write_text_atomic
+
+    p = os.fspath(path)
+    low = p.lower()
+    if low.endswith(".csv"):
+        write_text_atomic(p, frame.to_csv(index=False))
+    elif low.endswith((".parquet", ".pq")):
+        buf = io.BytesIO()
+        frame.to_parquet(buf, index=False)
+        write_bytes_atomic(p, buf.getvalue())
+    else:
+        raise DataError(f"the series file must end in .csv or .parquet, got {p!r}")
 
 
 @dataclass(frozen=True, eq=False)

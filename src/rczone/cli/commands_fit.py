@@ -157,7 +157,7 @@ def fit(
         raise typer.Exit(cal.exit_code)
 
 
-def _split(frame, spec: str | None, column_map: Path | None, *, warmup: bool) -> float | None:
+def _split(frame, spec: str | None, column_map: Path | None, zm, *, warmup: bool) -> float | None:
     """The time a ``--warmup`` ends or a ``--holdout`` starts, on the frame's time axis (None: not given)."""
     if spec is None:
         return None
@@ -167,7 +167,7 @@ def _split(frame, spec: str | None, column_map: Path | None, *, warmup: bool) ->
     if column_map is not None:
         from rczone.data.columnmap import read_column_map
 
-        timezone = read_column_map(column_map).timezone
+        timezone = read_column_map(column_map, zm.signal_quantities()).timezone
     t = frame["time"].to_numpy(float)
     return (warmup_end if warmup else holdout_start)(t, spec, timezone=timezone)
 
@@ -241,6 +241,22 @@ def predict(
             " 30min) or the time the scored part starts (2009-02-09T12:00, in the column map's time zone).",
         ),
     ] = None,
+    horizons: Annotated[
+        str | None,
+        typer.Option(
+            "--horizons",
+            help="Score several horizons at once, comma-separated steps ahead and 'open' (e.g."
+            " 1,12,72,open): one table of RMSE, MAE, bias and 2-sigma coverage per horizon.",
+        ),
+    ] = None,
+    baselines: Annotated[
+        bool,
+        typer.Option(
+            "--baselines",
+            help="Score 'persistence' (the measurement at the origin) and 'arx' (an ARX(2,2) model fitted by"
+            " least squares on the model's calibration data) next to the model.",
+        ),
+    ] = False,
 ) -> None:
     """Predict DATA with a model, open loop or k steps ahead: the error, the series and a 2-sigma band.
 
@@ -262,19 +278,36 @@ def predict(
             " be predicted; give fewer steps"
         )
     label = data_label(data)
-    start = _split(frame, warmup, column_map, warmup=True)
+    start = _split(frame, warmup, column_map, zm, warmup=True)
+    if horizons is not None or baselines:
+        from rczone.calibration.horizons import horizon_scores, parse_horizons
+        from rczone.report.predict import horizons_report
+
+        if steps is not None and horizons is not None:
+            raise ParameterError("give --steps or --horizons, not both")
+        chosen = parse_horizons(horizons) if horizons is not None else [steps]
+        scores = horizon_scores(
+            zm, frame, constants(const), horizons=chosen, baselines=baselines, start=start, label=label
+        )
+        _emit(scores, lambda: horizons_report(scores), json_out, out, report_dir)
+        return
+    from rczone.report.predict import prediction_report
+
     pred = prediction(
         zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label, start=start
     )
+    _emit(pred, lambda: prediction_report(pred, label, zm.label), json_out, out, report_dir)
+
+
+def _emit(result, report, json_out: Path | None, out: Path | None, report_dir: Path | None) -> None:
+    """Print a prediction result's summary, write its series, its report (built by ``report()``) and its JSON."""
     console = out_console(json_out)
-    for line in pred.summary_lines():
+    for line in result.summary_lines():
         console.print(line)
     if out is not None:
-        pred.write(out)
+        result.write(out)
         console.print(f"series written to [bold]{esc(out)}[/]")
     if report_dir is not None:
-        from rczone.report.predict import prediction_report
-
-        prediction_report(pred, label, zm.label).write(report_dir)
+        report().write(report_dir)
         console.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
-    write_json(json_out, pred.to_dict())
+    write_json(json_out, result.to_dict())
