@@ -374,3 +374,59 @@ def horizon_scores(
         data_label=label,
         warmup_samples=first,
     )
+
+
+#: Horizons a held-out part is scored at (``--holdout``), s: one step, 1 h, 6 h and 24 h, then open loop.
+HOLDOUT_HORIZONS_S = (3600.0, 21600.0, 86400.0)
+
+
+def holdout_horizons(dt: float, n_samples: int, stochastic: bool) -> list[int | None]:
+    """The horizons ``--holdout`` scores: one step, 1 h, 6 h and 24 h (those shorter than the part), open loop.
+
+    Parameters
+    ----------
+    dt : float
+        Sample interval, s.
+    n_samples : int
+        Samples of the held-out part.
+    stochastic : bool
+        Whether the model has noise levels (k-step predictions need them); without, open loop only.
+    """
+    if not stochastic:
+        return [None]
+    steps = [1, *(round(h / dt) for h in HOLDOUT_HORIZONS_S)]
+    return [*dict.fromkeys(k for k in steps if 1 <= k < n_samples), None]
+
+
+def holdout_scores(
+    model: ModelLike,
+    frame: pd.DataFrame,
+    start: float,
+    constants: Mapping[str, float] | None = None,
+    *,
+    label: str = "data",
+) -> HorizonScores:
+    """Scores of a model fitted on the samples before ``start`` on those after, with the baselines.
+
+    The calibration part warms the filter up (:func:`horizon_scores` with ``start``); the horizons
+    are :func:`holdout_horizons`.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        The model fitted on the calibration part.
+    frame : DataFrame
+        Every sample, calibration and held-out.
+    start : float
+        Time (s, on the data's axis) of the first held-out sample.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    label : str
+        The data's name.
+    """
+    zm = as_model(model)
+    t = frame["time"].to_numpy(float)
+    dt = float(np.median(np.diff(t))) if t.size > 1 else 1.0
+    stochastic = any(is_noise_name(k) for k in zm.noise)
+    horizons = holdout_horizons(dt, int((t >= start).sum()), stochastic)
+    return horizon_scores(zm, frame, constants, horizons=horizons, start=start, label=label)

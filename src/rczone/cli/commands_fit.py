@@ -108,6 +108,15 @@ def fit(
             help="Profile each R and C over a factor of 10 (with --json or --report; a few seconds)."
         ),
     ] = True,
+    holdout: Annotated[
+        str | None,
+        typer.Option(
+            "--holdout",
+            help="Fit on the data before this time (2009-02-09T12:00, in the column map's time zone) or all"
+            " but this last fraction (0.25), then score the rest: one step, 1 h, 6 h, 24 h and open loop,"
+            " next to persistence and ARX.",
+        ),
+    ] = None,
 ) -> None:
     """Identify the model's parameters from DATA.
 
@@ -123,6 +132,12 @@ def fit(
     zm = model(model_name)
     n_starts = _starts(starts)
     frame = read_frame(data, column_map, zm)
+    at = _split(frame, holdout, column_map, zm, warmup=False)
+    full = frame
+    if at is not None:
+        from rczone.calibration.holdout import split_frame
+
+        frame = split_frame(frame, at)[0]
     settings = FitSettings(
         method=method,
         free=split(free),
@@ -143,8 +158,12 @@ def fit(
     out = out_console(json_out)
     for line in cal.summary_lines():
         out.print(line)
+    payload = cal.to_dict()
+    if at is not None:
+        held = _score_holdout(cal.model, full, at, const, label, out, report_dir)
+        payload["holdout"] = held.to_dict()
     if json_out:
-        write_json(json_out, cal.to_dict())
+        write_json(json_out, payload)
     if save_model:
         _save(cal.model, save_model)
         out.print(f"model written to [bold]{esc(save_model)}[/]")
@@ -155,6 +174,21 @@ def fit(
         out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
     if cal.exit_code:
         raise typer.Exit(cal.exit_code)
+
+
+def _score_holdout(fitted, full, at: float, const, label: str, out, report_dir: Path | None):
+    """``--holdout``: score the fitted model on the held-out part, print the table, write its report."""
+    from rczone.calibration.horizons import holdout_scores
+
+    held = holdout_scores(fitted, full, at, constants(const), label=f"{label} (held out)")
+    for line in held.summary_lines():
+        out.print(line)
+    if report_dir:
+        from rczone.report.predict import horizons_report
+
+        horizons_report(held).write(report_dir / "holdout")
+        out.print(f"held-out report written to [bold]{esc(report_dir / 'holdout' / 'report.html')}[/]")
+    return held
 
 
 def _split(frame, spec: str | None, column_map: Path | None, zm, *, warmup: bool) -> float | None:
