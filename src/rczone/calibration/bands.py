@@ -42,6 +42,10 @@ TWO_SIGMA_COVERAGE = 0.9545
 #: Fewest standardized errors a factor is computed from.
 MIN_ERRORS = 50
 
+#: Most prediction origins the factors are computed from (evenly spaced): bounds the memory of the
+#: propagated covariances on long records (a year of 5-min samples) at no loss of precision.
+MAX_ORIGINS = 5000
+
 
 @dataclass(frozen=True)
 class BandScale:
@@ -153,7 +157,8 @@ def calibrate_band(
     if not steps:
         return None
     dt = float(np.median(np.diff(data.t)))
-    bands = k_step_bands(network, values, data, steps, hold)
+    origins = np.unique(np.linspace(0, N - 1, min(N, MAX_ORIGINS)).round().astype(int))
+    bands = k_step_bands(network, values, data, steps, hold, origins=origins)
     horizons, factors = [], []
     for k in steps:
         f = quantile_scale(data.y - bands[k].y_hat, bands[k].sd)

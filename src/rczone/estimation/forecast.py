@@ -83,7 +83,13 @@ def _check_steps(k: object) -> int:
 
 
 def k_step_bands(
-    network: RCNetwork, values: Mapping[str, float], data: Dataset, steps: Sequence[int], hold: str = "zoh"
+    network: RCNetwork,
+    values: Mapping[str, float],
+    data: Dataset,
+    steps: Sequence[int],
+    hold: str = "zoh",
+    *,
+    origins: np.ndarray | None = None,
 ) -> dict[int, Band]:
     """k-step-ahead predictions ``y_hat[j | j - k]`` and their noise standard deviations, for several k.
 
@@ -102,6 +108,9 @@ def k_step_bands(
         Steps ahead, each a positive integer.
     hold : {"zoh", "foh"}
         Inputs between samples.
+    origins : ndarray of int, optional
+        Predict only from these samples (increasing indices; the other targets stay NaN), to bound
+        the memory of the propagated covariances on long records. Default every sample.
 
     Returns
     -------
@@ -119,7 +128,8 @@ def k_step_bands(
     if not reach:
         return bands
     drive = input_drive(args.G0, args.G1, which, u)
-    origin = np.arange(N - reach[0])
+    origin = np.arange(N) if origins is None else np.asarray(origins, dtype=int)
+    origin = origin[(origin >= 0) & (origin < N - reach[0])]
     x = out.x_filt[origin].copy()
     P = filtered_covariances(out.P_pred, out.S, C, y)[origin]
     for i in range(reach[-1]):

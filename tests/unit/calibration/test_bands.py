@@ -22,6 +22,19 @@ def test_one_filter_pass_gives_every_horizon_of_the_single_horizon_predictor():
         np.testing.assert_array_equal(bands[k].sd, sd)
 
 
+def test_predictions_from_a_subset_of_origins_are_those_of_every_origin():
+    data = noisy_data(300)
+    values = {**THETA, **NOISE}
+    origins = np.array([0, 7, 100, 250, 295])
+    full = k_step_bands(NET1, values, data, [1, 6])
+    some = k_step_bands(NET1, values, data, [1, 6], origins=origins)
+    for k in (1, 6):
+        targets = origins[origins + k < 300] + k
+        np.testing.assert_array_equal(some[k].y_hat[targets], full[k].y_hat[targets])
+        np.testing.assert_array_equal(some[k].sd[targets], full[k].sd[targets])
+        assert np.isfinite(some[k].y_hat).sum() == len(targets)
+
+
 def test_the_factors_of_a_model_that_knows_its_noise_are_near_one():
     """Data simulated from the stochastic model itself: its band is right, the factors stay near 1."""
     data = noisy_data(1500, seed=8)
