@@ -87,3 +87,13 @@ def test_k_step_horizons_of_a_model_without_noise_levels_are_refused(zone, capsy
     assert main(["predict", str(d / "zone.toml"), str(d / "zone.csv"), "--horizons", "1,open"]) == 2
     assert "noise levels" in capsys.readouterr().err
     assert parse_horizons("open, 3,3") == [None, 3]
+
+
+def test_the_scores_follow_the_results_protocol(zone):  # noqa: F811
+    _, zm, frame, _, _ = zone
+    scores = horizon_scores(_with_noise(zm), frame, horizons=[1, None], start=NOON, parameters=False)
+    text = scores.summary()
+    assert "1 step (5 min)" in text and "open loop" in text and "arx" in text
+    assert "<table" in scores._repr_html_() and "\n" not in repr(scores)
+    assert list(scores.to_frame().columns[:4]) == ["horizon", "steps", "horizon_s", "predictor"]
+    assert json.loads(json.dumps(scores.to_dict()))["scores"][0]["predictor"] == "model"
