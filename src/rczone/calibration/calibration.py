@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from rczone.calibration.bands import calibrate_band
 from rczone.calibration.dataset import (
     ModelLike,
     as_model,
@@ -281,6 +282,7 @@ def calibrate(
     kind = method_of(method)
     noise = {k: v for k, v in values.items() if is_noise_name(k)} if kind.stochastic else {}
     initial = {k: v for k, v in values.items() if kind_of(k) == INITIAL_STATE}
+    band = calibrate_band(net, values, data, res.hold) if kind.stochastic else None
     fitted = zm.with_values(
         theta,
         noise,
@@ -297,6 +299,8 @@ def calibrate(
         flags=list(res.flags),
         stretch=stretch,
         covariance=parameter_covariance(res),
+        band_scale=band.to_dict() if band is not None else None,
+        baselines=baseline_models(data),
         **dict(provenance or {}),
     )
     if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
@@ -323,6 +327,26 @@ def parameter_covariance(res: FitResult) -> dict[str, object]:
     """
     se = np.array([res.std_errors[n] for n in res.names], dtype=float)
     return {"names": list(res.names), "matrix": (res.correlation * np.outer(se, se)).tolist()}
+
+
+def baseline_models(data: Dataset) -> dict | None:
+    """The baselines fitted on the calibration data, saved with the model: ``{"arx": ...}`` (None: too few samples).
+
+    Parameters
+    ----------
+    data : Dataset
+        The calibration data.
+    """
+    from rczone.errors import DataError
+    from rczone.estimation.baselines import fit_arx
+
+    try:
+        arx = fit_arx(data.y, data.u)
+    except DataError:
+        return None
+    return {
+        "arx": {**arx.to_dict(), "inputs": list(data.input_names), "dt_s": float(np.median(np.diff(data.t)))}
+    }
 
 
 def estimated_start(zm: ZoneModel, values: Mapping[str, float], data: Dataset, has_noise: bool):

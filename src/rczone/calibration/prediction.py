@@ -7,8 +7,9 @@ parameters' and the noise's contributions to the band, and the scores against th
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -24,6 +25,8 @@ from rczone.calibration.dataset import (
     time_index,
 )
 from rczone.errors import DataError
+from rczone.estimation.data import Dataset
+from rczone.estimation.forecast import parameter_sd
 from rczone.estimation.methods import REGISTRY
 from rczone.estimation.openloop import (
     InitialStateEstimate,
@@ -53,6 +56,25 @@ def predict(
     return open_loop_error(zm.network, dict(zm.theta), data)
 
 
+class HiddenStates(NamedTuple):
+    """Every node's estimated temperature at the scored samples.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The states (nodes).
+    x, sd : ndarray, shape (N, n)
+        Estimate and its standard deviation, K (NaN: none).
+    method : str
+        ``"smoothed"`` (Rauch-Tung-Striebel smoother) or ``"simulated"`` (open loop); the column suffix.
+    """
+
+    names: tuple[str, ...]
+    x: np.ndarray
+    sd: np.ndarray
+    method: str
+
+
 @dataclass(frozen=True, eq=False, repr=False)
 class Prediction(Result):
     """An open-loop or k-step-ahead prediction with a band of plus or minus two standard deviations.
@@ -77,6 +99,12 @@ class Prediction(Result):
         The samples' time stamps in the data's time zone (None when the data have no clock time).
     model_label, data_label : str
         Names of the model and the data, for titles.
+    states : HiddenStates, optional
+        Every node's estimated temperature (written with the series).
+    start_note : str
+        Open loop: where the prediction starts, in words.
+    warmup_samples : int
+        Samples before the first scored one that the start used (not scored).
     """
 
     t: np.ndarray
@@ -92,6 +120,9 @@ class Prediction(Result):
     index: pd.DatetimeIndex | None = None
     model_label: str = "model"
     data_label: str = "data"
+    states: HiddenStates | None = None
+    start_note: str = ""
+    warmup_samples: int = 0
 
     @property
     def horizon(self) -> str:
@@ -131,11 +162,18 @@ class Prediction(Result):
                 cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
             if self.sd_parameters is not None:
                 cols[f"{o}_sd_parameters"] = self.sd_parameters[:, j]
+        st = self.states
+        if st is not None:
+            for i, name in enumerate(st.names):
+                cols[f"{name}_{st.method}"] = st.x[:, i]
+                if np.isfinite(st.sd[:, i]).any():
+                    cols[f"{name}_{st.method}_sd"] = st.sd[:, i]
         return cols
 
     def to_frame(self) -> pd.DataFrame:
-        """Per output measured, predicted, lower and upper (2 sigma), indexed by the data's time stamps.
+        """Per output measured, predicted, lower and upper (2 sigma), then every node's estimate.
 
+        Indexed by the data's time stamps.
         Without clock time (seconds from the start), a ``time`` column in seconds instead.
         """
         if self.index is not None:
@@ -158,6 +196,8 @@ class Prediction(Result):
         from rczone.results.fit_text import esc
 
         lines = []
+        if self.start_note:
+            lines.append(f"open-loop start: {esc(self.start_note)}")
         start = self.initial_state
         if start is not None and start.sd:
             lines.append(
@@ -190,6 +230,9 @@ class Prediction(Result):
             "band": self.band_source,
             "horizon": self.horizon,
             "steps": self.steps,
+            "start": self.start_note or None,
+            "warmup_samples": self.warmup_samples,
+            "hidden_states": self.states.method if self.states is not None else None,
             "initial_state": {
                 target_of(k): {
                     "estimate_degC": v,
@@ -210,21 +253,214 @@ class Prediction(Result):
         }
 
     def write(self, path: str | os.PathLike) -> None:
-        """Write :meth:`series_frame` as ``.csv`` or ``.parquet`` (atomically)."""
-        import io
+        """Write :meth:`series_frame` as ``.csv`` or ``.parquet`` (atomically).
 
-        from rczone.files.atomic import write_bytes_atomic, write_text_atomic
+        Parameters
+        ----------
+        path : str or path
+            Ends in ``.csv`` or ``.parquet``.
+        """
+        write_series(self.series_frame(), path)
 
-        p = os.fspath(path)
-        low = p.lower()
-        if low.endswith(".csv"):
-            write_text_atomic(p, self.series_frame().to_csv(index=False))
-        elif low.endswith((".parquet", ".pq")):
-            buf = io.BytesIO()
-            self.series_frame().to_parquet(buf, index=False)
-            write_bytes_atomic(p, buf.getvalue())
-        else:
-            raise DataError(f"the series file must end in .csv or .parquet, got {p!r}")
+
+def write_series(frame: pd.DataFrame, path: str | os.PathLike) -> None:
+    """Write a series frame as ``.csv`` or ``.parquet`` (atomically, :mod:`rczone.files.atomic`).
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The series.
+    path : str or path
+        Ends in ``.csv`` or ``.parquet``; any other suffix is a DataError.
+    """
+    import io
+
+    from rczone.files.atomic import write_bytes_atomic, write_text_atomic
+
+    p = os.fspath(path)
+    low = p.lower()
+    if low.endswith(".csv"):
+        write_text_atomic(p, frame.to_csv(index=False))
+    elif low.endswith((".parquet", ".pq")):
+        buf = io.BytesIO()
+        frame.to_parquet(buf, index=False)
+        write_bytes_atomic(p, buf.getvalue())
+    else:
+        raise DataError(f"the series file must end in .csv or .parquet, got {p!r}")
+
+
+@dataclass(frozen=True, eq=False)
+class PredictionSetup:
+    """A model, its data (warm-up included) and where its predictions start: shared by every horizon.
+
+    Attributes
+    ----------
+    model : ZoneModel
+    data : Dataset
+        Every sample the predictions may use: the warm-up (``data.t < data.t[first]``), then the
+        scored samples.
+    first : int
+        Index of the first scored sample (0: no warm-up).
+    values : dict
+        Parameter values, noise levels and, open loop, the start's ``x0_*``.
+    has_noise : bool
+        Whether the model has noise levels (a likelihood fit): its predictions come from the Kalman filter.
+    start : InitialStateEstimate or None
+        The unmeasured nodes' start estimated from data (None: steady state or the filter's).
+    start_note : str
+        Where the open-loop prediction starts, in words.
+    """
+
+    model: ZoneModel
+    data: Dataset
+    first: int
+    values: dict
+    has_noise: bool
+    start: InitialStateEstimate | None
+    start_note: str
+
+    @property
+    def dt(self) -> float:
+        """The median sample interval, s."""
+        return float(np.median(np.diff(self.data.t))) if self.data.n_samples > 1 else float("nan")
+
+    def predictor(self, horizons: Sequence[int | None]) -> Callable[[Mapping[str, float]], np.ndarray]:
+        """Values to the predictions of every horizon (steps ahead; None for open loop), shape (H, N, ny)."""
+        from rczone.estimation.forecast import k_step_bands, noise_band
+
+        net, data, known = self.model.network, self.data, max(self.first, 1)
+        ks = [h for h in horizons if h is not None]
+
+        def run(v: Mapping[str, float]) -> np.ndarray:
+            bands = k_step_bands(net, v, data, ks) if ks else {}
+            out = []
+            for h in horizons:
+                if h is not None:
+                    out.append(bands[h].y_hat)
+                elif self.has_noise:
+                    out.append(noise_band(net, v, data, known=known)[0])
+                else:
+                    out.append(open_loop_error(net, v, data).y_hat)
+            return np.stack(out)
+
+        return run
+
+    def noise_sd(
+        self, horizons: Sequence[int | None], calibrated: bool = True
+    ) -> tuple[np.ndarray, list[str]]:
+        """The noise part of each horizon's band, shape (H, N, ny), and where it comes from, in words.
+
+        With noise levels: the Kalman filter's k-step (or open-loop) standard deviation, times the
+        per-horizon factor calibrated on the fit's data (:mod:`rczone.calibration.bands`) when the
+        model has one and ``calibrated``; without: the LS fit's open-loop RMSE, open loop only.
+        """
+        from rczone.calibration.bands import BandScale
+        from rczone.estimation.forecast import k_step_bands, noise_band
+
+        zm, net, data = self.model, self.model.network, self.data
+        shape = (len(horizons), *data.y.shape)
+        if not self.has_noise:
+            fitted_by = REGISTRY.get(str(zm.provenance.get("method")))
+            rmse = zm.provenance.get("rmse_K") if fitted_by is not None and not fitted_by.stochastic else None
+            if isinstance(rmse, (int, float)) and np.isfinite(rmse):
+                sd = np.full(shape, np.nan)
+                sd[[h is None for h in horizons]] = float(rmse)
+                return sd, ["the open-loop RMSE of the least-squares fit"]
+            return np.full(shape, np.nan), []
+        ks = [h for h in horizons if h is not None]
+        bands = k_step_bands(net, self.values, data, ks) if ks else {}
+        known = max(self.first, 1)
+        sd = np.stack(
+            [
+                bands[h].sd if h is not None else noise_band(net, self.values, data, known=known)[1]
+                for h in horizons
+            ]
+        )
+        saved = zm.provenance.get("band_scale")
+        if not calibrated or saved is None:
+            return sd, ["the model's noise levels"]
+        scale = BandScale.from_dict(saved)
+        factors = [scale.at(None if h is None else h * self.dt) for h in horizons]
+        sd = sd * np.array(factors)[:, None, None]
+        what = ", ".join(f"{f:.2f}" for f in factors)
+        return sd, [f"the model's noise levels times {what}, calibrated on the fit's own errors"]
+
+
+def prediction_setup(
+    model: ModelLike,
+    frame: pd.DataFrame,
+    constants: Mapping[str, float] | None = None,
+    *,
+    start: float | None = None,
+    initial_state: str = "warmup",
+) -> PredictionSetup:
+    """The data and start of a model's predictions; the samples before ``start`` only warm the filter up.
+
+    Parameters
+    ----------
+    model : ZoneModel, RCNetwork, str or path
+    frame : DataFrame
+        The data, warm-up included.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    start : float, optional
+        Time (s, on the data's axis) of the first scored sample; default the first sample.
+    initial_state : {"warmup", "steady", "estimated"}
+        Open loop: where the unmeasured nodes start (see :func:`prediction`).
+    """
+    zm = as_model(model)
+    if initial_state not in INITIAL_STATES:
+        raise DataError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
+    data = dataset(zm, frame, constants)
+    first = 0 if start is None else int(np.searchsorted(data.t, start))
+    if first >= data.n_samples:
+        raise DataError("the warm-up covers every sample: nothing is left to predict; give a shorter warm-up")
+    if initial_state != "warmup" and first:
+        data, first = window(data, first), 0
+    values = {**zm.theta, **noise_values(zm)}
+    has_noise = any(is_noise_name(k) for k in zm.noise)
+    begin = None
+    if initial_state == "estimated":
+        begin = estimated_start(zm, values, data, has_noise)
+        note = "the unmeasured nodes start where the scored data say (fitted to them: not a held-out score)"
+    elif first == 0:
+        note = (
+            "the first sample only: the measured nodes at their measurement, the others at the steady"
+            " state for its inputs"
+        )
+    elif has_noise:
+        note = f"the Kalman filter's estimate after {first} warm-up samples"
+    else:
+        y = np.array(data.y)
+        y[first:] = np.nan
+        masked = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+        begin = estimated_start(zm, values, masked, has_noise)
+        note = f"the unmeasured nodes' start fitted to the {first} warm-up samples"
+    if begin is not None:
+        values.update(begin.values)
+        if has_noise:
+            values.update({initial_spread_name(target_of(k)): v for k, v in begin.sd.items()})
+    return PredictionSetup(zm, data, first, values, has_noise, begin, note)
+
+
+def window(data: Dataset, first: int) -> Dataset:
+    """The samples of ``data`` from index ``first`` on.
+
+    Parameters
+    ----------
+    data : Dataset
+    first : int
+        Index of the first sample kept.
+    """
+    return Dataset(
+        data.t[first:],
+        data.u[first:],
+        data.m[first:] if data.m is not None and data.m.size else None,
+        data.y[first:],
+        data.input_names,
+        data.flow_names,
+        data.output_names,
+    )
 
 
 def prediction(
@@ -233,107 +469,161 @@ def prediction(
     constants: Mapping[str, float] | None = None,
     steps: int | None = None,
     parameters: bool = True,
-    initial_state: str = "estimated",
+    initial_state: str = "warmup",
     label: str = "data",
+    *,
+    start: float | None = None,
+    calibrated: bool = True,
 ) -> Prediction:
     """Open-loop (or ``steps``-ahead) prediction of ``model`` on data with a two-sigma band.
 
     The band has two parts (:mod:`rczone.estimation.forecast`):
 
     * the noise: from the model's noise levels when it has them (a likelihood fit: process noise
-      accumulated along the prediction plus measurement noise), else, open loop, from the
-      open-loop RMSE of the least-squares fit that produced the model (constant), else none;
+      accumulated along the prediction plus measurement noise), widened or narrowed per horizon by
+      the factors the fit calibrated on its own data (:mod:`rczone.calibration.bands`), else, open
+      loop, from the open-loop RMSE of the least-squares fit that produced the model (constant),
+      else none;
     * the estimates: their covariance saved with a fitted model (``provenance["covariance"]``),
       carried to the prediction by the delta method (``parameters=False`` leaves it out).
 
+    No prediction uses a measurement after its origin: k steps ahead, the filter's state at
+    ``j - k``; open loop, the warm-up's (or the first sample's) measurements only.
+
     Parameters
     ----------
+    model : ZoneModel, RCNetwork, str or path
+    frame : DataFrame
+        The data, warm-up included.
+    constants : mapping, optional
+        Inputs held constant (SI units).
     steps : int, optional
         Predict ``y[j]`` from the measurements up to ``j - steps`` (Kalman filter; needs the
-        model's noise levels). Default: open loop from the first measurement.
-    initial_state : {"estimated", "steady"}
-        Open loop: where the unmeasured nodes start. ``"estimated"`` (default): their initial
-        temperatures estimated from these data around the conditional steady state
-        (:func:`~rczone.estimation.openloop.estimate_initial_state`, prior standard deviation
-        the model's ``sigma_x0`` or 1 K), and the band starts from the estimate's uncertainty;
-        ``"steady"``: at the steady state for the first sample's inputs, which shows a slow node's
-        unknown start as a bias lasting its time constant.
+        model's noise levels). Default: open loop.
+    parameters : bool
+        Include the estimates' uncertainty in the band.
+    initial_state : {"warmup", "steady", "estimated"}
+        Open loop: where the unmeasured nodes start. ``"warmup"`` (default): the Kalman filter's
+        estimate at the end of the warm-up (the samples before ``start``), as a controller has it (a
+        model without noise levels: their start fitted to the warm-up's measurements, then simulated
+        through it); without a warm-up, from the first sample only: the measured nodes at their
+        measurement, the others at the steady state for its inputs. ``"steady"``: that, ignoring
+        any warm-up. ``"estimated"``: their start fitted to the scored data themselves
+        (:func:`~rczone.estimation.openloop.estimate_initial_state`): it uses the samples it then
+        scores, so it is a check of the model's dynamics, not a held-out score.
     label : str
         The data's name, for titles.
-    """
-    from rczone.estimation.forecast import noise_band, parameter_sd
+    start : float, optional
+        Time (s, on the data's axis) of the first scored sample; the samples before it warm the
+        filter up and are not scored.
+    calibrated : bool
+        Apply the fit's per-horizon band factors (when the model has them).
 
-    zm = as_model(model)
-    data = dataset(zm, frame, constants)
-    net = zm.network
-    values = {**zm.theta, **noise_values(zm)}
-    has_noise = any(is_noise_name(k) for k in zm.noise)
-    if steps is not None and not has_noise:
+    Returns
+    -------
+    Prediction
+    """
+    if steps is not None and not any(is_noise_name(k) for k in as_model(model).noise):
         raise DataError(
             f"a {steps}-step prediction needs the model's noise levels; fit the model by ML"
             " (rczone fit --method ml --save-model ...) or predict open loop"
         )
-    if initial_state not in INITIAL_STATES:
-        raise DataError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
-    start = None
-    if steps is None and initial_state == "estimated":
-        start = estimated_start(zm, values, data, has_noise)
-        values.update(start.values)
-        if has_noise:
-            values.update({initial_spread_name(target_of(k)): v for k, v in start.sd.items()})
-    sources = []
-    if has_noise:
-        y_hat, sd = noise_band(net, values, data, steps)
-        sources.append("the model's noise levels")
-    else:
-        y_hat = open_loop_error(net, {**zm.theta, **values}, data).y_hat
-        fitted_by = REGISTRY.get(str(zm.provenance.get("method")))
-        rmse = zm.provenance.get("rmse_K") if fitted_by is not None and not fitted_by.stochastic else None
-        if isinstance(rmse, (int, float)) and np.isfinite(rmse):
-            sd = np.full_like(y_hat, float(rmse))
-            sources.append("the open-loop RMSE of the least-squares fit")
-        else:
-            sd = np.full_like(y_hat, np.nan)
-    if not np.all(np.isfinite(y_hat[steps or 0 :])):
+    setup = prediction_setup(model, frame, constants, start=start, initial_state=initial_state)
+    return setup_prediction(
+        setup, steps, parameters=parameters, calibrated=calibrated, frame=frame, label=label
+    )
+
+
+def setup_prediction(
+    setup: PredictionSetup,
+    steps: int | None,
+    *,
+    parameters: bool = True,
+    calibrated: bool = True,
+    frame: pd.DataFrame | None = None,
+    label: str = "data",
+) -> Prediction:
+    """The prediction of one horizon from a :class:`PredictionSetup` (see :func:`prediction`).
+
+    Parameters
+    ----------
+    setup : PredictionSetup
+    steps : int or None
+        Steps ahead; None for open loop.
+    parameters : bool
+        Include the estimates' uncertainty in the band.
+    calibrated : bool
+        Apply the fit's per-horizon band factors.
+    frame : DataFrame, optional
+        The data's frame, for its time stamps.
+    label : str
+        The data's name.
+    """
+    zm, data, first = setup.model, setup.data, setup.first
+    y_hat = setup.predictor([steps])(setup.values)[0]
+    sd, sources = setup.noise_sd([steps], calibrated)
+    sd = sd[0]
+    if not np.all(np.isfinite(y_hat[max(first, steps or 0) :])):
         raise DataError("the model's prediction is not finite; its values are not usable on these data")
     sd_par = None
     cov = saved_covariance(zm) if parameters else None
     if cov is not None:
         names, matrix = cov
-        if has_noise:
-
-            def predictor(v: Mapping[str, float]) -> np.ndarray:
-                return noise_band(net, v, data, steps)[0]
-        else:
-
-            def predictor(v: Mapping[str, float]) -> np.ndarray:
-                return open_loop_error(net, v, data).y_hat
-
-        sd_par = parameter_sd(predictor, values, names, matrix)
+        predictor = setup.predictor([steps])
+        sd_par = parameter_sd(lambda v: predictor(v)[0], setup.values, names, matrix)[first:]
         sources.append("the estimates' covariance")
+    sd = sd[first:]
     total = sd if sd_par is None else np.sqrt(np.where(np.isfinite(sd), sd**2, 0.0) + sd_par**2)
     source = (
         " and ".join(sources) if sources else "none: the model has no noise levels (fit it by ML for a band)"
     )
     return Prediction(
-        data.t,
-        data.y,
-        y_hat,
+        data.t[first:],
+        data.y[first:],
+        y_hat[first:],
         total,
-        net.outputs,
+        zm.network.outputs,
         source,
         sd,
         sd_par,
         steps,
-        start,
-        index=time_index(frame, data.t),
+        setup.start,
+        index=time_index(frame, data.t[first:]) if frame is not None else None,
         model_label=zm.label,
         data_label=label,
+        states=hidden_states(setup),
+        start_note=setup.start_note if steps is None else "",
+        warmup_samples=first,
     )
 
 
+def hidden_states(setup: PredictionSetup) -> HiddenStates:
+    """Every node's estimated temperature over the scored samples, with its standard deviation.
+
+    A model with noise levels: the Rauch-Tung-Striebel smoother's estimates ``x[j | N]`` (from
+    every measurement of the record, before and after the sample:
+    :func:`rczone.estimation.smoother.smooth_states`), the best estimate to compare with an
+    embedded sensor; without: the open-loop simulation from the prediction's start (no standard
+    deviation). The scores never use them.
+
+    Parameters
+    ----------
+    setup : PredictionSetup
+    """
+    from rczone.estimation.costs import simulate_output
+    from rczone.estimation.smoother import smooth_states
+
+    net, first = setup.model.network, setup.first
+    if setup.has_noise:
+        est = smooth_states(net, setup.values, setup.data)
+        sd = np.sqrt(np.maximum(np.einsum("kii->ki", est.P), 0.0))
+        return HiddenStates(net.state_names, est.x[first:], sd[first:], "smoothed")
+    x, _ = simulate_output(net, setup.values, setup.data)
+    return HiddenStates(net.state_names, x[first:], np.full_like(x[first:], np.nan), "simulated")
+
+
 #: Where an open-loop prediction starts its unmeasured nodes (:func:`prediction`).
-INITIAL_STATES = ("estimated", "steady")
+INITIAL_STATES = ("warmup", "steady", "estimated")
 
 
 def noise_values(zm: ZoneModel) -> dict[str, float]:

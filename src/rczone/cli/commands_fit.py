@@ -108,6 +108,15 @@ def fit(
             help="Profile each R and C over a factor of 10 (with --json or --report; a few seconds)."
         ),
     ] = True,
+    holdout: Annotated[
+        str | None,
+        typer.Option(
+            "--holdout",
+            help="Fit on the data before this time (2009-02-09T12:00, in the column map's time zone) or all"
+            " but this last fraction (0.25), then score the rest: one step, 1 h, 6 h, 24 h and open loop,"
+            " next to persistence and ARX.",
+        ),
+    ] = None,
 ) -> None:
     """Identify the model's parameters from DATA.
 
@@ -123,6 +132,12 @@ def fit(
     zm = model(model_name)
     n_starts = _starts(starts)
     frame = read_frame(data, column_map, zm)
+    at = _split(frame, holdout, column_map, zm, warmup=False)
+    full = frame
+    if at is not None:
+        from rczone.calibration.holdout import split_frame
+
+        frame = split_frame(frame, at)[0]
     settings = FitSettings(
         method=method,
         free=split(free),
@@ -143,8 +158,12 @@ def fit(
     out = out_console(json_out)
     for line in cal.summary_lines():
         out.print(line)
+    payload = cal.to_dict()
+    if at is not None:
+        held = _score_holdout(cal.model, full, at, const, label, out, report_dir)
+        payload["holdout"] = held.to_dict()
     if json_out:
-        write_json(json_out, cal.to_dict())
+        write_json(json_out, payload)
     if save_model:
         _save(cal.model, save_model)
         out.print(f"model written to [bold]{esc(save_model)}[/]")
@@ -155,6 +174,36 @@ def fit(
         out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
     if cal.exit_code:
         raise typer.Exit(cal.exit_code)
+
+
+def _score_holdout(fitted, full, at: float, const, label: str, out, report_dir: Path | None):
+    """``--holdout``: score the fitted model on the held-out part, print the table, write its report."""
+    from rczone.calibration.horizons import holdout_scores
+
+    held = holdout_scores(fitted, full, at, constants(const), label=f"{label} (held out)")
+    for line in held.summary_lines():
+        out.print(line)
+    if report_dir:
+        from rczone.report.predict import horizons_report
+
+        horizons_report(held).write(report_dir / "holdout")
+        out.print(f"held-out report written to [bold]{esc(report_dir / 'holdout' / 'report.html')}[/]")
+    return held
+
+
+def _split(frame, spec: str | None, column_map: Path | None, zm, *, warmup: bool) -> float | None:
+    """The time a ``--warmup`` ends or a ``--holdout`` starts, on the frame's time axis (None: not given)."""
+    if spec is None:
+        return None
+    from rczone.calibration.holdout import holdout_start, warmup_end
+
+    timezone = "UTC"
+    if column_map is not None:
+        from rczone.data.columnmap import read_column_map
+
+        timezone = read_column_map(column_map, zm.signal_quantities()).timezone
+    t = frame["time"].to_numpy(float)
+    return (warmup_end if warmup else holdout_start)(t, spec, timezone=timezone)
 
 
 def _save(zm, path: Path) -> None:
@@ -212,15 +261,43 @@ def predict(
         str,
         typer.Option(
             "--initial-state",
-            help="Open loop: start the unmeasured nodes (walls, furniture) at temperatures estimated from"
-            " DATA ('estimated') or at the steady state for the first sample ('steady').",
+            help="Open loop: start the unmeasured nodes (walls, furniture) at the Kalman filter's estimate"
+            " after the warm-up ('warmup', default; without --warmup from the first sample only: the others"
+            " at the steady state for its inputs), at that steady state ('steady'), or at temperatures fitted"
+            " to the scored data themselves ('estimated': uses the data it scores, not a held-out score).",
         ),
-    ] = "estimated",
+    ] = "warmup",
+    warmup: Annotated[
+        str | None,
+        typer.Option(
+            "--warmup",
+            help="The first part of DATA only warms the filter up and is not scored: a duration (1d, 6h,"
+            " 30min) or the time the scored part starts (2009-02-09T12:00, in the column map's time zone).",
+        ),
+    ] = None,
+    horizons: Annotated[
+        str | None,
+        typer.Option(
+            "--horizons",
+            help="Score several horizons at once, comma-separated steps ahead and 'open' (e.g."
+            " 1,12,72,open): one table of RMSE, MAE, bias and 2-sigma coverage per horizon.",
+        ),
+    ] = None,
+    baselines: Annotated[
+        bool,
+        typer.Option(
+            "--baselines",
+            help="Score 'persistence' (the measurement at the origin) and 'arx' (an ARX(2,2) model fitted by"
+            " least squares on the model's calibration data) next to the model.",
+        ),
+    ] = False,
 ) -> None:
     """Predict DATA with a model, open loop or k steps ahead: the error, the series and a 2-sigma band.
 
-    The band adds the process and measurement noise of a model fitted by ML (or the RMSE of an
-    LS fit) and the uncertainty of the estimates saved with a fitted model.
+    The band adds the process and measurement noise of a model fitted by ML (widened per horizon
+    by the factors its fit calibrated on its own errors; or the RMSE of an LS fit) and the
+    uncertainty of the estimates saved with a fitted model. No prediction uses a measurement after
+    its start. The series file (-o) also has every node's estimated temperature.
     """
     from rczone.calibration import prediction
     from rczone.errors import ParameterError
@@ -235,16 +312,36 @@ def predict(
             " be predicted; give fewer steps"
         )
     label = data_label(data)
-    pred = prediction(zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label)
+    start = _split(frame, warmup, column_map, zm, warmup=True)
+    if horizons is not None or baselines:
+        from rczone.calibration.horizons import horizon_scores, parse_horizons
+        from rczone.report.predict import horizons_report
+
+        if steps is not None and horizons is not None:
+            raise ParameterError("give --steps or --horizons, not both")
+        chosen = parse_horizons(horizons) if horizons is not None else [steps]
+        scores = horizon_scores(
+            zm, frame, constants(const), horizons=chosen, baselines=baselines, start=start, label=label
+        )
+        _emit(scores, lambda: horizons_report(scores), json_out, out, report_dir)
+        return
+    from rczone.report.predict import prediction_report
+
+    pred = prediction(
+        zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label, start=start
+    )
+    _emit(pred, lambda: prediction_report(pred, label, zm.label), json_out, out, report_dir)
+
+
+def _emit(result, report, json_out: Path | None, out: Path | None, report_dir: Path | None) -> None:
+    """Print a prediction result's summary, write its series, its report (built by ``report()``) and its JSON."""
     console = out_console(json_out)
-    for line in pred.summary_lines():
+    for line in result.summary_lines():
         console.print(line)
     if out is not None:
-        pred.write(out)
+        result.write(out)
         console.print(f"series written to [bold]{esc(out)}[/]")
     if report_dir is not None:
-        from rczone.report.predict import prediction_report
-
-        prediction_report(pred, label, zm.label).write(report_dir)
+        report().write(report_dir)
         console.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
-    write_json(json_out, pred.to_dict())
+    write_json(json_out, result.to_dict())

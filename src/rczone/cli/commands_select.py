@@ -75,6 +75,14 @@ def select(
         Path | None,
         typer.Option("--save-model", help="Write the selected fitted model (.json or .toml)."),
     ] = None,
+    holdout: Annotated[
+        str | None,
+        typer.Option(
+            "--holdout",
+            help="Select on the data before this time (2009-02-09T12:00) or all but this last fraction"
+            " (0.25), then score the selected model on the rest next to persistence and ARX.",
+        ),
+    ] = None,
 ) -> None:
     """Fit candidate models to DATA by maximum likelihood on the same samples and choose one.
 
@@ -88,7 +96,7 @@ def select(
     """
     import dataclasses
 
-    from rczone.cli.commands_fit import _save, _starts
+    from rczone.cli.commands_fit import _save, _score_holdout, _split, _starts
     from rczone.cli.common import check_seed
     from rczone.cli.console import console as make_console
     from rczone.errors import ParameterError
@@ -115,6 +123,12 @@ def select(
         out.print("candidates: " + ", ".join(esc(zm.label) for zm in zms))
     if len(zms) < 2:
         raise ParameterError("give at least two candidate models (--model A --model B ...)")
+    full = frame
+    at = _split(frame, holdout, column_map, zms[0], warmup=False)
+    if at is not None:
+        from rczone.calibration.holdout import split_frame
+
+        frame = split_frame(frame, at)[0]
 
     def progress(name: str) -> None:
         console.print(f"fitting {esc(name)} (ML)")
@@ -135,8 +149,12 @@ def select(
     sel = dataclasses.replace(sel, data_label=label, source=str(data), noise=noise.strip().lower())
     for line in sel.summary_lines():
         out.print(line)
-    write_json(json_out, sel.to_dict())
+    payload = sel.to_dict()
     best = sel.best
+    if at is not None:
+        held = _score_holdout(best.calibration.model, full, at, const, label, out, report_dir)
+        payload["holdout"] = held.to_dict()
+    write_json(json_out, payload)
     if save_model:
         _save(best.calibration.model, save_model)
         out.print(f"model written to [bold]{esc(save_model)}[/]")

@@ -18,12 +18,15 @@ References
    section 9.6 (variance of the estimated model's output) and 7.3 (k-step-ahead predictors).
 .. [2] H. Madsen, *Time Series Analysis*, Chapman & Hall 2007, section 10.3 (k-step prediction
    with the Kalman filter).
+.. [3] S. Saerkkae, *Bayesian Filtering and Smoothing*, Cambridge University Press 2013,
+   chapters 4 and 8 (Kalman filter and Rauch-Tung-Striebel smoother).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -38,51 +41,116 @@ from rczone.network import RCNetwork
 SENSITIVITY_STEP = 0.01
 
 
+class Band(NamedTuple):
+    """A prediction and its standard deviation, each of shape (N, ny) (NaN where there is none)."""
+
+    y_hat: np.ndarray
+    sd: np.ndarray
+
+
+def _check_steps(k: object) -> int:
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+        raise ParameterError(f"k must be a positive integer (steps ahead), got {k!r}")
+    return int(k)
+
+
+def k_step_bands(
+    network: RCNetwork,
+    values: Mapping[str, float],
+    data: Dataset,
+    steps: Sequence[int],
+    hold: str = "zoh",
+    *,
+    origins: np.ndarray | None = None,
+) -> dict[int, Band]:
+    """k-step-ahead predictions ``y_hat[j | j - k]`` and their noise standard deviations, for several k.
+
+    One Kalman filter pass: the filtered state and covariance at every origin ``j - k`` are
+    propagated with the known inputs and the process noise, and read off after each requested
+    number of steps (the k-step predictor from the filtered state, Madsen 2007, section 10.3).
+    ``values`` must hold the noise levels. The first ``k`` samples have no k-step prediction (NaN).
+
+    Parameters
+    ----------
+    network : RCNetwork
+    values : mapping
+        Parameter values and noise levels.
+    data : Dataset
+    steps : sequence of int
+        Steps ahead, each a positive integer.
+    hold : {"zoh", "foh"}
+        Inputs between samples.
+    origins : ndarray of int, optional
+        Predict only from these samples (increasing indices; the other targets stay NaN), to bound
+        the memory of the propagated covariances on long records. Default every sample.
+
+    Returns
+    -------
+    dict
+        Steps ahead to :class:`Band`.
+    """
+    ks = sorted({_check_steps(k) for k in steps})
+    data.check_against(network)
+    args = filter_arrays(network, values, data, hold)
+    Phi, Qd, which, u, y, C, R = args.Phi, args.Qd, args.which, args.u, args.y, args.C, args.R
+    out = kalman_filter_arrays(args)
+    N = y.shape[0]
+    bands = {k: Band(np.full(y.shape, np.nan), np.full(y.shape, np.nan)) for k in ks}
+    reach = [k for k in ks if k < N]
+    if not reach:
+        return bands
+    drive = input_drive(args.G0, args.G1, which, u)
+    origin = np.arange(N) if origins is None else np.asarray(origins, dtype=int)
+    origin = origin[(origin >= 0) & (origin < N - reach[0])]
+    x = out.x_filt[origin].copy()
+    P = out.P_filt[origin]
+    for i in range(reach[-1]):
+        live = origin + i + 1 < N  # origins whose next step is still inside the data
+        origin, x, P = origin[live], x[live], P[live]
+        w = which[origin + i]
+        x = np.einsum("kij,kj->ki", Phi[w], x) + drive[origin + i]
+        P = np.einsum("kij,kjl,kml->kim", Phi[w], P, Phi[w]) + Qd[w]
+        if i + 1 in reach:
+            target = origin + i + 1
+            band = bands[i + 1]
+            band.y_hat[target] = x @ C.T + u[target] @ args.D.T
+            S = np.einsum("ij,kjl,ml->kim", C, P, C) + R
+            band.sd[target] = np.sqrt(np.einsum("kii->ki", S))
+    return bands
+
+
 def k_step_band(
     network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int, hold: str = "zoh"
 ) -> tuple[np.ndarray, np.ndarray]:
     """k-step-ahead prediction ``y_hat[j | j - k]`` and its standard deviation from the noise.
 
     The filtered state and covariance at ``j - k`` are propagated ``k`` intervals with the known
-    inputs and the process noise; ``values`` must hold the noise levels. The first ``k``
-    samples have no prediction (NaN).
+    inputs and the process noise (:func:`k_step_bands` for one ``k``); ``values`` must hold the
+    noise levels. The first ``k`` samples have no prediction (NaN).
 
     Returns
     -------
     y_hat, sd : ndarray, shape (N, ny)
     """
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-        raise ParameterError(f"k must be a positive integer (steps ahead), got {k!r}")
-    data.check_against(network)
-    args = filter_arrays(network, values, data, hold)
-    Phi, Qd, which, u, y, C, R = args.Phi, args.Qd, args.which, args.u, args.y, args.C, args.R
-    out = kalman_filter_arrays(args)
-    N = y.shape[0]
-    y_hat = np.full(y.shape, np.nan)
-    sd = np.full(y.shape, np.nan)
-    if k >= N:
-        return y_hat, sd
-    drive = input_drive(args.G0, args.G1, which, u)
-    origin = np.arange(N - k)
-    x = out.x_filt[origin].copy()
-    P = out.P_filt[origin]
-    for i in range(k):
-        w = which[origin + i]
-        x = np.einsum("kij,kj->ki", Phi[w], x) + drive[origin + i]
-        P = np.einsum("kij,kjl,kml->kim", Phi[w], P, Phi[w]) + Qd[w]
-    target = origin + k
-    y_hat[target] = x @ C.T + u[target] @ args.D.T
-    S = np.einsum("ij,kjl,ml->kim", C, P, C) + R
-    sd[target] = np.sqrt(np.einsum("kii->ki", S))
-    return y_hat, sd
+    k = _check_steps(k)
+    return tuple(k_step_bands(network, values, data, [k], hold)[k])
 
 
 def noise_band(
-    network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int | None = None, hold: str = "zoh"
+    network: RCNetwork,
+    values: Mapping[str, float],
+    data: Dataset,
+    k: int | None = None,
+    hold: str = "zoh",
+    *,
+    known: int = 1,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Prediction and its noise standard deviation: ``k`` steps ahead, or open loop (``k=None``)."""
+    """Prediction and its noise standard deviation: ``k`` steps ahead, or open loop (``k=None``).
+
+    Open loop, the filter uses the first ``known`` measurements (a warm-up) and then only predicts.
+    """
     if k is None:
-        return open_loop_band(network, values, data, hold)
+        return open_loop_band(network, values, data, hold, known=known)
     return k_step_band(network, values, data, k, hold)
 
 

@@ -181,12 +181,13 @@ def estimate_initial_state(
 
 
 def open_loop_band(
-    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh", *, known: int = 1
 ) -> tuple[np.ndarray, np.ndarray]:
     """Open-loop prediction and its standard deviation from the model's noise levels.
 
     The Kalman filter of the stochastic model is run with every measurement after the first
-    removed: it conditions the state on the first measurement and then only predicts, so its
+    ``known`` ones removed (default: all but the first; a warm-up's length to start from the
+    filter's estimate at its end): it conditions the state on them and then only predicts, so its
     mean is the open-loop simulation and its innovation covariance ``C P C' + R`` is the variance
     of the measurement around it (process noise accumulated since the start, plus measurement
     noise). ``values`` must hold the noise levels (``sigma_v``, ``sigma_w_*``, ``sigma_x0_*``).
@@ -197,7 +198,7 @@ def open_loop_band(
     sd : ndarray, shape (N, ny)
     """
     y = np.full_like(data.y, np.nan)
-    y[0] = data.y[0]
+    y[:known] = data.y[:known]
     masked = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
     arrays = filter_arrays(network, values, masked, hold)
     out = kalman_filter_arrays(arrays)

@@ -7,6 +7,7 @@ import html
 import numpy as np
 
 from rczone.calibration import Prediction
+from rczone.calibration.horizons import HorizonScores
 from rczone.network.stochastic import target_of
 from rczone.report.html import Report
 from rczone.report.html import ReportFigure as Figure
@@ -101,4 +102,65 @@ def prediction_report(pred: Prediction, data_name: str, model_name: str) -> Repo
     rep.figure(
         "prediction", prediction_figure(pred, f"{model_name} on {data_name}"), "Measured and predicted"
     )
+    return rep
+
+
+def horizons_figure(scores: HorizonScores) -> Figure:
+    """RMSE and 2-sigma coverage against the horizon: the model, persistence and ARX (open loop at the right)."""
+    from rczone.calibration.horizons import MODEL
+
+    fig = Figure(figsize=(8.5, 5.6))
+    ax_rmse, ax_cov = fig.subplots(2, 1, sharex=True)
+    table = scores.table
+    labels = list(dict.fromkeys(table["horizon"]))
+    pos = np.arange(len(labels))
+    styles = {"model": ("#2b6cb0", "o"), "persistence": ("#718096", "s"), "arx": ("#c05621", "^")}
+    for (name, output), rows in table.groupby(["predictor", "output"], sort=False):
+        x = [labels.index(h) for h in rows["horizon"]]
+        colour, marker = styles.get(name, ("black", "x"))
+        tag = name if len(scores.outputs) == 1 else f"{name} ({output})"
+        ax_rmse.plot(x, rows["rmse_K"], marker=marker, color=colour, label=tag)
+        if name == MODEL:
+            ax_cov.plot(x, 100 * rows["coverage_2sigma"], marker=marker, color=colour, label=tag)
+    ax_rmse.set_ylabel("RMSE (K)")
+    ax_rmse.grid(alpha=0.3)
+    ax_rmse.legend(fontsize=8, loc="best")
+    ax_cov.axhspan(90, 98, color="#c6f6d5", alpha=0.6, lw=0, label="90-98 %")
+    ax_cov.axhline(95.45, color="grey", lw=0.8, ls="--", label="nominal 95.45 %")
+    ax_cov.set_ylabel("inside ±2σ (%)")
+    ax_cov.set_ylim(0, 102)
+    ax_cov.grid(alpha=0.3)
+    ax_cov.legend(fontsize=8, loc="lower left")
+    ax_cov.set_xticks(pos, labels, rotation=20, fontsize=8)
+    ax_cov.set_xlabel("horizon")
+    fig.suptitle(f"{scores.model_label} on {scores.data_label}: error against horizon")
+    fig.tight_layout()
+    return fig
+
+
+def horizons_report(scores: HorizonScores) -> Report:
+    """A report with the scores table per horizon and the figure of error against horizon."""
+    rep = Report(
+        f"Prediction of {scores.model_label} on {scores.data_label} at {len(scores.horizons)} horizons"
+    )
+    rep.paragraph(
+        f"{len(scores.t)} samples scored"
+        + (f" after {scores.warmup_samples} warm-up samples (not scored)" if scores.warmup_samples else "")
+        + f". Open-loop start: {html.escape(scores.start_note)}. Band: {html.escape(scores.band_source)}."
+        f" Baselines: {html.escape(scores.baseline_note)}."
+    )
+    rows = [
+        {
+            "horizon": r.horizon,
+            **({"output": r.output} if len(scores.outputs) > 1 else {}),
+            "predictor": r.predictor,
+            "RMSE (K)": r.rmse_K,
+            "MAE (K)": r.mae_K,
+            "bias (K)": r.bias_K,
+            "inside ±2σ": f"{r.coverage_2sigma:.0%}" if np.isfinite(r.coverage_2sigma) else "",
+        }
+        for r in scores.table.itertuples()
+    ]
+    rep.table(rows, "Scores per horizon (bias: measured minus predicted)", digits=3)
+    rep.figure("horizons", horizons_figure(scores), "Error and band coverage against the horizon")
     return rep

@@ -148,7 +148,7 @@ def predict(
     data: pd.DataFrame | PathLike,
     *,
     steps: int | None = None,
-    initial_state: str = "estimated",
+    initial_state: str = "warmup",
     constants: Mapping[str, float] | None = None,
     columns: PathLike | None = None,
     parameters: bool = True,
@@ -164,8 +164,9 @@ def predict(
         As for :func:`fit`.
     steps : int, optional
         Steps ahead from the Kalman filter (a model fitted by ML); default open loop.
-    initial_state : {"estimated", "steady"}
-        Open loop: where the unmeasured nodes start.
+    initial_state : {"warmup", "steady", "estimated"}
+        Open loop: where the unmeasured nodes start (:func:`rczone.calibration.prediction`; the
+        default uses no sample it scores).
     constants : mapping, optional
         Inputs held constant (SI units).
     columns : str or path, optional

@@ -47,7 +47,8 @@ def test_fit_saves_a_model_that_predict_and_a_second_fit_use(tmp_path, capsys) -
     )
     out = capsys.readouterr().out
     d = json.loads(out[out.index("{") :])
-    assert d["band"] == "the model's noise levels and the estimates' covariance"
+    assert d["band"].startswith("the model's noise levels times ")  # the fit's calibrated factor
+    assert d["band"].endswith("calibrated on the fit's own errors and the estimates' covariance")
     assert 0.5 < d["coverage_2sigma"]["Ti"] <= 1.0
     df = pd.read_csv(series)
     assert list(df.columns) == [
@@ -58,6 +59,10 @@ def test_fit_saves_a_model_that_predict_and_a_second_fit_use(tmp_path, capsys) -
         "Ti_upper",
         "Ti_sd_noise",
         "Ti_sd_parameters",
+        "Ti_smoothed",  # every node's smoothed temperature and its sd
+        "Ti_smoothed_sd",
+        "Tw_smoothed",
+        "Tw_smoothed_sd",
     ]
     assert (df["Ti_lower"] < df["Ti_predicted"]).all() and (df["Ti_predicted"] < df["Ti_upper"]).all()
     assert (tmp_path / "rep" / "report.html").exists()

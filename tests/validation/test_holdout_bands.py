@@ -1,0 +1,89 @@
+"""Held-out bands on the Bacher & Madsen PRBS house (issue 22, defect 4): coverage per horizon.
+
+The data stay outside the project (see their PROVENANCE.md); the test reads them from the shared
+folder through :func:`tests.shared_data.require` (skips without them, fails under ``CI=true``). The
+default ML fit of TiTe on the first four days, then ``rczone predict --horizons`` on the last two
+with the calibration days as warm-up, through the command line. docs/validation.md has the table.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from rczone.calibration.horizons import horizon_scores
+from rczone.cli.main import main
+from rczone.models import load_model
+from rczone.workflow.reader import read_model_frame
+from tests.shared_data import SHARED, require
+
+DATA = SHARED / "data" / "bacher_madsen_prbs" / "inputPRBS1.csv"
+MAP = """
+[time]
+column = "TimeDate"
+timezone = "Europe/Copenhagen"
+{window}
+[columns]
+Ti = "yTi"
+To = "Ta"
+Ph = {{ column = "Ph", unit = "kW" }}
+Ps = {{ column = "Ps", unit = "kW/m2" }}
+"""
+SPLIT = "2009-02-09T12:00"
+HORIZONS = "1,3,12,72,open"
+
+
+def _steps(value) -> int | None:
+    """A table's ``steps`` (None or NaN for open loop) as an int or None."""
+    return None if value is None or value != value else int(value)
+
+
+@pytest.fixture(scope="module")
+def scored(tmp_path_factory):
+    require(DATA, what="shared real data (Bacher & Madsen PRBS)")
+    d = tmp_path_factory.mktemp("bands")
+    (d / "cal.toml").write_text(MAP.format(window=f'end = "{SPLIT}"'))
+    (d / "all.toml").write_text(MAP.format(window=""))
+    fit = ["fit", str(DATA), "--columns", str(d / "cal.toml"), "--model", "TiTe+heater+solar"]
+    assert main([*fit, "--save-model", str(d / "tite.json")]) == 0
+    args = ["predict", str(d / "tite.json"), str(DATA), "--columns", str(d / "all.toml"), "--warmup", SPLIT]
+    assert main([*args, "--horizons", HORIZONS, "--baselines", "--json", str(d / "h.json")]) == 0
+    rows = json.loads((d / "h.json").read_text())["scores"]
+    calibrated = {r["steps"]: r for r in rows if r["predictor"] == "model"}
+    # the same fit without its saved factors: the band from the noise levels alone
+    zm = load_model(d / "tite.json")
+    raw_model = zm.with_values(zm.theta, band_scale=None)
+    frame = read_model_frame(DATA, d / "all.toml", zm)
+    start = frame["time"].to_numpy()[json.loads((d / "h.json").read_text())["warmup_samples"]]
+    raw = horizon_scores(raw_model, frame, horizons=[1, 3, 12, 72, None], start=start, baselines=False)
+    uncalibrated = {_steps(r.steps): r for r in raw.table.itertuples()}
+    return calibrated, uncalibrated, rows
+
+
+@pytest.mark.slow
+def test_coverage_is_reported_per_horizon_and_the_calibration_widens_the_long_bands(scored):
+    calibrated, uncalibrated, rows = scored
+    assert set(calibrated) == {1, 3, 12, 72, None}
+    # as issue 22 measured: overconfident beyond one step without the factors
+    assert uncalibrated[12].coverage_2sigma < 0.8 and uncalibrated[72].coverage_2sigma < 0.6
+    for k in (3, 12, 72, None):
+        assert calibrated[k]["coverage_2sigma"] > uncalibrated[k].coverage_2sigma + 0.05
+    assert 0.9 <= calibrated[3]["coverage_2sigma"] <= 0.98
+    # the model beats both baselines from 15 min on
+    for k in (3, 12, 72, None):
+        best = min(r["rmse_K"] for r in rows if r["steps"] == k and r["predictor"] != "model")
+        assert calibrated[k]["rmse_K"] < best
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 22 target not reached: the held-out days' 1 h and 6 h errors are twice the calibration"
+    " days' (docs/validation.md), so factors calibrated on the fit's own errors leave the coverage at"
+    " about 84 % and 68 %",
+)
+def test_two_sigma_coverage_lies_within_90_to_98_percent_at_1_h_and_6_h(scored):
+    calibrated, _, _ = scored
+    for k in (12, 72):
+        assert 0.9 <= calibrated[k]["coverage_2sigma"] <= 0.98
