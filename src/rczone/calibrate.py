@@ -28,6 +28,7 @@ from rczone.estimation.innovations import (
     open_loop_analysis,
 )
 from rczone.estimation.methods import DEFAULT_METHOD, REGISTRY, method_of
+from rczone.estimation.sampling import SamplerSettings
 from rczone.estimation.validation import (
     INITIAL_STATE_PRIOR_K,
     InitialStateEstimate,
@@ -349,6 +350,7 @@ def calibrate(
     uncertainty: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
     noise: str = "measured",
+    sampler: SamplerSettings | None = None,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` and check the fitted model open loop.
 
@@ -379,6 +381,9 @@ def calibrate(
     noise : {"measured", "all"}
         ML and MAP without ``free``: process noise on the measured states or on every state
         (:func:`rczone.estimation.fit.default_free` says why the first is the default).
+    sampler : SamplerSettings, optional
+        Draws, warm-up and chains of a sampling method (``"mcmc"``); the fitted model keeps
+        :data:`~rczone.estimation.posterior.KEPT_DRAWS` posterior draws for :func:`prediction`.
     """
     zm = as_model(model)
     net = zm.network
@@ -406,6 +411,7 @@ def calibrate(
         start=start,
         fixed={k: v for k, v in zm.theta.items() if k not in free},
         bounds=bounds,
+        sampler=sampler,
     )
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
@@ -428,6 +434,7 @@ def calibrate(
         flags=list(res.flags),
         stretch=stretch,
         covariance=parameter_covariance(res),
+        **({"posterior_draws": posterior_draws(res)} if res.posterior is not None else {}),
         **dict(provenance or {}),
     )
     if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
@@ -489,6 +496,10 @@ class Prediction(Result):
         The samples' time stamps in the data's time zone (None when the data have no clock time).
     model_label, data_label : str
         Names of the model and the data, for titles.
+    lower, upper : ndarray, shape (N, ny), optional
+        A posterior predictive band (a model fitted by sampling:
+        :func:`~rczone.estimation.forecast.posterior_band`), of the probability of plus or minus two
+        standard deviations; None: the band is ``predicted -+ 2 sd``.
     """
 
     t: np.ndarray
@@ -504,6 +515,15 @@ class Prediction(Result):
     index: pd.DatetimeIndex | None = None
     model_label: str = "model"
     data_label: str = "data"
+    lower: np.ndarray | None = None
+    upper: np.ndarray | None = None
+
+    @property
+    def band(self) -> tuple[np.ndarray, np.ndarray]:
+        """The band's lower and upper ends, shape (N, ny) each."""
+        if self.lower is not None and self.upper is not None:
+            return self.lower, self.upper
+        return self.predicted - 2 * self.sd, self.predicted + 2 * self.sd
 
     @property
     def horizon(self) -> str:
@@ -527,18 +547,19 @@ class Prediction(Result):
     @property
     def coverage(self) -> np.ndarray:
         """Fraction of measured samples inside the band, per output (NaN without a band)."""
-        e = np.abs(self.error)
-        ok = np.isfinite(e) & np.isfinite(self.sd)
-        inside = (e <= 2 * self.sd) & ok
+        lo, hi = self.band
+        ok = np.isfinite(self.measured) & np.isfinite(lo) & np.isfinite(hi)
+        inside = (self.measured >= lo) & (self.measured <= hi) & ok
         return np.where(ok.sum(axis=0) > 0, inside.sum(axis=0) / np.maximum(ok.sum(axis=0), 1), np.nan)
 
     def _columns(self) -> dict[str, np.ndarray]:
         cols: dict[str, np.ndarray] = {}
+        lo, hi = self.band
         for j, o in enumerate(self.outputs):
             cols[f"{o}_measured"] = self.measured[:, j]
             cols[f"{o}_predicted"] = self.predicted[:, j]
-            cols[f"{o}_lower"] = self.predicted[:, j] - 2 * self.sd[:, j]
-            cols[f"{o}_upper"] = self.predicted[:, j] + 2 * self.sd[:, j]
+            cols[f"{o}_lower"] = lo[:, j]
+            cols[f"{o}_upper"] = hi[:, j]
             if self.sd_noise is not None:
                 cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
             if self.sd_parameters is not None:
@@ -708,8 +729,19 @@ def prediction(
             sd = np.full_like(y_hat, np.nan)
     if not np.all(np.isfinite(y_hat[steps or 0 :])):
         raise DataError("the model's prediction is not finite; its values are not usable on these data")
-    sd_par = None
-    cov = saved_covariance(zm) if parameters else None
+    sd_par = lower = upper = None
+    kept = saved_draws(zm) if parameters else None
+    cov = saved_covariance(zm) if parameters and kept is None else None
+    if kept is not None:
+        from rczone.estimation.forecast import posterior_band
+
+        def band(v: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+            if has_noise:
+                return noise_band(net, v, data, steps)
+            return open_loop_error(net, v, data).y_hat, sd
+
+        lower, upper, sd_par = posterior_band(band, values, *kept, np.random.default_rng(0))
+        sources.append(f"{kept[1].shape[0]} posterior draws")
     if cov is not None:
         names, matrix = cov
         if has_noise:
@@ -741,6 +773,8 @@ def prediction(
         index=time_index(frame, data.t),
         model_label=zm.label,
         data_label=label,
+        lower=lower,
+        upper=upper,
     )
 
 
@@ -778,6 +812,40 @@ def noise_values(zm: ZoneModel) -> dict[str, float]:
             continue
         values[n] = KINDS[INITIAL_SPREAD].default if kind == INITIAL_SPREAD else 0.0
     return values
+
+
+def posterior_draws(res: FitResult) -> dict[str, object]:
+    """A sampled fit's kept draws, ``{"names": [...], "values": [[...], ...]}`` (physical units)."""
+    kept = res.posterior.kept()
+    return {"names": list(res.posterior.names), "values": kept.tolist()}
+
+
+def saved_draws(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:
+    """The posterior draws a sampled fit saved with the model, restricted to what moves a prediction.
+
+    As :func:`saved_covariance`: only base parameters and noise levels are kept. None when the
+    model has none. A malformed entry (a model file is untrusted) is an error.
+    """
+    kept = zm.provenance.get("posterior_draws")
+    if kept is None:
+        return None
+    try:
+        names = [str(n) for n in kept["names"]]
+        matrix = np.array(kept["values"], dtype=float)
+        if matrix.ndim != 2 or matrix.shape[1] != len(names) or matrix.shape[0] < 2:
+            raise ValueError
+        if not np.isfinite(matrix).all():
+            raise ValueError
+    except (KeyError, TypeError, ValueError):
+        raise DataError(
+            f"model {zm.label!r}: its saved posterior draws are malformed (expected names and a table of"
+            " at least two finite rows, one column per name)"
+        ) from None
+    known = {*zm.theta, *noise_values(zm)}
+    keep = [i for i, n in enumerate(names) if n in known]
+    if not keep:
+        return None
+    return [names[i] for i in keep], matrix[:, keep]
 
 
 def saved_covariance(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:
