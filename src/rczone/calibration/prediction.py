@@ -77,6 +77,10 @@ class Prediction(Result):
         The samples' time stamps in the data's time zone (None when the data have no clock time).
     model_label, data_label : str
         Names of the model and the data, for titles.
+    lower, upper : ndarray, shape (N, ny), optional
+        A posterior predictive band (a model fitted by sampling:
+        :func:`~rczone.estimation.forecast.posterior_band`), of the probability of plus or minus two
+        standard deviations; None: the band is ``predicted -+ 2 sd``.
     """
 
     t: np.ndarray
@@ -92,6 +96,15 @@ class Prediction(Result):
     index: pd.DatetimeIndex | None = None
     model_label: str = "model"
     data_label: str = "data"
+    lower: np.ndarray | None = None
+    upper: np.ndarray | None = None
+
+    @property
+    def band(self) -> tuple[np.ndarray, np.ndarray]:
+        """The band's lower and upper ends, shape (N, ny) each."""
+        if self.lower is not None and self.upper is not None:
+            return self.lower, self.upper
+        return self.predicted - 2 * self.sd, self.predicted + 2 * self.sd
 
     @property
     def horizon(self) -> str:
@@ -115,18 +128,19 @@ class Prediction(Result):
     @property
     def coverage(self) -> np.ndarray:
         """Fraction of measured samples inside the band, per output (NaN without a band)."""
-        e = np.abs(self.error)
-        ok = np.isfinite(e) & np.isfinite(self.sd)
-        inside = (e <= 2 * self.sd) & ok
+        lo, hi = self.band
+        ok = np.isfinite(self.measured) & np.isfinite(lo) & np.isfinite(hi)
+        inside = (self.measured >= lo) & (self.measured <= hi) & ok
         return np.where(ok.sum(axis=0) > 0, inside.sum(axis=0) / np.maximum(ok.sum(axis=0), 1), np.nan)
 
     def _columns(self) -> dict[str, np.ndarray]:
         cols: dict[str, np.ndarray] = {}
+        lo, hi = self.band
         for j, o in enumerate(self.outputs):
             cols[f"{o}_measured"] = self.measured[:, j]
             cols[f"{o}_predicted"] = self.predicted[:, j]
-            cols[f"{o}_lower"] = self.predicted[:, j] - 2 * self.sd[:, j]
-            cols[f"{o}_upper"] = self.predicted[:, j] + 2 * self.sd[:, j]
+            cols[f"{o}_lower"] = lo[:, j]
+            cols[f"{o}_upper"] = hi[:, j]
             if self.sd_noise is not None:
                 cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
             if self.sd_parameters is not None:
@@ -296,8 +310,19 @@ def prediction(
             sd = np.full_like(y_hat, np.nan)
     if not np.all(np.isfinite(y_hat[steps or 0 :])):
         raise DataError("the model's prediction is not finite; its values are not usable on these data")
-    sd_par = None
-    cov = saved_covariance(zm) if parameters else None
+    sd_par = lower = upper = None
+    kept = saved_draws(zm) if parameters else None
+    cov = saved_covariance(zm) if parameters and kept is None else None
+    if kept is not None:
+        from rczone.estimation.forecast import posterior_band
+
+        def band(v: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+            if has_noise:
+                return noise_band(net, v, data, steps)
+            return open_loop_error(net, v, data).y_hat, sd
+
+        lower, upper, sd_par = posterior_band(band, values, *kept, np.random.default_rng(0))
+        sources.append(f"{kept[1].shape[0]} posterior draws")
     if cov is not None:
         names, matrix = cov
         if has_noise:
@@ -329,6 +354,8 @@ def prediction(
         index=time_index(frame, data.t),
         model_label=zm.label,
         data_label=label,
+        lower=lower,
+        upper=upper,
     )
 
 
@@ -349,6 +376,34 @@ def noise_values(zm: ZoneModel) -> dict[str, float]:
             continue
         values[n] = KINDS[INITIAL_SPREAD].default if kind == INITIAL_SPREAD else 0.0
     return values
+
+
+def saved_draws(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:
+    """The posterior draws a sampled fit saved with the model, restricted to what moves a prediction.
+
+    As :func:`saved_covariance`: only base parameters and noise levels are kept. None when the
+    model has none. A malformed entry (a model file is untrusted) is an error.
+    """
+    kept = zm.provenance.get("posterior_draws")
+    if kept is None:
+        return None
+    try:
+        names = [str(n) for n in kept["names"]]
+        matrix = np.array(kept["values"], dtype=float)
+        if matrix.ndim != 2 or matrix.shape[1] != len(names) or matrix.shape[0] < 2:
+            raise ValueError
+        if not np.isfinite(matrix).all():
+            raise ValueError
+    except (KeyError, TypeError, ValueError):
+        raise DataError(
+            f"model {zm.label!r}: its saved posterior draws are malformed (expected names and a table of"
+            " at least two finite rows, one column per name)"
+        ) from None
+    known = {*zm.theta, *noise_values(zm)}
+    keep = [i for i, n in enumerate(names) if n in known]
+    if not keep:
+        return None
+    return [names[i] for i in keep], matrix[:, keep]
 
 
 def saved_covariance(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:
