@@ -40,6 +40,7 @@ from rczone.estimation.openloop import (
     open_loop_error,
     per_output_errors,
 )
+from rczone.estimation.sampling import SamplerSettings
 from rczone.models import ZoneModel
 from rczone.network.stochastic import (
     INITIAL_STATE,
@@ -219,6 +220,7 @@ def calibrate(
     uncertainty: bool = True,
     bounds: Mapping[str, tuple[float, float]] | None = None,
     noise: str = "measured",
+    sampler: SamplerSettings | None = None,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` and check the fitted model open loop.
 
@@ -249,6 +251,9 @@ def calibrate(
     noise : {"measured", "all"}
         ML and MAP without ``free``: process noise on the measured states or on every state
         (:func:`rczone.estimation.fit.default_free` says why the first is the default).
+    sampler : SamplerSettings, optional
+        Draws, warm-up and chains of a sampling method (``"mcmc"``); the fitted model keeps
+        :data:`~rczone.estimation.posterior.KEPT_DRAWS` posterior draws for :func:`prediction`.
     """
     zm = as_model(model)
     net = zm.network
@@ -276,6 +281,7 @@ def calibrate(
         start=start,
         fixed={k: v for k, v in zm.theta.items() if k not in free},
         bounds=bounds,
+        sampler=sampler,
     )
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
@@ -301,6 +307,7 @@ def calibrate(
         covariance=parameter_covariance(res),
         band_scale=band.to_dict() if band is not None else None,
         baselines=baseline_models(data),
+        **({"posterior_draws": posterior_draws(res)} if res.posterior is not None else {}),
         **dict(provenance or {}),
     )
     if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
@@ -317,6 +324,12 @@ def calibrate(
 
 #: Fewest measured samples (of every output) the residual analysis is made on (fewer: the statistics mean nothing).
 MIN_ANALYSIS_SAMPLES = 10
+
+
+def posterior_draws(res: FitResult) -> dict[str, object]:
+    """A sampled fit's kept draws, ``{"names": [...], "values": [[...], ...]}`` (physical units)."""
+    kept = res.posterior.kept()
+    return {"names": list(res.posterior.names), "values": kept.tolist()}
 
 
 def parameter_covariance(res: FitResult) -> dict[str, object]:

@@ -105,6 +105,10 @@ class Prediction(Result):
         Open loop: where the prediction starts, in words.
     warmup_samples : int
         Samples before the first scored one that the start used (not scored).
+    lower, upper : ndarray, shape (N, ny), optional
+        A posterior predictive band (a model fitted by sampling:
+        :func:`~rczone.estimation.forecast.posterior_band`), of the probability of plus or minus two
+        standard deviations; None: the band is ``predicted -+ 2 sd``.
     """
 
     t: np.ndarray
@@ -123,6 +127,15 @@ class Prediction(Result):
     states: HiddenStates | None = None
     start_note: str = ""
     warmup_samples: int = 0
+    lower: np.ndarray | None = None
+    upper: np.ndarray | None = None
+
+    @property
+    def band(self) -> tuple[np.ndarray, np.ndarray]:
+        """The band's lower and upper ends, shape (N, ny) each."""
+        if self.lower is not None and self.upper is not None:
+            return self.lower, self.upper
+        return self.predicted - 2 * self.sd, self.predicted + 2 * self.sd
 
     @property
     def horizon(self) -> str:
@@ -146,18 +159,19 @@ class Prediction(Result):
     @property
     def coverage(self) -> np.ndarray:
         """Fraction of measured samples inside the band, per output (NaN without a band)."""
-        e = np.abs(self.error)
-        ok = np.isfinite(e) & np.isfinite(self.sd)
-        inside = (e <= 2 * self.sd) & ok
+        lo, hi = self.band
+        ok = np.isfinite(self.measured) & np.isfinite(lo) & np.isfinite(hi)
+        inside = (self.measured >= lo) & (self.measured <= hi) & ok
         return np.where(ok.sum(axis=0) > 0, inside.sum(axis=0) / np.maximum(ok.sum(axis=0), 1), np.nan)
 
     def _columns(self) -> dict[str, np.ndarray]:
         cols: dict[str, np.ndarray] = {}
+        lo, hi = self.band
         for j, o in enumerate(self.outputs):
             cols[f"{o}_measured"] = self.measured[:, j]
             cols[f"{o}_predicted"] = self.predicted[:, j]
-            cols[f"{o}_lower"] = self.predicted[:, j] - 2 * self.sd[:, j]
-            cols[f"{o}_upper"] = self.predicted[:, j] + 2 * self.sd[:, j]
+            cols[f"{o}_lower"] = lo[:, j]
+            cols[f"{o}_upper"] = hi[:, j]
             if self.sd_noise is not None:
                 cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
             if self.sd_parameters is not None:
@@ -565,8 +579,25 @@ def setup_prediction(
     sd = sd[0]
     if not np.all(np.isfinite(y_hat[max(first, steps or 0) :])):
         raise DataError("the model's prediction is not finite; its values are not usable on these data")
-    sd_par = None
-    cov = saved_covariance(zm) if parameters else None
+    sd_par = lower = upper = None
+    kept = saved_draws(zm) if parameters else None
+    cov = saved_covariance(zm) if parameters and kept is None else None
+    if kept is not None:
+        from rczone.estimation.forecast import k_step_bands, noise_band, posterior_band
+
+        net, known, sd_ls = zm.network, max(first, 1), sd
+
+        def band(v: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
+            if not setup.has_noise:
+                return open_loop_error(net, v, data).y_hat, sd_ls
+            if steps is None:
+                return noise_band(net, v, data, known=known)
+            one = k_step_bands(net, v, data, [steps])[steps]
+            return one.y_hat, one.sd
+
+        lower, upper, sd_par = posterior_band(band, setup.values, *kept, np.random.default_rng(0))
+        lower, upper, sd_par = lower[first:], upper[first:], sd_par[first:]
+        sources.append(f"{kept[1].shape[0]} posterior draws")
     if cov is not None:
         names, matrix = cov
         predictor = setup.predictor([steps])
@@ -594,6 +625,8 @@ def setup_prediction(
         states=hidden_states(setup),
         start_note=setup.start_note if steps is None else "",
         warmup_samples=first,
+        lower=lower,
+        upper=upper,
     )
 
 
@@ -639,6 +672,34 @@ def noise_values(zm: ZoneModel) -> dict[str, float]:
             continue
         values[n] = KINDS[INITIAL_SPREAD].default if kind == INITIAL_SPREAD else 0.0
     return values
+
+
+def saved_draws(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:
+    """The posterior draws a sampled fit saved with the model, restricted to what moves a prediction.
+
+    As :func:`saved_covariance`: only base parameters and noise levels are kept. None when the
+    model has none. A malformed entry (a model file is untrusted) is an error.
+    """
+    kept = zm.provenance.get("posterior_draws")
+    if kept is None:
+        return None
+    try:
+        names = [str(n) for n in kept["names"]]
+        matrix = np.array(kept["values"], dtype=float)
+        if matrix.ndim != 2 or matrix.shape[1] != len(names) or matrix.shape[0] < 2:
+            raise ValueError
+        if not np.isfinite(matrix).all():
+            raise ValueError
+    except (KeyError, TypeError, ValueError):
+        raise DataError(
+            f"model {zm.label!r}: its saved posterior draws are malformed (expected names and a table of"
+            " at least two finite rows, one column per name)"
+        ) from None
+    known = {*zm.theta, *noise_values(zm)}
+    keep = [i for i, n in enumerate(names) if n in known]
+    if not keep:
+        return None
+    return [names[i] for i in keep], matrix[:, keep]
 
 
 def saved_covariance(zm: ZoneModel) -> tuple[list[str], np.ndarray] | None:

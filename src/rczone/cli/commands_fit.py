@@ -117,15 +117,20 @@ def fit(
             " next to persistence and ARX.",
         ),
     ] = None,
+    draws: Annotated[int, typer.Option(help="--method mcmc: draws kept per chain.")] = 1000,
+    tune: Annotated[int, typer.Option(help="--method mcmc: warm-up draws per chain (discarded).")] = 1000,
+    chains: Annotated[int, typer.Option(help="--method mcmc: independent chains (--seed seeds them).")] = 4,
 ) -> None:
     """Identify the model's parameters from DATA.
 
     Exit code 0: a trustworthy fit; 3: the fit finished but is flagged (an estimate at a bound, no
-    standard error, an indefinite Hessian, or starts that disagree) - every output is still
-    written; 2: a mistake in the input.
+    standard error, an indefinite Hessian, starts that disagree, or for --method mcmc R-hat >= 1.01,
+    too few effective draws or divergent transitions) - every output is still written; 2: a mistake
+    in the input.
     """
     from rich.console import Console
 
+    from rczone.estimation.sampling import SamplerSettings
     from rczone.workflow import FitSettings, fit_and_check
 
     check_seed(seed)
@@ -148,6 +153,7 @@ def fit(
         constants=constants(const) or {},
         checks=bool(report_dir or json_out),
         profiles=profiles,
+        sampler=SamplerSettings(draws=draws, tune=tune, chains=chains),
     )
     others = {p: read_frame(Path(p), column_map, zm) for p in split(check_on) or []}
     label = data_label(data)

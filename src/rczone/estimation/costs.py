@@ -7,9 +7,11 @@
   the integral is split at the gap. Units K^2 s.
 * ``J_ML`` (Lin et al. 2012, eq. (9)): ``-log L`` of the continuous-discrete stochastic model, by the
   Kalman filter (:mod:`rczone.estimation.kalman`); one measurement-noise level per output.
-* ``J_MAP = J_ML + sum_i 0.5 ((log theta_i - log theta_i,construction) / s)^2`` over the
-  free resistances and capacitances: a log-normal prior centred on the construction
-  value with spread ``s`` (default ``log 2``: a factor 2 is one standard deviation).
+* ``J_MAP = w J_ML - log p(eta)``: the declared prior of every free parameter that has one
+  (:mod:`rczone.network.prior`, carried to the optimizer's scale by :mod:`rczone.estimation.priors`),
+  and for the other free resistances and capacitances ``0.5 ((log theta_i - log theta_i,construction) / s)^2``,
+  a log-normal prior centred on the construction value with spread ``s`` (default ``log 2``: a
+  factor 2 is one standard deviation).
 
 Initial state
 -------------
@@ -63,6 +65,7 @@ from rczone.estimation.engines import (
 from rczone.estimation.methods import METHODS as _REGISTERED
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec, make_spec
+from rczone.estimation.priors import LogPrior, log_prior
 from rczone.kernels.adjoint import gradient_fused
 from rczone.kernels.arrays import Problem
 from rczone.kernels.problem import cost_and_gradient, value_kernel
@@ -210,23 +213,8 @@ def _public_objective(
 
 
 def log_prior_penalty(spec: ParameterSpec, theta: np.ndarray, spread: float = PRIOR_SPREAD) -> float:
-    """``sum 0.5 ((log theta - log theta_c) / s)^2`` over free resistances and capacitances."""
-    return _log_prior(spec, theta, spread)[0]
-
-
-def _log_prior(spec: ParameterSpec, theta: np.ndarray, spread: float) -> tuple[float, np.ndarray, np.ndarray]:
-    """:func:`log_prior_penalty`, its gradient and its (exact, diagonal) Hessian in theta at the construction values."""
-    sel = np.array([k in ("resistance", "capacitance") for k in spec.kinds], dtype=bool) & np.isfinite(
-        spec.construction
-    )
-    grad = np.zeros(spec.n_free)
-    curv = np.zeros(spec.n_free)
-    if not sel.any():
-        return 0.0, grad, curv
-    d = (np.log(theta[sel]) - np.log(spec.construction[sel])) / spread
-    grad[sel] = d / (spread * theta[sel])
-    curv[sel] = 1.0 / (spread * theta[sel]) ** 2
-    return float(0.5 * d @ d), grad, curv
+    """``sum 0.5 ((log theta - log theta_c) / s)^2`` over free resistances and capacitances (no declared prior)."""
+    return log_prior(spec, {}, default="construction", spread=spread).terms(theta)[0]
 
 
 @dataclass(frozen=True, eq=False)
@@ -280,9 +268,15 @@ class Objective:
     engine: str = "auto"
 
     def __post_init__(self) -> None:
-        method_of(self.method)
+        meth = method_of(self.method)
         if not self.prior_spread > 0:
             raise ParameterError(f"prior_spread must be > 0, got {self.prior_spread!r}")
+        prior = (
+            log_prior(self.spec, self.network.priors, default="construction", spread=self.prior_spread)
+            if meth.prior
+            else None
+        )
+        object.__setattr__(self, "_prior", prior)
         if not 0 < self.likelihood_weight <= 1:
             raise ParameterError(f"likelihood_weight must be in (0, 1], got {self.likelihood_weight!r}")
         if self.engine not in ("auto", *ENGINES):
@@ -301,6 +295,9 @@ class Objective:
             packed = packed._replace(
                 consts=packed.consts._replace(fused=False)
             )  # values from the general kernel
+        if packed is not None and self.declared_prior:
+            # the kernel's prior is the construction log-normal only: a declared one is added here
+            packed = packed._replace(penalty=packed.penalty._replace(prior_idx=np.empty(0, dtype=np.int64)))
         object.__setattr__(self, "engine", engine)
         object.__setattr__(self, "_packed", packed if engine in ("rc2-fused", "compiled") else None)
         # the compiled value kernel of the engine, chosen once (rczone.kernels.problem.value_kernel)
@@ -310,8 +307,31 @@ class Objective:
 
     @property
     def compiled(self) -> Problem | None:
-        """The packed problem of the compiled engines (:mod:`rczone.kernels.problem`), or None."""
-        return self._packed
+        """The packed problem of a search that never leaves compiled code, or None.
+
+        None also where the problem has a declared prior: the compiled kernels then evaluate the
+        tempered likelihood and :class:`Objective` adds the prior (:mod:`rczone.estimation.priors`).
+        """
+        return None if self.declared_prior else self._packed
+
+    @property
+    def declared_prior(self) -> bool:
+        """Whether a MAP problem has a declared prior on a free parameter (:mod:`rczone.network.prior`)."""
+        return self._prior is not None and bool(self._prior.declared)
+
+    @property
+    def map_prior(self) -> LogPrior | None:
+        """The prior a MAP cost adds (:func:`rczone.estimation.priors.log_prior`); None for LS and ML."""
+        return self._prior
+
+    def _with_declared_prior(
+        self, theta: np.ndarray, j: float, g: np.ndarray, c: np.ndarray
+    ) -> tuple[float, np.ndarray, np.ndarray]:
+        """A compiled value (tempered likelihood, kernel prior emptied) plus the declared prior."""
+        if not (self.declared_prior and math.isfinite(j)):
+            return j, g, c
+        pen, dpen, cpen = self._prior.terms(theta)
+        return j + pen, g + dpen, c + cpen
 
     @property
     def gradient_engine(self) -> str:
@@ -321,7 +341,9 @@ class Objective:
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
         if self._packed is not None:
-            return self._value(np.asarray(theta, dtype=np.float64), self._packed)
+            theta = np.asarray(theta, dtype=np.float64)
+            j = self._value(theta, self._packed)
+            return self._with_declared_prior(theta, j, np.zeros(theta.size), np.zeros(theta.size))[0]
         return self._general(np.asarray(theta, dtype=float), False)[0]
 
     def theta_value_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -332,7 +354,7 @@ class Objective:
         """
         theta = np.asarray(theta, dtype=np.float64)
         if self.gradient_engine == "compiled":
-            j, g, c = cost_and_gradient(theta, self._packed)
+            j, g, c = self._with_declared_prior(theta, *cost_and_gradient(theta, self._packed))
             return (
                 (float(j), g, c)
                 if math.isfinite(j)
@@ -353,8 +375,8 @@ class Objective:
             return math.inf, zero, zero
         if not want_grad:
             g = c = zero
-        if method_of(self.method).prior:
-            pen, dpen, cpen = _log_prior(self.spec, theta, self.prior_spread)
+        if self._prior is not None:
+            pen, dpen, cpen = self._prior.terms(theta)
             j = self.likelihood_weight * j + pen
             if want_grad:
                 g = self.likelihood_weight * g + dpen

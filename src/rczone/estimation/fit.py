@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -52,6 +53,9 @@ from rczone.network.stochastic import (
 from rczone.network.stochastic import unit_of as stochastic_unit
 from rczone.results import Estimate
 from rczone.simulation.simulate import HOLDS
+
+if TYPE_CHECKING:
+    from rczone.estimation.sampling import SamplerSettings
 
 
 def rmse_of(network: RCNetwork, values: Mapping[str, float], data: Dataset, method: str, hold: str) -> float:
@@ -137,6 +141,7 @@ def fit(
     uncertainty: bool = True,
     max_evals: int | None = None,
     initial_state: str = "estimate",
+    sampler: SamplerSettings | None = None,
 ) -> FitResult:
     """Estimate the ``free`` parameters of ``network`` from ``data``.
 
@@ -156,9 +161,11 @@ def fit(
         Parameters to estimate (base network parameters, ``sigma_v`` (``sigma_v_<output>`` with
         several outputs), ``sigma_w_<state>``, ``x0_<state>``, ``sigma_x0_<state>``). Default
         :func:`default_free`.
-    method : {"ls", "ml", "map"}
+    method : {"ls", "ml", "map", "mcmc"}
         Output-error least squares (Lin et al. 2012, eq. (8)), Kalman-filter maximum likelihood
-        (eq. 9), or ML with a log-normal prior on the free R and C.
+        (eq. 9), ML with a prior on the free R and C (declared, else log-normal around the
+        construction value), or posterior sampling (:mod:`rczone.estimation.sampling`; the
+        estimates are posterior means, the standard errors posterior standard deviations).
     optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
         The local method. ``"auto"``: the compiled Nelder-Mead for a two-state single-output problem
         (the fused kernel, cheapest per evaluation), L-BFGS with the exact gradient otherwise (one
@@ -191,6 +198,9 @@ def fit(
         every unmeasured state in an LS fit; ``"steady"`` starts them in equilibrium with the first
         inputs and measurement, which biases the fit when the data do not start at rest. ML and
         MAP fits carry an initial-state uncertainty in the filter either way.
+    sampler : SamplerSettings, optional
+        Draws, warm-up and chains of a sampling method (``"mcmc"``,
+        :mod:`rczone.estimation.sampling`); default :class:`~rczone.estimation.sampling.SamplerSettings`.
 
     Returns
     -------
@@ -231,6 +241,10 @@ def fit(
         raise ParameterError(f"correlation_time_s must be > 0, got {correlation_time_s!r}")
     weight = min(1.0, float(np.median(np.diff(data.t))) / correlation_time_s) if meth.prior else 1.0
     objective = Objective(network, data, spec, method, hold, prior_spread, weight)
+    if meth.search == "sample":
+        from rczone.estimation.sampling import SamplerSettings, sample_fit
+
+        return sample_fit(objective, settings=sampler or SamplerSettings(), rng=rng)
     scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if meth.kernel == "ls" else 0.0
     if optimizer == "auto":
         optimizer = "nelder-mead" if objective.engine == "rc2-fused" else "lbfgs"
@@ -293,7 +307,7 @@ def fit(
                     " the data do not determine it"
                 )
     values = spec.values(theta)
-    units = [_unit_of(network, n) for n in names]
+    units = [unit_of(network, n) for n in names]
     parameters = {
         n: Estimate(n, float(v), float(e), float(lo), float(hi), float(c), bool(b), u, k, bool(lg))
         for n, v, e, lo, hi, c, b, u, k, lg in zip(
@@ -338,7 +352,7 @@ def log_likelihood(
     return -float(general_cost(network, values, data, hold, "ml", ())[0])
 
 
-def _unit_of(network: RCNetwork, name: str) -> str:
+def unit_of(network: RCNetwork, name: str) -> str:
     """SI unit of a free parameter, for tables."""
     if name in network.parameters:
         return network.parameters[name].unit or ""

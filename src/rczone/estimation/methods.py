@@ -36,7 +36,9 @@ class Method(NamedTuple):
         Whether the model has a noise model (measurement and process noise are estimated, the
         objective is a likelihood, the residuals are innovations).
     prior : bool
-        Whether a log-normal prior on the free R and C is added (and the likelihood tempered).
+        Whether the objective is a tempered likelihood plus a prior (MAP: the declared priors, a
+        log-normal around the construction value for the other free R and C;
+        :mod:`rczone.estimation.priors`).
     objective : str
         What the objective value means, with its unit.
     rmse_kind : str
@@ -45,6 +47,11 @@ class Method(NamedTuple):
         Objective differences below ``abs_tol + rel_tol |objective|`` are the same optimum.
     rel_tol : float
         See ``abs_tol``.
+    search : {"minimize", "sample"}
+        How :func:`rczone.estimation.fit.fit` finds the values: the global search for the minimum
+        of the objective, or draws from the posterior (:mod:`rczone.estimation.sampling`: the
+        likelihood of ``kernel`` plus the declared priors, flat in the optimizer's variable for the
+        other parameters; the estimates are posterior means).
     """
 
     name: str
@@ -56,6 +63,7 @@ class Method(NamedTuple):
     rmse_kind: str
     abs_tol: float
     rel_tol: float
+    search: str = "minimize"
 
 
 #: The estimation methods by name (the first is listed first in help texts).
@@ -65,6 +73,7 @@ REGISTRY: dict[str, Method] = {
         Method("ls", "output-error least squares", "ls", False, False, "squared output error, K^2 s", "open-loop", 0.0, 1e-5),
         Method("ml", "Kalman-filter maximum likelihood", "ml", True, False, "negative log-likelihood", "one-step", 0.01, 1e-9),
         Method("map", "maximum a posteriori (ML with a log-normal prior)", "ml", True, True, "negative log-posterior (tempered likelihood)", "one-step", 0.01, 1e-9),
+        Method("mcmc", "posterior sampling (NUTS) of the Kalman likelihood and the declared priors", "ml", True, False, "negative log-likelihood at the posterior mean", "one-step", 0.01, 1e-9, "sample"),
     )
 }  # fmt: skip
 

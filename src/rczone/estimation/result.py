@@ -5,14 +5,18 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rczone.estimation.methods import method_of
 from rczone.estimation.optimize import StartOutcome
+from rczone.estimation.posterior import POSTERIOR_ISSUES
 from rczone.estimation.search import SearchSummary
 from rczone.results import Estimate, Result, json_number
+
+if TYPE_CHECKING:
+    from rczone.estimation.posterior import Posterior
 
 #: Codes of :attr:`FitResult.issues`: what makes a result untrustworthy (CLI exit code 3).
 ISSUES = {
@@ -21,6 +25,7 @@ ISSUES = {
     "hessian": "the Hessian is not positive definite (the parameters are not identifiable)",
     "not_converged": "the search has not settled on one optimum",
     "starts_disagree": "starts that reach the same cost disagree on an estimate",
+    **POSTERIOR_ISSUES,
 }
 
 
@@ -75,6 +80,10 @@ class FitResult(Result):
         Findings that do not make the result untrustworthy (a noise level at its floor).
     issues : tuple of str
         Codes of the flags (keys of :data:`ISSUES`); empty when the result can be trusted.
+    posterior : Posterior, optional
+        A sampling method's draws and diagnostics (:mod:`rczone.estimation.posterior`); the
+        estimates are then posterior means and the standard errors posterior standard
+        deviations, and :meth:`conf_int` gives equal-tailed credible intervals.
     """
 
     parameters: Mapping[str, Estimate]
@@ -97,6 +106,7 @@ class FitResult(Result):
     search: SearchSummary | None = None
     notes: tuple[str, ...] = ()
     issues: tuple[str, ...] = ()
+    posterior: Posterior | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -153,18 +163,26 @@ class FitResult(Result):
         """
         import pandas as pd
 
-        rows = {n: e.interval(alpha) for n, e in self.parameters.items()}
+        rows = self._intervals(alpha)
         return pd.DataFrame.from_dict(rows, orient="index", columns=["lower", "upper"]).rename_axis(
             "parameter"
         )
+
+    def _intervals(self, alpha: float) -> dict[str, tuple[float, float]]:
+        """Wald intervals, or the posterior's credible intervals for a sampled fit."""
+        if self.posterior is None:
+            return {n: e.interval(alpha) for n, e in self.parameters.items()}
+        q = self.posterior.interval(1.0 - alpha)
+        return {n: (float(q[i, 0]), float(q[i, 1])) for i, n in enumerate(self.names)}
 
     def to_frame(self):
         """One row per free parameter: estimate, standard error, 95 % interval, unit, bounds, construction."""
         import pandas as pd
 
         rows = []
+        intervals = self._intervals(0.05)
         for n, e in self.parameters.items():
-            lo, hi = e.interval()
+            lo, hi = intervals[n]
             rows.append(
                 {
                     "parameter": n,
@@ -213,9 +231,13 @@ class FitResult(Result):
         return [parameter_table(self, f"{self.method.upper()} fit"), search_line(self)]
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready summary (NaN becomes ``None``)."""
+        """JSON-ready summary (NaN becomes ``None``); a sampled fit's ``interval_95`` is the credible interval."""
+        intervals = self._intervals(0.05)
         return {
-            "parameters": {n: e.to_dict() for n, e in self.parameters.items()},
+            "parameters": {
+                n: {**e.to_dict(), "interval_95": [json_number(v) for v in intervals[n]]}
+                for n, e in self.parameters.items()
+            },
             "correlation": {
                 a: {b: json_number(self.correlation[i, j]) for j, b in enumerate(self.names)}
                 for i, a in enumerate(self.names)
@@ -243,4 +265,5 @@ class FitResult(Result):
             "notes": list(self.notes),
             "search": self.search.to_dict(self.names) if self.search is not None else None,
             "starts": self.starts_table(),
+            "posterior": self.posterior.to_dict() if self.posterior is not None else None,
         }

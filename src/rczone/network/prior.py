@@ -17,10 +17,10 @@ log-normal's ``sigma`` is dimensionless (a factor ``exp(sigma)`` around the medi
 positive physical parameter (Gelman et al. 2013, sec. 2.8; Kristensen, Madsen & Jørgensen 2004,
 sec. 2.2 use it in the MAP estimation of grey-box models).
 
-A prior is a declaration only, for now: the MAP cost of :mod:`rczone.estimation.costs` still puts
-its own log-normal prior around the construction value of every resistance and capacitance
-(``prior_spread``); the declared priors are read, validated, stored on
-:class:`~rczone.network.parameters.Parameter` and written back.
+Estimators read them through :mod:`rczone.estimation.priors`: the MAP cost adds the declared prior
+of every free parameter that has one (and its own log-normal around the construction value for the
+other resistances and capacitances), and posterior sampling (``--method mcmc``,
+:mod:`rczone.estimation.sampling`) samples the likelihood times the declared priors.
 
 References
 ----------

@@ -19,11 +19,13 @@ def prediction_figure(pred: Prediction, title: str = "") -> Figure:
     fig = Figure(figsize=(8.5, 2.8 * ny + 1.8))
     axes = fig.subplots(ny + 1, 1, squeeze=False, sharex=True)[:, 0]
     h = (pred.t - pred.t[0]) / 3600.0
+    band_lo, band_hi = pred.band
+    posterior = pred.lower is not None
     for j, (ax, o) in enumerate(zip(axes[:-1], pred.outputs, strict=True)):
-        lo = pred.predicted[:, j] - 2 * pred.sd[:, j]
-        hi = pred.predicted[:, j] + 2 * pred.sd[:, j]
-        if np.isfinite(pred.sd[:, j]).any():
-            ax.fill_between(h, lo, hi, color="#90cdf4", alpha=0.5, lw=0, label="±2 σ")
+        lo, hi = band_lo[:, j], band_hi[:, j]
+        if np.isfinite(lo).any():
+            label = "posterior predictive 95.4 %" if posterior else "±2 σ"
+            ax.fill_between(h, lo, hi, color="#90cdf4", alpha=0.5, lw=0, label=label)
         if (
             pred.sd_parameters is not None
             and pred.sd_noise is not None

@@ -46,10 +46,15 @@ def parameter_table(r, title: str):
 
     table = Table(title=title)
     table.add_column("parameter", no_wrap=True)
-    for c in ("estimate", "unit", "std. error", "construction", "ratio", "flag"):
+    post = getattr(r, "posterior", None)
+    heads = ("estimate", "unit", "std. error", "construction", "ratio", "flag")
+    if post is not None:
+        heads = ("posterior mean", "unit", "sd", "90 % interval", "R-hat", "flag")
+        q90 = post.interval(0.9)
+    for c in heads:
         table.add_column(c, overflow="fold")
     search = r.search
-    for n, e in r.parameters.items():
+    for i, (n, e) in enumerate(r.parameters.items()):
         flags = []
         if e.at_bound and not any(n in note for note in r.notes):
             flags.append("[red]at bound[/]")
@@ -62,7 +67,7 @@ def parameter_table(r, title: str):
             if lo > 0 and hi / lo > 1.1 and e.unit in ("K/W", "J/K"):
                 flags.append(f"[yellow]starts: x{hi / lo:.2g}[/]")
         c, ratio = e.construction, e.ratio_to_construction
-        table.add_row(
+        cells = [
             esc(n),
             f"{e.value:.4g}",
             esc(e.unit),
@@ -70,7 +75,12 @@ def parameter_table(r, title: str):
             f"{c:.4g}" if math.isfinite(c) else "",
             f"{ratio:.2f}" if math.isfinite(ratio) else "",
             " ".join(flags),
-        )
+        ]
+        if post is not None:
+            rhat = post.rhat[i]
+            mark = "" if rhat < 1.01 else "[red]"
+            cells[4:6] = [f"{q90[i, 0]:.3g} to {q90[i, 1]:.3g}", f"{mark}{rhat:.3f}{'[/]' if mark else ''}"]
+        table.add_row(*cells)
     return table
 
 
@@ -86,6 +96,9 @@ def search_line(r) -> str:
     -------
     str
     """
+    post = getattr(r, "posterior", None)
+    if post is not None:
+        return posterior_line(post)
     s = r.search
     if s is None:
         return f"{r.n_evals} evaluations"
@@ -96,6 +109,28 @@ def search_line(r) -> str:
     if len(s.optima) > 1:
         head += f" (next best optimum {s.optima[1].cost - s.optima[0].cost:+.3g} in cost)"
     return head
+
+
+def posterior_line(post) -> str:
+    """What the sampler did and whether its draws can be used, in one line.
+
+    Parameters
+    ----------
+    post : Posterior
+        The draws and diagnostics (:class:`rczone.estimation.posterior.Posterior`).
+
+    Returns
+    -------
+    str
+    """
+    ess = float(min(post.ess_bulk.min(), post.ess_tail.min()))
+    verdict = "[green]converged[/]" if not post.issues() else "[red]not converged[/]"
+    return (
+        f"{esc(post.sampler)}: {post.n_chains} chains x {post.n_draws} draws ({post.tune} warm-up),"
+        f" {post.draws_per_second:.0f} draws/s ({post.seconds:.1f} s, {post.n_gradients} gradients;"
+        f" the ML search that placed the chains {post.mode_seconds:.2f} s); R-hat max {float(post.rhat.max()):.3f},"
+        f" ESS min {ess:.0f}, {post.divergences} divergences: {verdict}"
+    )
 
 
 def residual_lines(analysis) -> list[str]:

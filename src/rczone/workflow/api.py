@@ -18,6 +18,7 @@ from rczone.calibration import Calibration, Prediction, as_model, frame_from, pr
 from rczone.calibration.dataset import time_index
 from rczone.errors import ParameterError
 from rczone.estimation.methods import DEFAULT_METHOD
+from rczone.estimation.sampling import SamplerSettings
 from rczone.models import ZoneModel
 from rczone.workflow.checks import fit_and_check
 from rczone.workflow.datasource import DataSource, data_source
@@ -81,6 +82,9 @@ def fit(
     checks: bool = True,
     profiles: bool = True,
     label: str | None = None,
+    draws: int = 1000,
+    tune: int = 1000,
+    chains: int = 4,
 ) -> Calibration:
     """Fit a model to data: ``rczone fit`` in Python.
 
@@ -92,8 +96,8 @@ def fit(
         A frame (``time`` in s or a DatetimeIndex, a column per signal), a trend log or a built-in
         data set's name.
     method : str
-        ``"ml"`` (default, as the command line), ``"ls"`` or ``"map"``
-        (:data:`rczone.estimation.methods.REGISTRY`).
+        ``"ml"`` (default, as the command line), ``"ls"``, ``"map"`` or ``"mcmc"`` (posterior
+        sampling; :data:`rczone.estimation.methods.REGISTRY`).
     free : sequence of str, optional
         Free parameters; default the model's, plus noise levels for ML and MAP.
     optimizer : str
@@ -117,6 +121,9 @@ def fit(
         With ``checks``: profile each R and C over a factor of ten.
     label : str, optional
         The data's name in titles and the JSON; default the file name (or ``"data"``).
+    draws, tune, chains : int
+        ``method="mcmc"``: draws kept per chain, warm-up draws per chain, chains
+        (:class:`~rczone.estimation.sampling.SamplerSettings`; ``seed`` seeds the sampler).
 
     Returns
     -------
@@ -134,6 +141,7 @@ def fit(
         constants=dict(constants or {}),
         checks=checks,
         profiles=profiles,
+        sampler=SamplerSettings(draws=draws, tune=tune, chains=chains),
     )
     frame, name = _frame(data, columns, zm)
     others = {}

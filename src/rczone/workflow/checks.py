@@ -65,6 +65,7 @@ def fit_and_check(
         constants=settings.constants or None,
         provenance={"data": label, "model": model.label},
         noise=settings.noise,
+        sampler=settings.sampler,
     )
     if settings.checks or others:
         cal = check_fit(cal, frame, settings, others=others, progress=progress)
@@ -122,6 +123,7 @@ def check_fit(
             settings.optimizer,
             constants=settings.constants or None,
             noise=settings.noise,
+            sampler=settings.sampler,
         ).result
         ol = predict(zm, f, settings.constants or None)
         validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from rczone.errors import ParameterError
 from rczone.estimation.methods import DEFAULT_METHOD, method_of
 from rczone.estimation.optimize import OPTIMIZERS
+from rczone.estimation.sampling import SamplerSettings
 
 #: Process-noise placements of an ML or MAP fit (:func:`rczone.estimation.fit.default_free`).
 NOISE_PLACEMENTS = ("measured", "all")
@@ -43,6 +44,8 @@ class FitSettings:
         the command line makes them when it writes JSON or a report.
     profiles : bool
         With ``checks``: profile each R and C over a factor of 10 (single-output models).
+    sampler : SamplerSettings
+        Draws, warm-up and chains of a sampling method (``"mcmc"``); the seed is :attr:`seed`.
     """
 
     method: str = DEFAULT_METHOD
@@ -54,6 +57,7 @@ class FitSettings:
     constants: Mapping[str, float] = field(default_factory=dict)
     checks: bool = True
     profiles: bool = True
+    sampler: SamplerSettings = field(default_factory=SamplerSettings)
 
     def __post_init__(self) -> None:
         method_of(self.method)
@@ -76,3 +80,6 @@ class FitSettings:
                 raise ParameterError(f"free must be a sequence of names, got the string {self.free!r}")
             object.__setattr__(self, "free", tuple(self.free) or None)
         object.__setattr__(self, "constants", dict(self.constants or {}))
+        if not isinstance(self.sampler, SamplerSettings):
+            raise ParameterError(f"sampler must be a SamplerSettings, got {type(self.sampler).__name__}")
+        self.sampler.checked()

@@ -1,0 +1,119 @@
+"""The prior on the optimizer's scale, against scipy's densities, and the MAP cost with declared priors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from rczone.errors import ParameterError
+from rczone.estimation import Objective, make_spec
+from rczone.estimation.priors import log_prior
+from rczone.network import Parameter, Prior
+
+from .nets import NET2, data2
+
+# (parameter, prior, scipy's log density of the physical value, two physical values)
+CASES = [
+    (
+        "Rw",
+        Prior("lognormal", median=0.012, sigma=0.3),
+        stats.lognorm(0.3, scale=0.012).logpdf,
+        (0.008, 0.015),
+    ),
+    ("Rw", Prior("normal", mean=0.011, sigma=0.002), stats.norm(0.011, 0.002).logpdf, (0.009, 0.0125)),
+    ("Rw", Prior("uniform", lower=0.005, upper=0.02), stats.uniform(0.005, 0.015).logpdf, (0.006, 0.019)),
+    ("g", Prior("normal", mean=1.2, sigma=0.1), stats.norm(1.2, 0.1).logpdf, (1.0, 1.3)),
+    ("g", Prior("uniform", lower=0.5, upper=2.0), stats.uniform(0.5, 1.5).logpdf, (0.7, 1.9)),
+]
+
+
+@pytest.mark.parametrize(("name", "prior", "logpdf", "xs"), CASES, ids=[f"{c[0]}-{c[1].dist}" for c in CASES])
+def test_prior_is_the_declared_density_of_the_optimizer_variable(name, prior, logpdf, xs) -> None:
+    spec = make_spec(NET2, [name])
+    lp = log_prior(spec, {name: prior}, default="flat")
+    # p_eta(eta) = p_theta(theta) |d theta / d eta|: theta for a log parameter, 1 otherwise
+    log = bool(spec.log[0])
+
+    def scipy_neg(x):
+        return -(logpdf(x) + (math.log(x) if log else 0.0))
+
+    a, b = (lp.terms(np.array([x]))[0] for x in xs)
+    assert a - b == pytest.approx(scipy_neg(xs[0]) - scipy_neg(xs[1]), rel=1e-10)
+    # the gradient in theta against central differences
+    x = 0.5 * (xs[0] + xs[1])
+    h = 1e-6 * x
+    fd = (lp.terms(np.array([x + h]))[0] - lp.terms(np.array([x - h]))[0]) / (2 * h)
+    assert lp.terms(np.array([x]))[1][0] == pytest.approx(fd, rel=1e-6)
+
+
+def test_uniform_prior_is_infinite_outside_its_support() -> None:
+    spec = make_spec(NET2, ["Rw"])
+    lp = log_prior(spec, {"Rw": Prior("uniform", lower=0.005, upper=0.02)}, default="flat")
+    assert lp.terms(np.array([0.03]))[0] == math.inf
+
+
+def test_defaults_construction_log_normal_for_map_and_flat_for_sampling() -> None:
+    spec = make_spec(NET2, ["Cr", "Rw", "sigma_v"])
+    theta = np.array([2 * 8e5, 0.01 / 4, 0.07])
+    s = 0.5
+    construction = log_prior(spec, {}, default="construction", spread=s)
+    assert construction.terms(theta)[0] == pytest.approx(
+        0.5 * (math.log(2) / s) ** 2 + 0.5 * (math.log(4) / s) ** 2, rel=1e-12
+    )
+    assert log_prior(spec, {}, default="flat").terms(theta)[0] == 0.0
+    declared = log_prior(spec, {"Rw": Prior("lognormal", median=0.0025, sigma=0.1)}, default="construction")
+    assert declared.declared == ("Rw",)
+    assert declared.terms(theta)[0] == pytest.approx(0.5 * (math.log(2) / math.log(2)) ** 2, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"), [({"default": "jeffreys"}, "default prior"), ({"spread": 0.0}, "spread")]
+)
+def test_bad_options_are_refused(kw, match) -> None:
+    with pytest.raises(ParameterError, match=match):
+        log_prior(make_spec(NET2, ["Rw"]), {}, **kw)
+
+
+def test_map_cost_uses_a_declared_prior_in_every_engine() -> None:
+    data = data2(noise=0.05, rng=np.random.default_rng(3))
+    prior = Prior("normal", mean=0.012, sigma=0.001)
+    net = NET2.replace_parameters([Parameter("Rw", "resistance", 0.01, prior=prior)])
+    spec = make_spec(net, ["Cr", "Rw", "sigma_v"])
+    theta = np.array([9e5, 0.011, 0.05])
+    eta = spec.to_eta(theta)
+    ml = Objective(net, data, spec, "ml", engine="general")
+    w = 0.3
+    # independent: the tempered likelihood, the construction log-normal on Cr, the declared normal
+    # on Rw as a density of log Rw
+    expect = (
+        w * ml(eta)
+        + 0.5 * (math.log(9e5 / 8e5) / 0.5) ** 2
+        + 0.5 * ((0.011 - 0.012) / 0.001) ** 2
+        - math.log(0.011)
+    )
+    values = []
+    for engine in ("general", "compiled", "auto"):
+        mp = Objective(net, data, spec, "map", prior_spread=0.5, likelihood_weight=w, engine=engine)
+        assert mp.declared_prior
+        assert mp.compiled is None  # the compiled search knows only the construction prior
+        values.append(mp(eta))
+        j, g = mp.value_and_gradient(eta)
+        assert j == pytest.approx(expect, rel=1e-9)
+        k = 1
+        h = 1e-6
+        fd = (mp(eta + h * np.eye(3)[k]) - mp(eta - h * np.eye(3)[k])) / (2 * h)
+        assert g[k] == pytest.approx(fd, rel=1e-5)
+    assert values[0] == pytest.approx(expect, rel=1e-9)
+    assert values[1] == pytest.approx(expect, rel=1e-9)
+    assert values[2] == pytest.approx(expect, rel=1e-9)
+
+
+def test_map_without_declared_prior_keeps_the_compiled_search() -> None:
+    data = data2(noise=0.05, rng=np.random.default_rng(3))
+    spec = make_spec(NET2, ["Cr", "Rw", "sigma_v"])
+    mp = Objective(NET2, data, spec, "map")
+    assert not mp.declared_prior
+    assert mp.compiled is not None
