@@ -39,6 +39,31 @@ ConstantsOption = Annotated[
     typer.Option("--const", help="Hold an input constant, NAME=VALUE in SI units (repeatable), e.g. Q=50."),
 ]
 
+HoldOption = Annotated[
+    str,
+    typer.Option(
+        "--hold",
+        help="Inputs between samples: zoh (held, default) or foh (linear; pySIP's choice, matters on"
+        " coarse data).",
+    ),
+]
+BoundsOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--bounds",
+        help="Search bounds NAME=LO,HI in the parameter's unit as the fit table prints it (SI: J/K,"
+        " K/W, K), repeatable, e.g. Ci=1e5,5e9.",
+    ),
+]
+FixOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--fix",
+        help="Hold a parameter, NAME or NAME=VALUE (repeatable): any R, C or gain, a noise level"
+        " (sigma_v, sigma_w_Te) or an initial state (x0_Te); without a value, the model's.",
+    ),
+]
+
 MODEL_HELP = (
     "Model: a built-in name (`rczone models` lists them, e.g. second-order-paper, TiTe+heater+solar),"
     " a model file (.toml) or a model saved by --save-model (.json; its values are the start)."
@@ -60,7 +85,25 @@ def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None 
     from rczone.workflow.reader import read_frame as read
     from rczone.workflow.reader import read_model_frame
 
-    return read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
+    frame = read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
+    note_ignored(frame, column_map, f"{zm.label if zm is not None else 'the model'} does not use")
+    return frame
+
+
+def note_ignored(frame: pd.DataFrame, column_map: Path | None, unused: str) -> None:
+    """One quiet line on stderr naming the mapped channels the model does not use (they are ignored).
+
+    ``unused`` ends the sentence "the map maps Ps, which ...": ``"TiTe does not use"``.
+    """
+    from rczone.errors import printable
+
+    ignored = frame.attrs.get("ignored_channels")
+    if ignored and column_map is not None:
+        names = ", ".join(map(str, ignored))
+        typer.echo(
+            f"note: {printable(column_map.name)} maps {printable(names)}, which {printable(unused)}: ignored",
+            err=True,
+        )
 
 
 def check_seed(value: int) -> int:
@@ -99,6 +142,58 @@ def constants(items: Iterable[str] | None) -> dict[str, float] | None:
                 f"--const must be NAME=VALUE with a finite number in SI units, e.g. Q=50; got {item!r}"
             ) from None
     return out or None
+
+
+def _number(text: str) -> float:
+    v = float(text)
+    if not math.isfinite(v):
+        raise ValueError
+    return v
+
+
+def bounds(items: Iterable[str] | None) -> dict[str, tuple[float, float]]:
+    """``["Ci=1e5,5e9"]`` -> ``{"Ci": (1e5, 5e9)}`` (the order is checked by the settings)."""
+    from rczone.errors import ParameterError
+    from rczone.files.text import nfkc
+
+    out: dict[str, tuple[float, float]] = {}
+    for item in items or ():
+        name, sep, pair = item.partition("=")
+        lo, comma, hi = pair.partition(",")
+        try:
+            if not sep or not comma or not name.strip():
+                raise ValueError
+            out[nfkc(name.strip())] = (_number(lo), _number(hi))
+        except ValueError:
+            raise ParameterError(
+                f"--bounds must be NAME=LO,HI with two finite numbers, e.g. Ci=1e5,5e9; got {item!r}"
+            ) from None
+    return out
+
+
+def fixed(items: Iterable[str] | None) -> dict[str, float | None]:
+    """``["sigma_v=0.01", "Rea"]`` -> ``{"sigma_v": 0.01, "Rea": None}`` (None: the model's value)."""
+    from rczone.errors import ParameterError
+    from rczone.files.text import nfkc
+
+    out: dict[str, float | None] = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        try:
+            if not name.strip():
+                raise ValueError
+            out[nfkc(name.strip())] = _number(value) if sep else None
+        except ValueError:
+            raise ParameterError(
+                f"--fix must be NAME or NAME=VALUE with a finite number, e.g. sigma_v=0.01; got {item!r}"
+            ) from None
+    return out
+
+
+def free_list(items: Iterable[str] | None) -> list[str] | None:
+    """Every ``--free`` given, each comma-separated, as one list; None when none given."""
+    names = [n for item in items or () for n in split(item) or ()]
+    return names or None
 
 
 def out_console(json_out: Path | None) -> Console:
