@@ -54,6 +54,7 @@ def fit(
     free: Annotated[
         list[str] | None,
         typer.Option(
+            metavar="NAMES|+NAME",
             help="Free parameters, comma-separated or repeated (default: the model's, plus noise levels"
             " for ML); +NAME adds NAME to the default set instead, e.g. --free +sigma_w_Te."
         ),

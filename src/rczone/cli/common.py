@@ -43,6 +43,7 @@ HoldOption = Annotated[
     str,
     typer.Option(
         "--hold",
+        metavar="zoh|foh",
         help="Inputs between samples: zoh (held, default) or foh (linear; pySIP's choice, matters on"
         " coarse data).",
     ),
@@ -51,6 +52,7 @@ BoundsOption = Annotated[
     list[str] | None,
     typer.Option(
         "--bounds",
+        metavar="NAME=LO,HI",
         help="Search bounds NAME=LO,HI in the parameter's unit as the fit table prints it (SI: J/K,"
         " K/W, K), repeatable, e.g. Ci=1e5,5e9.",
     ),
@@ -59,6 +61,7 @@ FixOption = Annotated[
     list[str] | None,
     typer.Option(
         "--fix",
+        metavar="NAME[=VALUE]",
         help="Hold a parameter, NAME or NAME=VALUE (repeatable): any R, C or gain, a noise level"
         " (sigma_v, sigma_w_Te) or an initial state (x0_Te); without a value, the model's.",
     ),
