@@ -60,10 +60,11 @@ def test_foh_recovers_data_made_with_linear_inputs_and_zoh_does_not(zone):
     assert foh["hold"] == "foh" and zoh["hold"] == "zoh"
 
 
-def test_fix_holds_a_parameter_at_the_value_given(zone):
+def test_fix_holds_a_parameter_at_the_value_given(zone, capsys):
     _, d = _fit(zone, "--hold", "foh", "--fix", "Rea=0.006")
     assert "Rea" not in d["parameters"] and d["fixed"]["Rea"] == 0.006
     assert _worst(d) < 0.01
+    assert capsys.readouterr().out.count("open-loop RMSE") == 1  # an LS fit's RMSE is said once
 
 
 def test_bounds_replace_the_declared_ones_and_a_bound_that_excludes_the_truth_is_flagged(zone):
