@@ -316,7 +316,7 @@ def calibrate(
     )
     if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
         initial = estimated_start(fitted, values, data, has_noise=True).values
-    ol = open_loop_error(net, {**theta, **initial}, data)
+    ol = open_loop_error(net, {**theta, **initial}, data, hold)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = None
     if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
