@@ -112,3 +112,10 @@ def test_the_settings_resolve_the_free_set_as_the_command_line_does():
     assert FitSettings(free=("Ci", "+Rea")).free_for(net) == ("Ci", "Rea")
     with pytest.raises(ParameterError, match="every parameter is fixed"):
         FitSettings(method="ls", fixed=dict.fromkeys(("Ci", "Ce", "Rie", "Rea", "x0_Te"))).free_for(net)
+
+
+def test_select_refuses_a_bound_no_candidate_estimates(zone, capsys):
+    args = ["select", str(zone), "--model", "Ti+heater", "--model", "TiTe+heater", "--bounds", "Cx=1e5,1e7"]
+    rc = main(args)
+    err = capsys.readouterr().err
+    assert rc == 2 and "bounds given for 'Cx', which no candidate estimates; did you mean" in err
