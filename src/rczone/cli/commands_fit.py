@@ -56,7 +56,7 @@ def fit(
         typer.Option(
             metavar="NAMES|+NAME",
             help="Free parameters, comma-separated or repeated (default: the model's, plus noise levels"
-            " for ML); +NAME adds NAME to the default set instead, e.g. --free +sigma_w_Te."
+            " for ML); +NAME adds NAME to the default set instead, e.g. --free +sigma_w_Te.",
         ),
     ] = None,
     fix: FixOption = None,
