@@ -10,7 +10,8 @@ from them), so what the page shows is what ran. Its plain code blocks are the co
 :data:`BLOCKS` lists, in page order, the commands each one shows; the script runs them in a
 temporary folder with the two real data sets (read from the shared folder, never copied into the
 repository: their licences do not allow it) and writes the page back with each plain block replaced
-by the commands and their output (stdout and stderr as a terminal 100 columns wide shows them).
+by the commands and their output (stdout and stderr as a terminal 100 columns wide shows them,
+less the notice of a first run that compiles the kernels).
 The prose is not touched: after a change of the numbers, read it again.
 
 To add a block (v22's held-out horizons, for one), add the prose and an empty plain block (three
@@ -36,6 +37,10 @@ HERE = Path(__file__).resolve().parent
 PAGE = HERE.parent / "docs" / "your-building.md"
 DEFAULT_SHARED = HERE.parent.parent / "shared"
 WIDTH = 100
+
+#: The notice of a first run that compiles the kernels: it depends on the machine's cache, not on
+#: the command, so it is left out (:mod:`rczone.cli.compile_notice`).
+COMPILING = "compiling kernels (first run only)…"
 
 #: Data files of the page: name in the work folder -> path under the shared folder.
 DATA = {
@@ -183,7 +188,8 @@ def run_block(block: Block, folder: Path) -> str:
             raise SystemExit(f"{command!r} failed (exit {done.returncode}):\n{done.stdout.decode()}")
         if block.show_commands:
             lines.append(f"$ {command}")
-        lines += _elide(done.stdout.decode().rstrip("\n").splitlines(), block.keep)
+        shown = [ln for ln in done.stdout.decode().rstrip("\n").splitlines() if ln != COMPILING]
+        lines += _elide(shown, block.keep)
     return "\n".join(lines) + "\n"
 
 

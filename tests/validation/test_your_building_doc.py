@@ -70,3 +70,9 @@ def test_a_fresh_run_reproduces_the_page(tmp_path) -> None:
     assert new_words == old_words
     moved = [(a, b) for a, b in zip(old_numbers, new_numbers) if not _close(a, b)]
     assert not moved, f"numbers that drifted (page, fresh run): {moved[:10]}"
+
+
+def test_the_compile_notice_the_script_leaves_out_is_the_commands() -> None:
+    from rczone.cli.compile_notice import NOTICE
+
+    assert load_script("your_building_doc").COMPILING == NOTICE
