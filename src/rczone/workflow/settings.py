@@ -141,6 +141,12 @@ class FitSettings:
         free = tuple(dict.fromkeys(n for n in (*base, *added) if n not in self.fixed))
         if not free:
             raise ParameterError("every parameter is fixed: leave at least one free")
+        held = [n for n in self.bounds if n not in free]
+        if held:
+            raise ParameterError(
+                f"bounds given for {held[0]!r}, which this fit does not estimate; free it too"
+                f" (--free +{held[0]}, or free=['{ADD}{held[0]}']) or drop the bound"
+            )
         return free
 
 

@@ -95,6 +95,7 @@ def test_noise_levels_are_fixed_and_freed_by_name(zone):
         (["--fix", "Rea=cold"], "--fix must be NAME or NAME=VALUE"),
         (["--fix", "Rea", "--free", "Rea,Ci"], "'Rea' is both free and fixed"),
         (["--hold", "cubic"], "hold must be one of zoh, foh"),
+        (["--bounds", "x0_Ti=10,30"], "which this fit does not estimate; free it too (--free +x0_Ti"),
     ],
 )
 def test_mistakes_in_the_options_exit_2_with_one_line(zone, capsys, extra, message):
