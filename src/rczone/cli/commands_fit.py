@@ -21,6 +21,7 @@ from rczone.cli.common import (
     free_list,
     model,
     out_console,
+    parameter_kinds,
     read_frame,
     split,
     write_json,
@@ -137,8 +138,8 @@ def fit(
     settings = FitSettings(
         method=method,
         free=free_list(free),
-        fixed=fixed(fix),
-        bounds=bounds(bound),
+        fixed=fixed(fix, parameter_kinds(zm)),
+        bounds=bounds(bound, parameter_kinds(zm)),
         hold=hold.strip().lower(),
         optimizer=optimizer,
         n_starts=n_starts,

@@ -19,6 +19,7 @@ from rczone.cli.common import (
     esc,
     model,
     out_console,
+    parameter_kinds,
     write_json,
 )
 from rczone.cli.main import app
@@ -113,7 +114,6 @@ def select(
     out = out_console(json_out)
     label = data_label(data)
     hold = hold.strip().lower()
-    box = bounds(bound)
     specs: dict[str, str] = {}
     if models:
         zms = [model(m) for m in models]
@@ -128,6 +128,7 @@ def select(
         out.print("candidates: " + ", ".join(esc(zm.label) for zm in zms))
     if len(zms) < 2:
         raise ParameterError("give at least two candidate models (--model A --model B ...)")
+    box = bounds(bound, parameter_kinds(*zms))
 
     def progress(name: str) -> None:
         console.print(f"fitting {esc(name)} (ML)")

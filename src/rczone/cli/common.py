@@ -6,7 +6,7 @@ Everything heavy is imported inside the functions, so that ``rczone --help`` sta
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -53,8 +53,8 @@ BoundsOption = Annotated[
     typer.Option(
         "--bounds",
         metavar="NAME=LO,HI",
-        help="Search bounds NAME=LO,HI in the parameter's unit as the fit table prints it (SI: J/K,"
-        " K/W, K), repeatable, e.g. Ci=1e5,5e9.",
+        help="Search bounds NAME=LO,HI, repeatable: SI units as the fit table prints them (J/K, K/W,"
+        " K), or a model file's unit after the numbers, e.g. Ci=1e5,5e9 or 'Ci=0.1,500 kWh/K'.",
     ),
 ]
 FixOption = Annotated[
@@ -63,7 +63,8 @@ FixOption = Annotated[
         "--fix",
         metavar="NAME[=VALUE]",
         help="Hold a parameter, NAME or NAME=VALUE (repeatable): any R, C or gain, a noise level"
-        " (sigma_v, sigma_w_Te) or an initial state (x0_Te); without a value, the model's.",
+        " (sigma_v, sigma_w_Te) or an initial state (x0_Te); without a value, the model's; SI units"
+        " or a model file's unit after the number ('Rea=20 K/kW').",
     ),
 ]
 
@@ -154,43 +155,89 @@ def _number(text: str) -> float:
     return v
 
 
-def bounds(items: Iterable[str] | None) -> dict[str, tuple[float, float]]:
-    """``["Ci=1e5,5e9"]`` -> ``{"Ci": (1e5, 5e9)}`` (the order is checked by the settings)."""
+def _unit_factor(name: str, unit: str, kinds: Mapping[str, str], option: str) -> float:
+    """Factor to SI of ``unit`` for the parameter ``name``: the units a model file accepts for its kind."""
+    from rczone.errors import ParameterError, did_you_mean
+    from rczone.models.modelfile import PARAMETER_UNITS
+
+    kind = kinds.get(name)
+    if kind is None:
+        raise ParameterError(
+            f"{option} {name}: a unit is for a resistance, capacity or gain of the model; give {name} in SI"
+            " units without one"
+        )
+    table = PARAMETER_UNITS[kind]
+    if unit not in table:
+        raise ParameterError(
+            f"{option} {name}: {unit!r} is not a unit of a {kind} ({', '.join(table)}); {did_you_mean(unit, table)}"
+        )
+    return table[unit]
+
+
+def _numbers_and_unit(text: str) -> tuple[list[float], str]:
+    """``"0.5,50 kWh/K"`` -> ``([0.5, 50.0], "kWh/K")``; ValueError for anything but finite numbers."""
+    numbers, _, unit = text.strip().partition(" ")
+    return [_number(v) for v in numbers.split(",")], unit.strip()
+
+
+def bounds(
+    items: Iterable[str] | None, kinds: Mapping[str, str] | None = None
+) -> dict[str, tuple[float, float]]:
+    """``["Ci=1e5,5e9", "Rea=0.2,2000 K/kW"]`` -> ``{"Ci": (1e5, 5e9), "Rea": (2e-4, 2.0)}`` (SI).
+
+    ``kinds`` (parameter name -> kind) allows a unit after the numbers, one a model file accepts for
+    the parameter's kind; the order of the bounds is checked by the settings.
+    """
     from rczone.errors import ParameterError
     from rczone.files.text import nfkc
 
     out: dict[str, tuple[float, float]] = {}
     for item in items or ():
         name, sep, pair = item.partition("=")
-        lo, comma, hi = pair.partition(",")
+        name = nfkc(name.strip())
         try:
-            if not sep or not comma or not name.strip():
+            values, unit = _numbers_and_unit(pair) if sep and name else ([], "")
+            if len(values) != 2:
                 raise ValueError
-            out[nfkc(name.strip())] = (_number(lo), _number(hi))
         except ValueError:
             raise ParameterError(
-                f"--bounds must be NAME=LO,HI with two finite numbers, e.g. Ci=1e5,5e9; got {item!r}"
+                "--bounds must be NAME=LO,HI with two finite numbers and an optional unit, e.g. Ci=1e5,5e9"
+                f" or 'Ci=0.1,500 kWh/K'; got {item!r}"
             ) from None
+        factor = _unit_factor(name, unit, kinds or {}, "--bounds") if unit else 1.0
+        out[name] = (values[0] * factor, values[1] * factor)
     return out
 
 
-def fixed(items: Iterable[str] | None) -> dict[str, float | None]:
-    """``["sigma_v=0.01", "Rea"]`` -> ``{"sigma_v": 0.01, "Rea": None}`` (None: the model's value)."""
+def fixed(items: Iterable[str] | None, kinds: Mapping[str, str] | None = None) -> dict[str, float | None]:
+    """``["sigma_v=0.01", "Rea", "Rie=2 K/kW"]`` -> ``{"sigma_v": 0.01, "Rea": None, "Rie": 0.002}``.
+
+    None holds the model's value; ``kinds`` allows a unit after the number, as for :func:`bounds`.
+    """
     from rczone.errors import ParameterError
     from rczone.files.text import nfkc
 
     out: dict[str, float | None] = {}
     for item in items or ():
         name, sep, value = item.partition("=")
+        name = nfkc(name.strip())
         try:
-            if not name.strip():
+            values, unit = _numbers_and_unit(value) if sep else ([], "")
+            if not name or len(values) != (1 if sep else 0):
                 raise ValueError
-            out[nfkc(name.strip())] = _number(value) if sep else None
         except ValueError:
             raise ParameterError(
-                f"--fix must be NAME or NAME=VALUE with a finite number, e.g. sigma_v=0.01; got {item!r}"
+                "--fix must be NAME or NAME=VALUE with a finite number and an optional unit, e.g."
+                f" sigma_v=0.01 or 'Rea=20 K/kW'; got {item!r}"
             ) from None
+        factor = _unit_factor(name, unit, kinds or {}, "--fix") if unit else 1.0
+        out[name] = values[0] * factor if values else None
     return out
+
+
+def parameter_kinds(*models: ZoneModel) -> dict[str, str]:
+    """Name -> kind of the models' own parameters (what a unit in ``--bounds`` and ``--fix`` is checked against)."""
+    return {n: p.kind for zm in models for n, p in zm.network.parameters.items()}
 
 
 def free_list(items: Iterable[str] | None) -> list[str] | None:

@@ -67,6 +67,14 @@ def test_fix_holds_a_parameter_at_the_value_given(zone, capsys):
     assert capsys.readouterr().out.count("open-loop RMSE") == 1  # an LS fit's RMSE is said once
 
 
+def test_a_model_files_unit_after_the_numbers_is_converted_to_si(zone):
+    _, d = _fit(zone, "--hold", "foh", "--fix", "Rea=6 K/kW", "--bounds", "Ci=0.1,1 kWh/K")
+    assert d["fixed"]["Rea"] == pytest.approx(0.006, rel=1e-12)
+    ci = d["parameters"]["Ci"]
+    assert (ci["lower"], ci["upper"]) == pytest.approx((3.6e5, 3.6e6), rel=1e-12)  # 1 kWh = 3.6 MJ
+    assert _worst(d) < 0.01
+
+
 def test_bounds_replace_the_declared_ones_and_a_bound_that_excludes_the_truth_is_flagged(zone):
     rc, d = _fit(zone, "--hold", "foh", "--bounds", "Ci=1e5,1.5e6")
     ci = d["parameters"]["Ci"]
@@ -95,6 +103,8 @@ def test_noise_levels_are_fixed_and_freed_by_name(zone):
         (["--fix", "Rea=cold"], "--fix must be NAME or NAME=VALUE"),
         (["--fix", "Rea", "--free", "Rea,Ci"], "'Rea' is both free and fixed"),
         (["--hold", "cubic"], "hold must be one of zoh, foh"),
+        (["--bounds", "Ci=1,2 K/kW"], "'K/kW' is not a unit of a capacitance"),
+        (["--fix", "sigma_v=1 mK"], "a unit is for a resistance, capacity or gain"),
         (["--bounds", "x0_Ti=10,30"], "which this fit does not estimate; free it too (--free +x0_Ti"),
     ],
 )
