@@ -139,9 +139,11 @@ class Calibration(Result):
         r = self.result
         title = f"{esc(self.model_label)} fitted to {esc(self.data_label)} by {r.method.upper()}"
         lines: list = [parameter_table(r, title), search_line(r)]
+        # an LS fit's own RMSE is the open-loop one: said once (issue 22, defect 8)
+        own = "" if r.rmse_kind == "open-loop" else f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K;"
         lines.append(
-            f"open-loop RMSE {self.open_loop.rmse_K:.3f} K, max {self.open_loop.max_abs_K:.3f} K;"
-            f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K; {r.n_evals} evaluations"
+            f"open-loop RMSE {self.open_loop.rmse_K:.3f} K, max {self.open_loop.max_abs_K:.3f} K;{own}"
+            f" {r.n_evals} evaluations"
         )
         stretch = self.model.provenance.get("stretch") or {}
         if stretch.get("samples", 0) < stretch.get("of", 0):
@@ -221,6 +223,8 @@ def calibrate(
     bounds: Mapping[str, tuple[float, float]] | None = None,
     noise: str = "measured",
     sampler: SamplerSettings | None = None,
+    hold: str = "zoh",
+    fixed: Mapping[str, float | None] | None = None,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` and check the fitted model open loop.
 
@@ -254,6 +258,12 @@ def calibrate(
     sampler : SamplerSettings, optional
         Draws, warm-up and chains of a sampling method (``"mcmc"``); the fitted model keeps
         :data:`~rczone.estimation.posterior.KEPT_DRAWS` posterior draws for :func:`prediction`.
+    hold : {"zoh", "foh"}
+        Inter-sample behaviour of the inputs (:func:`rczone.estimation.fit`); recorded in the
+        fitted model's provenance.
+    fixed : mapping, optional
+        Values of parameters that are not free (a noise level, an initial state, an R or C),
+        physical units; None keeps the model's value.
     """
     zm = as_model(model)
     net = zm.network
@@ -269,6 +279,9 @@ def calibrate(
     }
     free = tuple(free) if free else default_free(net, method, noise=noise)
     start = {k: v for k, v in {**zm.theta, **zm.noise}.items() if k in free}
+    held = {k: v for k, v in zm.theta.items() if k not in free}
+    known = {**zm.theta, **zm.noise}
+    held.update({k: (known.get(k) if v is None else v) for k, v in (fixed or {}).items()})
     res = fit(
         net,
         data,
@@ -279,9 +292,10 @@ def calibrate(
         rng=np.random.default_rng(seed),
         uncertainty=uncertainty,
         start=start,
-        fixed={k: v for k, v in zm.theta.items() if k not in free},
+        fixed={k: v for k, v in held.items() if v is not None},
         bounds=bounds,
         sampler=sampler,
+        hold=hold,
     )
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
@@ -308,11 +322,12 @@ def calibrate(
         band_scale=band.to_dict() if band is not None else None,
         baselines=baseline_models(data),
         **({"posterior_draws": posterior_draws(res)} if res.posterior is not None else {}),
+        hold=hold,
         **dict(provenance or {}),
     )
     if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
         initial = estimated_start(fitted, values, data, has_noise=True).values
-    ol = open_loop_error(net, {**theta, **initial}, data)
+    ol = open_loop_error(net, {**theta, **initial}, data, hold)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = None
     if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:

@@ -9,12 +9,19 @@ import typer
 
 from rczone.cli.common import (
     MODEL_HELP,
+    BoundsOption,
+    FixOption,
+    HoldOption,
+    bounds,
     check_seed,
     constants,
     data_label,
     esc,
+    fixed,
+    free_list,
     model,
     out_console,
+    parameter_kinds,
     read_frame,
     split,
     write_json,
@@ -46,11 +53,16 @@ def fit(
     model_name: Annotated[str, typer.Option("--model", help=MODEL_HELP)] = "second-order-paper",
     method: Annotated[str, typer.Option(help=METHOD_HELP)] = DEFAULT_METHOD,
     free: Annotated[
-        str | None,
+        list[str] | None,
         typer.Option(
-            help="Comma-separated free parameters (default: the model's, plus noise levels for ML)."
+            metavar="NAMES|+NAME",
+            help="Free parameters, comma-separated or repeated (default: the model's, plus noise levels"
+            " for ML); +NAME adds NAME to the default set instead, e.g. --free +sigma_w_Te.",
         ),
     ] = None,
+    fix: FixOption = None,
+    bound: BoundsOption = None,
+    hold: HoldOption = "zoh",
     optimizer: Annotated[
         str,
         typer.Option(
@@ -145,7 +157,10 @@ def fit(
         frame = split_frame(frame, at)[0]
     settings = FitSettings(
         method=method,
-        free=split(free),
+        free=free_list(free),
+        fixed=fixed(fix, parameter_kinds(zm)),
+        bounds=bounds(bound, parameter_kinds(zm)),
+        hold=hold.strip().lower(),
         optimizer=optimizer,
         n_starts=n_starts,
         seed=seed,

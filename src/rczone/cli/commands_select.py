@@ -9,13 +9,17 @@ import typer
 
 from rczone.cli.common import (
     MODEL_HELP,
+    BoundsOption,
     ColumnMapOption,
     ConstantsOption,
+    HoldOption,
+    bounds,
     constants,
     data_label,
     esc,
     model,
     out_console,
+    parameter_kinds,
     write_json,
 )
 from rczone.cli.main import app
@@ -23,9 +27,12 @@ from rczone.cli.main import app
 
 def _read(data: Path, column_map: Path | None, zms: list, required: list[str] | None = None) -> object:
     """The data with every candidate's signals (:func:`rczone.workflow.api.read_for_models`)."""
+    from rczone.cli.common import note_ignored
     from rczone.workflow.api import read_for_models
 
-    return read_for_models(data, column_map, zms, required)
+    frame = read_for_models(data, column_map, zms, required)
+    note_ignored(frame, column_map, "no candidate uses")
+    return frame
 
 
 @app.command()
@@ -64,6 +71,8 @@ def select(
     seed: Annotated[int, typer.Option(help="Seed of the global searches.")] = 0,
     column_map: ColumnMapOption = None,
     const: ConstantsOption = None,
+    hold: HoldOption = "zoh",
+    bound: BoundsOption = None,
     json_out: Annotated[
         Path | None,
         typer.Option("--json", help="Write the table, tests and selection as JSON ('-': stdout)."),
@@ -103,6 +112,7 @@ def select(
 
     check_seed(seed)
     from rczone.selection.compare import family_candidates, select_models
+    from rczone.selection.text import fit_arguments
 
     n_starts = _starts(starts)
     criterion = criterion.strip().lower()
@@ -111,8 +121,11 @@ def select(
     console = make_console(stderr=True)
     out = out_console(json_out)
     label = data_label(data)
+    hold = hold.strip().lower()
+    specs: dict[str, str] = {}
     if models:
         zms = [model(m) for m in models]
+        specs = {zm.label: m for zm, m in zip(zms, models)}
         frame = _read(data, column_map, zms)
     else:
         from rczone.models import load_model
@@ -129,6 +142,7 @@ def select(
         from rczone.calibration.holdout import split_frame
 
         frame = split_frame(frame, at)[0]
+    box = bounds(bound, parameter_kinds(*zms))
 
     def progress(name: str) -> None:
         console.print(f"fitting {esc(name)} (ML)")
@@ -145,10 +159,28 @@ def select(
             seed=seed,
             progress=progress,
             noise=noise.strip().lower(),
+            hold=hold,
+            bounds=box,
         )
-    sel = dataclasses.replace(sel, data_label=label, source=str(data), noise=noise.strip().lower())
-    for line in sel.summary_lines():
-        out.print(line)
+    sel = dataclasses.replace(
+        sel,
+        data_label=label,
+        source=str(data),
+        noise=noise.strip().lower(),
+        fit_args=fit_arguments(
+            sel,
+            columns=column_map,
+            constants=constants(const),
+            hold=hold,
+            n_starts=n_starts,
+            seed=seed,
+            bounds=box,
+        ),
+        model_specs=specs,
+    )
+    from rczone.results.protocol import print_lines
+
+    print_lines(out, sel.summary_lines())  # the command to paste stays one line
     payload = sel.to_dict()
     best = sel.best
     if at is not None:

@@ -6,7 +6,7 @@ Everything heavy is imported inside the functions, so that ``rczone --help`` sta
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -39,6 +39,35 @@ ConstantsOption = Annotated[
     typer.Option("--const", help="Hold an input constant, NAME=VALUE in SI units (repeatable), e.g. Q=50."),
 ]
 
+HoldOption = Annotated[
+    str,
+    typer.Option(
+        "--hold",
+        metavar="zoh|foh",
+        help="Inputs between samples: zoh (held, default) or foh (linear; pySIP's choice, matters on"
+        " coarse data).",
+    ),
+]
+BoundsOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--bounds",
+        metavar="NAME=LO,HI",
+        help="Search bounds NAME=LO,HI, repeatable: SI units as the fit table prints them (J/K, K/W,"
+        " K), or a model file's unit after the numbers, e.g. Ci=1e5,5e9 or 'Ci=0.1,500 kWh/K'.",
+    ),
+]
+FixOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--fix",
+        metavar="NAME[=VALUE]",
+        help="Hold a parameter, NAME or NAME=VALUE (repeatable): any R, C or gain, a noise level"
+        " (sigma_v, sigma_w_Te) or an initial state (x0_Te); without a value, the model's; SI units"
+        " or a model file's unit after the number ('Rea=20 K/kW').",
+    ),
+]
+
 MODEL_HELP = (
     "Model: a built-in name (`rczone models` lists them, e.g. second-order-paper, TiTe+heater+solar),"
     " a model file (.toml) or a model saved by --save-model (.json; its values are the start)."
@@ -60,7 +89,25 @@ def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None 
     from rczone.workflow.reader import read_frame as read
     from rczone.workflow.reader import read_model_frame
 
-    return read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
+    frame = read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
+    note_ignored(frame, column_map, f"{zm.label if zm is not None else 'the model'} does not use")
+    return frame
+
+
+def note_ignored(frame: pd.DataFrame, column_map: Path | None, unused: str) -> None:
+    """One quiet line on stderr naming the mapped channels the model does not use (they are ignored).
+
+    ``unused`` ends the sentence "the map maps Ps, which ...": ``"TiTe does not use"``.
+    """
+    from rczone.errors import printable
+
+    ignored = frame.attrs.get("ignored_channels")
+    if ignored and column_map is not None:
+        names = ", ".join(map(str, ignored))
+        typer.echo(
+            f"note: {printable(column_map.name)} maps {printable(names)}, which {printable(unused)}: ignored",
+            err=True,
+        )
 
 
 def check_seed(value: int) -> int:
@@ -99,6 +146,104 @@ def constants(items: Iterable[str] | None) -> dict[str, float] | None:
                 f"--const must be NAME=VALUE with a finite number in SI units, e.g. Q=50; got {item!r}"
             ) from None
     return out or None
+
+
+def _number(text: str) -> float:
+    v = float(text)
+    if not math.isfinite(v):
+        raise ValueError
+    return v
+
+
+def _unit_factor(name: str, unit: str, kinds: Mapping[str, str], option: str) -> float:
+    """Factor to SI of ``unit`` for the parameter ``name``: the units a model file accepts for its kind."""
+    from rczone.errors import ParameterError, did_you_mean
+    from rczone.models.modelfile import PARAMETER_UNITS
+
+    kind = kinds.get(name)
+    if kind is None:
+        raise ParameterError(
+            f"{option} {name}: a unit is for a resistance, capacity or gain of the model; give {name} in SI"
+            " units without one"
+        )
+    table = PARAMETER_UNITS[kind]
+    if unit not in table:
+        raise ParameterError(
+            f"{option} {name}: {unit!r} is not a unit of a {kind} ({', '.join(table)}); {did_you_mean(unit, table)}"
+        )
+    return table[unit]
+
+
+def _numbers_and_unit(text: str) -> tuple[list[float], str]:
+    """``"0.5,50 kWh/K"`` -> ``([0.5, 50.0], "kWh/K")``; ValueError for anything but finite numbers."""
+    numbers, _, unit = text.strip().partition(" ")
+    return [_number(v) for v in numbers.split(",")], unit.strip()
+
+
+def bounds(
+    items: Iterable[str] | None, kinds: Mapping[str, str] | None = None
+) -> dict[str, tuple[float, float]]:
+    """``["Ci=1e5,5e9", "Rea=0.2,2000 K/kW"]`` -> ``{"Ci": (1e5, 5e9), "Rea": (2e-4, 2.0)}`` (SI).
+
+    ``kinds`` (parameter name -> kind) allows a unit after the numbers, one a model file accepts for
+    the parameter's kind; the order of the bounds is checked by the settings.
+    """
+    from rczone.errors import ParameterError
+    from rczone.files.text import nfkc
+
+    out: dict[str, tuple[float, float]] = {}
+    for item in items or ():
+        name, sep, pair = item.partition("=")
+        name = nfkc(name.strip())
+        try:
+            values, unit = _numbers_and_unit(pair) if sep and name else ([], "")
+            if len(values) != 2:
+                raise ValueError
+        except ValueError:
+            raise ParameterError(
+                "--bounds must be NAME=LO,HI with two finite numbers and an optional unit, e.g. Ci=1e5,5e9"
+                f" or 'Ci=0.1,500 kWh/K'; got {item!r}"
+            ) from None
+        factor = _unit_factor(name, unit, kinds or {}, "--bounds") if unit else 1.0
+        out[name] = (values[0] * factor, values[1] * factor)
+    return out
+
+
+def fixed(items: Iterable[str] | None, kinds: Mapping[str, str] | None = None) -> dict[str, float | None]:
+    """``["sigma_v=0.01", "Rea", "Rie=2 K/kW"]`` -> ``{"sigma_v": 0.01, "Rea": None, "Rie": 0.002}``.
+
+    None holds the model's value; ``kinds`` allows a unit after the number, as for :func:`bounds`.
+    """
+    from rczone.errors import ParameterError
+    from rczone.files.text import nfkc
+
+    out: dict[str, float | None] = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        name = nfkc(name.strip())
+        try:
+            values, unit = _numbers_and_unit(value) if sep else ([], "")
+            if not name or len(values) != (1 if sep else 0):
+                raise ValueError
+        except ValueError:
+            raise ParameterError(
+                "--fix must be NAME or NAME=VALUE with a finite number and an optional unit, e.g."
+                f" sigma_v=0.01 or 'Rea=20 K/kW'; got {item!r}"
+            ) from None
+        factor = _unit_factor(name, unit, kinds or {}, "--fix") if unit else 1.0
+        out[name] = values[0] * factor if values else None
+    return out
+
+
+def parameter_kinds(*models: ZoneModel) -> dict[str, str]:
+    """Name -> kind of the models' own parameters (what a unit in ``--bounds`` and ``--fix`` is checked against)."""
+    return {n: p.kind for zm in models for n, p in zm.network.parameters.items()}
+
+
+def free_list(items: Iterable[str] | None) -> list[str] | None:
+    """Every ``--free`` given, each comma-separated, as one list; None when none given."""
+    names = [n for item in items or () for n in split(item) or ()]
+    return names or None
 
 
 def out_console(json_out: Path | None) -> Console:

@@ -59,9 +59,24 @@ def render_plain(renderables: list, width: int = SUMMARY_WIDTH) -> str:
     console = Console(
         file=buf, width=width, color_system=None, force_terminal=False, highlight=False, soft_wrap=False
     )
-    for r in renderables:
-        console.print(r)
+    print_lines(console, renderables)
     return buf.getvalue()
+
+
+def print_lines(console, renderables: list) -> None:
+    """Print summary lines on a rich console; a :class:`rich.text.Text` (a command to paste) is never wrapped.
+
+    Parameters
+    ----------
+    console : rich.console.Console
+        Where to print.
+    renderables : list
+        Strings with rich markup, tables, or ``Text`` lines printed whole.
+    """
+    from rich.text import Text
+
+    for r in renderables:
+        console.print(r, soft_wrap=isinstance(r, Text))
 
 
 class Result:

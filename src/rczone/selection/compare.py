@@ -55,7 +55,7 @@ import pandas as pd
 from scipy.special import chdtrc
 
 from rczone.calibration import Calibration, ModelLike, as_model, calibrate, complete_stretch, frame_from
-from rczone.errors import DataError, ParameterError
+from rczone.errors import DataError, ParameterError, did_you_mean
 from rczone.estimation.fit import default_free
 from rczone.models import ZoneModel
 from rczone.network.stochastic import MEASUREMENT_NOISE, PROCESS_NOISE, kind_of, process_noise_name, target_of
@@ -269,6 +269,12 @@ class Selection(Result):
         The data as the user named them (a path), for the command line printed to refit.
     noise : str
         The process-noise placement the candidates were fitted with.
+    fit_args : tuple of str
+        The further ``rczone fit`` arguments that reproduce a candidate's fit alone (the column
+        map, constants, hold, starts, seed), as the command line was given them.
+    model_specs : dict of str to str
+        What names each candidate on the command line (``--model``), when it is not its label
+        (a model file).
     """
 
     candidates: Mapping[str, Candidate]
@@ -286,6 +292,8 @@ class Selection(Result):
     data_label: str = "data"
     source: str = ""
     noise: str = "all"
+    fit_args: tuple[str, ...] = ()
+    model_specs: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def best(self) -> Candidate:
@@ -408,6 +416,8 @@ def select_models(
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
     noise: str = "all",
+    hold: str = "zoh",
+    bounds: Mapping[str, tuple[float, float]] | None = None,
 ) -> Selection:
     """Fit the candidate ``models`` to ``frame`` by ML and choose one (see the module notes).
 
@@ -431,6 +441,11 @@ def select_models(
         Called with the name of each model before it is fitted.
     noise : {"all", "measured"}
         Estimate the process noise of every state (default), or of the measured states only.
+    hold : {"zoh", "foh"}
+        Inter-sample behaviour of the inputs in every fit.
+    bounds : mapping of str to (float, float), optional
+        Search bounds (SI units), each applied to the candidates that have the parameter; a name no
+        candidate has is an error.
     """
     if rule not in RULES:
         raise ParameterError(f"rule must be one of {RULES}, got {rule!r}")
@@ -456,6 +471,13 @@ def select_models(
         check_measured(by_name, frame_from(frame), constants, basis)
     frame = common_stretch(zms, frame_from(frame), constants)
     free = {n: candidate_free(zm.network, noise) for n, zm in by_name.items()}
+    bounds = dict(bounds or {})
+    known = {p for names_ in free.values() for p in names_}
+    for b in bounds:
+        if b not in known:
+            raise ParameterError(
+                f"bounds given for {b!r}, which no candidate estimates; {did_you_mean(b, known)}"
+            )
     nests: dict[tuple[str, str], Nesting] = {}
     for a in names:
         for b in names:
@@ -479,7 +501,18 @@ def select_models(
             progress(name)
 
         def run(zm: ZoneModel) -> Calibration:
-            return calibrate(zm, frame, "ml", free[name], n_starts=n_starts, seed=seed, constants=constants)
+            own = {k: v for k, v in bounds.items() if k in free[name]}
+            return calibrate(
+                zm,
+                frame,
+                "ml",
+                free[name],
+                n_starts=n_starts,
+                seed=seed,
+                constants=constants,
+                hold=hold,
+                bounds=own or None,
+            )
 
         cal = run(by_name[name])
         simpler = [fitted[a] for (a, b) in nests if b == name and a in fitted]

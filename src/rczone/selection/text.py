@@ -5,6 +5,8 @@ Plain functions over a :class:`~rczone.selection.compare.Selection`; rich render
 
 from __future__ import annotations
 
+from rich.text import Text
+
 from rczone.results.fit_text import esc
 from rczone.results.verdict import EXIT_UNTRUSTED
 
@@ -125,11 +127,11 @@ def selection_lines(sel) -> list:
         )
     lines.append(f"selected: [bold]{esc(sel.selected)}[/] ({how})")
     lines.append(
-        f"the same fit alone: rczone fit {esc(sel.source or sel.data_label)} --model {esc(sel.selected)}"
-        f" --noise {esc(sel.noise)}; check its open-loop prediction on held-out data (rczone predict) before"
+        "the same fit alone (check its open-loop prediction on held-out data with rczone predict before"
         " using it for control: process noise on every state raises the likelihood but can leave the"
-        " deterministic part poor"
+        " deterministic part poor):"
     )
+    lines.append(Text(fit_command(sel)))  # a Text is printed unwrapped, so it pastes as one line
     best = sel.best.calibration
     inn = best.innovations
     if inn is not None and not inn.white:
@@ -141,3 +143,66 @@ def selection_lines(sel) -> list:
     if not best.verdict.trustworthy:
         lines.append(f"[red]the selected model's fit is flagged[/] (exit code {EXIT_UNTRUSTED})")
     return lines
+
+
+def fit_command(sel) -> str:
+    """The ``rczone fit`` command line that fits the selected model alone, as ``select`` fitted it.
+
+    Every argument is quoted for a POSIX shell (:func:`shlex.join`), so the line can be pasted.
+
+    Parameters
+    ----------
+    sel : Selection
+        The selection (its ``source``, ``model_specs``, ``noise`` and ``fit_args``).
+
+    Returns
+    -------
+    str
+    """
+    import shlex
+
+    spec = sel.model_specs.get(sel.selected, sel.selected)
+    args = ["rczone", "fit", sel.source or sel.data_label, "--model", spec, "--noise", sel.noise]
+    return shlex.join([*args, *sel.fit_args])
+
+
+def fit_arguments(sel, *, columns=None, constants=None, hold="zoh", n_starts=None, seed=0, bounds=None):
+    """The ``rczone fit`` options that repeat the selected model's fit as ``select`` made it.
+
+    Parameters
+    ----------
+    sel : Selection
+        The selection (the selected fit's free parameters decide which bounds apply).
+    columns : str or path, optional
+        The column map.
+    constants : mapping of str to float, optional
+        Inputs held constant (SI units).
+    hold : {"zoh", "foh"}
+        Inputs between samples.
+    n_starts : int, optional
+        Local searches (None: the global search, the default of both commands).
+    seed : int
+        Seed of the global search.
+    bounds : mapping of str to (float, float), optional
+        Search bounds; those of parameters the selected fit estimates are kept.
+
+    Returns
+    -------
+    tuple of str
+    """
+    free = set(sel.best.calibration.result.names)
+    args: list[str] = []
+    if columns is not None:
+        args += ["--columns", str(columns)]
+    for name, value in (constants or {}).items():
+        args += ["--const", f"{name}={value!r}"]
+    if hold != "zoh":
+        args += ["--hold", hold]
+    if n_starts is not None:
+        args += ["--starts", str(n_starts)]
+    if seed:
+        args += ["--seed", str(seed)]
+    for name, (lo, hi) in (bounds or {}).items():
+        if name in free:
+            args += ["--bounds", f"{name}={lo!r},{hi!r}"]
+    return tuple(args)

@@ -81,6 +81,9 @@ def fit(
     check_on: Sequence[pd.DataFrame | PathLike] = (),
     checks: bool = True,
     profiles: bool = True,
+    hold: str = "zoh",
+    bounds: Mapping[str, tuple[float, float]] | None = None,
+    fixed: Mapping[str, float | None] | None = None,
     label: str | None = None,
     draws: int = 1000,
     tune: int = 1000,
@@ -99,7 +102,8 @@ def fit(
         ``"ml"`` (default, as the command line), ``"ls"``, ``"map"`` or ``"mcmc"`` (posterior
         sampling; :data:`rczone.estimation.methods.REGISTRY`).
     free : sequence of str, optional
-        Free parameters; default the model's, plus noise levels for ML and MAP.
+        Free parameters; default the model's, plus noise levels for ML and MAP. ``"+NAME"`` adds
+        ``NAME`` to the default set (``--free +sigma_w_Te``).
     optimizer : str
         ``"auto"``, ``"nelder-mead"``, ``"powell"`` or ``"lbfgs"``.
     n_starts : int, optional
@@ -119,6 +123,12 @@ def fit(
         ``rczone fit --json`` does; they enter the one verdict.
     profiles : bool
         With ``checks``: profile each R and C over a factor of ten.
+    hold : {"zoh", "foh"}
+        Inputs between samples: held (default) or linear (``--hold``).
+    bounds : mapping of str to (float, float), optional
+        Search bounds in the parameter's SI unit (``--bounds NAME=LO,HI``).
+    fixed : mapping of str to float or None, optional
+        Parameters held at a value, None for the model's (``--fix NAME[=VALUE]``).
     label : str, optional
         The data's name in titles and the JSON; default the file name (or ``"data"``).
     draws, tune, chains : int
@@ -142,6 +152,9 @@ def fit(
         checks=checks,
         profiles=profiles,
         sampler=SamplerSettings(draws=draws, tune=tune, chains=chains),
+        hold=hold,
+        bounds=dict(bounds or {}),
+        fixed=dict(fixed or {}),
     )
     frame, name = _frame(data, columns, zm)
     others = {}
@@ -388,6 +401,8 @@ def select_models(
     seed: int = 0,
     constants: Mapping[str, float] | None = None,
     columns: PathLike | None = None,
+    hold: str = "zoh",
+    bounds: Mapping[str, tuple[float, float]] | None = None,
     label: str | None = None,
 ):
     """Fit candidate models to the same data by ML and choose one: ``rczone select`` in Python.
@@ -414,6 +429,10 @@ def select_models(
         Inputs held constant (SI units).
     columns : str or path, optional
         A column map for ``data`` given as a file.
+    hold : {"zoh", "foh"}
+        Inputs between samples in every fit (``--hold``).
+    bounds : mapping of str to (float, float), optional
+        Search bounds (SI units) for the candidates that have the parameter (``--bounds``).
     label : str, optional
         The data's name in titles and the JSON.
 
@@ -425,6 +444,7 @@ def select_models(
     import dataclasses
 
     from rczone.selection import select_models as run
+    from rczone.selection.text import fit_arguments
 
     zms = [as_model(m) for m in models]
     if isinstance(data, pd.DataFrame):
@@ -441,8 +461,13 @@ def select_models(
         n_starts=n_starts,
         seed=seed,
         noise=noise,
+        hold=hold,
+        bounds=bounds,
     )
-    return dataclasses.replace(sel, data_label=label or name, source=source, noise=noise)
+    args = fit_arguments(
+        sel, columns=columns, constants=constants, hold=hold, n_starts=n_starts, seed=seed, bounds=bounds
+    )
+    return dataclasses.replace(sel, data_label=label or name, source=source, noise=noise, fit_args=args)
 
 
 def design_test(

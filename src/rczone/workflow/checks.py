@@ -58,7 +58,7 @@ def fit_and_check(
         model,
         frame,
         settings.method,
-        settings.free,
+        settings.free_for(model.network),
         settings.optimizer,
         settings.n_starts,
         settings.seed,
@@ -66,6 +66,9 @@ def fit_and_check(
         provenance={"data": label, "model": model.label},
         noise=settings.noise,
         sampler=settings.sampler,
+        hold=settings.hold,
+        bounds=settings.bounds or None,
+        fixed=settings.fixed,
     )
     if settings.checks or others:
         cal = check_fit(cal, frame, settings, others=others, progress=progress)
@@ -119,11 +122,14 @@ def check_fit(
             zm,
             f,
             settings.method,
-            settings.free,
+            settings.free_for(zm.network),
             settings.optimizer,
             constants=settings.constants or None,
             noise=settings.noise,
             sampler=settings.sampler,
+            hold=settings.hold,
+            bounds=settings.bounds or None,
+            fixed=settings.fixed,
         ).result
         ol = predict(zm, f, settings.constants or None)
         validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}

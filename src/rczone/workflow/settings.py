@@ -7,6 +7,7 @@ command line defaulted to maximum likelihood).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -14,6 +15,10 @@ from rczone.errors import ParameterError
 from rczone.estimation.methods import DEFAULT_METHOD, method_of
 from rczone.estimation.optimize import OPTIMIZERS
 from rczone.estimation.sampling import SamplerSettings
+from rczone.simulation.simulate import HOLDS
+
+#: Start of a ``free`` entry that adds a parameter to the default free set (``"+sigma_w_Te"``).
+ADD = "+"
 
 #: Process-noise placements of an ML or MAP fit (:func:`rczone.estimation.fit.default_free`).
 NOISE_PLACEMENTS = ("measured", "all")
@@ -28,7 +33,9 @@ class FitSettings:
     method : str
         A method of :data:`rczone.estimation.methods.REGISTRY`; default ``"ml"``.
     free : tuple of str or None
-        Free parameters; None for :func:`rczone.estimation.fit.default_free`.
+        Free parameters; None for :func:`rczone.estimation.fit.default_free`. An entry written
+        ``"+NAME"`` adds ``NAME`` (a noise level ``sigma_w_Te``, an initial state ``x0_Te``, a
+        parameter the model declares fixed) to the default set instead of replacing it.
     optimizer : str
         ``"auto"`` or one of :data:`rczone.estimation.optimize.OPTIMIZERS`.
     n_starts : int or None
@@ -46,6 +53,22 @@ class FitSettings:
         With ``checks``: profile each R and C over a factor of 10 (single-output models).
     sampler : SamplerSettings
         Draws, warm-up and chains of a sampling method (``"mcmc"``); the seed is :attr:`seed`.
+    hold : {"zoh", "foh"}
+        Inter-sample behaviour of the inputs: held (zero-order) or linear between samples
+        (first-order hold; Franklin, Powell & Workman 1998, sec. 6.3.2). On coarse data the choice
+        moves the optimum (pySIP's published fits use FOH).
+    bounds : dict of str to (float, float)
+        Search bounds overriding the declared ones, in the parameter's SI unit (as the fit table
+        prints it), ``lower < upper``.
+    fixed : dict of str to float or None
+        Parameters held at a value instead of estimated (any R, C or gain, noise level or initial
+        state); None holds the model's value (a noise level the model does not carry: its default,
+        no process noise).
+
+    References
+    ----------
+    Franklin, G. F., Powell, J. D. & Workman, M. L. (1998). *Digital Control of Dynamic Systems*,
+    3rd ed. Addison-Wesley.
     """
 
     method: str = DEFAULT_METHOD
@@ -58,6 +81,9 @@ class FitSettings:
     checks: bool = True
     profiles: bool = True
     sampler: SamplerSettings = field(default_factory=SamplerSettings)
+    hold: str = "zoh"
+    bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    fixed: Mapping[str, float | None] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         method_of(self.method)
@@ -83,3 +109,77 @@ class FitSettings:
         if not isinstance(self.sampler, SamplerSettings):
             raise ParameterError(f"sampler must be a SamplerSettings, got {type(self.sampler).__name__}")
         self.sampler.checked()
+        if self.hold not in HOLDS:
+            raise ParameterError(f"hold must be one of {', '.join(HOLDS)}, got {self.hold!r}")
+        object.__setattr__(self, "bounds", {k: _pair(k, v) for k, v in dict(self.bounds or {}).items()})
+        object.__setattr__(self, "fixed", {k: _value(k, v) for k, v in dict(self.fixed or {}).items()})
+        both = [n for n in self.fixed if n in (self.free or ()) or ADD + n in (self.free or ())]
+        if both:
+            raise ParameterError(f"parameter {both[0]!r} is both free and fixed; choose one")
+        pinned = [n for n in self.bounds if n in self.fixed]
+        if pinned:
+            raise ParameterError(f"bounds given for {pinned[0]!r}, which is fixed; drop one of the two")
+
+    def free_for(self, network) -> tuple[str, ...]:
+        """The free parameters of a fit of ``network``: ``free`` (or the default, with the ``+`` entries), less ``fixed``.
+
+        Parameters
+        ----------
+        network : RCNetwork
+            The model's network.
+
+        Returns
+        -------
+        tuple of str
+
+        Raises
+        ------
+        ParameterError
+            For a name the network does not have (with the close names), or nothing left free.
+        """
+        from rczone.estimation.fit import default_free
+        from rczone.estimation.parameters import check_name
+
+        given = [n for n in (self.free or ()) if not n.startswith(ADD)]
+        added = [n[len(ADD) :] for n in (self.free or ()) if n.startswith(ADD)]
+        for name in (*added, *self.fixed, *self.bounds):
+            check_name(network, name)
+        base = list(given) if given else list(default_free(network, self.method, noise=self.noise))
+        free = tuple(dict.fromkeys(n for n in (*base, *added) if n not in self.fixed))
+        if not free:
+            raise ParameterError("every parameter is fixed: leave at least one free")
+        held = [n for n in self.bounds if n not in free]
+        if held:
+            raise ParameterError(
+                f"bounds given for {held[0]!r}, which this fit does not estimate; free it too"
+                f" (--free +{held[0]}, or free=['{ADD}{held[0]}']) or drop the bound"
+            )
+        return free
+
+
+def _pair(name: str, bounds: object) -> tuple[float, float]:
+    """``bounds[name]`` as a checked ``(lower, upper)``: finite numbers, ``lower < upper``."""
+    try:
+        lo, hi = (float(b) for b in bounds)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        raise ParameterError(f"bounds of {name!r} must be a (lower, upper) pair, got {bounds!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ParameterError(
+            f"bounds of {name!r}: lower {lo:g} must be < upper {hi:g}, both finite (they are never swapped)"
+        )
+    return lo, hi
+
+
+def _value(name: str, value: object) -> float | None:
+    """A fixed value: None (the model's) or a finite number."""
+    if value is None:
+        return None
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ParameterError(f"fixed value of {name!r} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ParameterError(f"fixed value of {name!r} must be finite, got {value!r}")
+    return v
