@@ -47,9 +47,9 @@ SETTINGS = settings(max_examples=20, deadline=None, suppress_health_check=[Healt
 def complex_state_space(net, base: dict) -> BilinearStateSpace:
     """The state space of complex base parameter values (ties evaluated in complex arithmetic)."""
     vals = evaluate_ties(net.parameters, base, net._tie_order)
-    A, N, B, M, C, D, cap = net._assemble(vals, complex)
+    built = net._assemble(vals, complex)
     return BilinearStateSpace(
-        A, N, B, M, C, D, net.state_names, net.input_names, net.flow_names, net.outputs, cap.real
+        *built.matrices, net.state_names, net.input_names, net.flow_names, net.outputs, built.capacities.real
     )
 
 
