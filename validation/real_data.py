@@ -133,8 +133,8 @@ def fit_and_validate(
     return out
 
 
-def leec(shared: Path) -> dict:
-    """LEEC classroom: the longest stretch without frozen sensors, last 25 % held out."""
+def leec_frame(shared: Path) -> tuple[pd.DataFrame, np.ndarray]:
+    """The LEEC classroom's longest stretch without frozen sensors, and the mask of frozen samples."""
     folder = shared / "data" / "leec_classroom_vav"
     with warnings.catch_warnings():  # the loader warns about the frozen logger; handled below
         warnings.simplefilter("ignore", RczoneWarning)
@@ -144,31 +144,40 @@ def leec(shared: Path) -> dict:
     frame = frame.dropna(subset=["Ti", "To", "Ts", "m"]).reset_index(drop=True)
     frame["Q"] = 0.0
     bad = stuck_mask(frame, ["Ti", "Ts", "Tw"], hours=6.0)
-    run = longest_clean_run(bad)
-    clean = frame.iloc[run].reset_index(drop=True)
+    return frame.iloc[longest_clean_run(bad)].reset_index(drop=True), bad
+
+
+def leec(shared: Path) -> dict:
+    """LEEC classroom: the longest stretch without frozen sensors, last 25 % held out."""
+    clean, bad = leec_frame(shared)
     split = int(0.75 * len(clean))
     res = fit_and_validate(
         leec_network(), clean.iloc[:split], clean.iloc[split:], ["Ci", "Cm", "Rea", "Rim"], "LEEC"
     )
     res["cleaning"] = (
         f"frozen logger: samples where Ti, Ts and the wall-mass temperature have not changed for 6 h are"
-        f" excluded ({int(bad.sum())} of {len(frame)}); the longest clean stretch ({len(clean)} hours) is used"
+        f" excluded ({int(bad.sum())} of {bad.size}); the longest clean stretch ({len(clean)} hours) is used"
     )
     return res
 
 
-def bacher_madsen(shared: Path) -> dict:
-    """Bacher-Madsen PRBS experiment: TiTe, last 25 % held out."""
+def bacher_madsen_frame(shared: Path, outdoor: str = "Ta") -> pd.DataFrame:
+    """The Bacher-Madsen PRBS record in SI units (hours to s, kW to W); the outdoor column named ``outdoor``."""
     raw = pd.read_csv(shared / "data" / "bacher_madsen_prbs" / "inputPRBS1.csv")
-    frame = pd.DataFrame(
+    return pd.DataFrame(
         {
             "time": raw["t"] * 3600.0,
             "Ti": raw["yTi"],
-            "Ta": raw["Ta"],
+            outdoor: raw["Ta"],
             "Ph": raw["Ph"] * 1e3,
             "Ps": raw["Ps"] * 1e3,
         }
     )
+
+
+def bacher_madsen(shared: Path) -> dict:
+    """Bacher-Madsen PRBS experiment: TiTe, last 25 % held out."""
+    frame = bacher_madsen_frame(shared)
     split = int(0.75 * len(frame))
     return fit_and_validate(
         bacher_madsen_network(),

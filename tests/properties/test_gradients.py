@@ -48,9 +48,8 @@ def complex_state_space(net, base: dict) -> BilinearStateSpace:
     """The state space of complex base parameter values (ties evaluated in complex arithmetic)."""
     vals = evaluate_ties(net.parameters, base, net._tie_order)
     built = net._assemble(vals, complex)
-    A, N, B, M, C, D = built.matrices
     return BilinearStateSpace(
-        A, N, B, M, C, D, net.state_names, net.input_names, net.flow_names, net.outputs, built.capacities.real
+        *built.matrices, net.state_names, net.input_names, net.flow_names, net.outputs, built.capacities.real
     )
 
 

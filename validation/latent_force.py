@@ -1,0 +1,258 @@
+"""Latent-force disturbances on real data: the same model with and without one (issue 23, item 3).
+
+Usage::
+
+    python validation/latent_force.py [--shared ../shared] [--out validation-output] [--only NAME]
+
+Reads the real data sets from the shared folder (their licences do not allow shipping them; see
+each PROVENANCE.md) and, for each, fits by ML on the first 75 % a model *without* and the same
+model *with* an unmeasured heat input at the room air whose prior is a Matérn-3/2 Gaussian process
+(:mod:`rczone.network.disturbance`). Reported per data set:
+
+* the likelihood-ratio test of the nesting that :func:`rczone.selection.nesting.nesting` finds
+  (the disturbance's magnitude -> 0): statistic, degrees of freedom, the ``chi2(df)`` p-value
+  (the one that decides) and the chi-bar-squared one;
+* the Ljung-Box p-value of each model's standardized one-step innovations on the calibration part
+  (:func:`rczone.estimation.innovations.innovation_analysis`; closer to white is larger);
+* the held-out 6-h prediction error: the filter runs over the whole record with the calibration
+  estimates, and each held-out sample is predicted from the filtered state 6 h earlier with the
+  measured inputs (:func:`rczone.estimation.forecast.k_step_band`), RMSE over the held-out part.
+
+Prints 'skipped: data not found' and exits 0 when the shared folder is absent. Writes
+``<out>/latent_force.json`` and prints the table as Markdown (the form in docs/validation.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy.special import chdtrc
+
+from rczone.atomic import write_json_atomic
+from rczone.estimation import Dataset, fit
+from rczone.estimation.fit import default_free
+from rczone.estimation.forecast import k_step_band
+from rczone.estimation.innovations import innovation_analysis
+from rczone.models import load_model
+from rczone.network import Disturbance, Parameter, RCNetwork
+from rczone.selection.compare import chi_bar_sf
+from rczone.selection.nesting import nesting
+
+HERE = Path(__file__).resolve().parent
+DEFAULT_SHARED = HERE.parent.parent / "shared"
+sys.path.insert(0, str(HERE))
+from real_data import bacher_madsen_frame, leec_frame, leec_network  # noqa: E402
+
+#: Prediction horizon of the held-out check, s.
+HORIZON_S = 6 * 3600.0
+#: Level of the likelihood-ratio test.
+ALPHA = 0.05
+
+
+def with_disturbance(net: RCNetwork, kind: str = "matern32", node: str = "Ti") -> RCNetwork:
+    """``net`` plus a disturbance ``Qd`` at ``node`` (magnitude in [1, 2000] W).
+
+    ``matern32``: length scale in [1 h, 2 d]; ``periodic``: a daily gain (period 1 d, fixed) whose
+    profile decays over ``ld`` in [6 h, 20 d].
+    """
+    periodic = kind == "periodic"
+    params = [
+        Parameter("sd", "magnitude", 100.0, bounds=(1.0, 2000.0), description="std of the unmeasured gains"),
+        Parameter(
+            "ld",
+            "time",
+            2 * 86400.0 if periodic else 4 * 3600.0,
+            bounds=(6 * 3600.0, 20 * 86400.0) if periodic else (3600.0, 2 * 86400.0),
+            description="decay of the daily profile" if periodic else "length scale of the gains",
+        ),
+    ]
+    extra = {}
+    if periodic:
+        params.append(Parameter("Pd", "time", 86400.0, fixed=True, description="a day"))
+        extra["period"] = "Pd"
+    return RCNetwork(
+        f"{net.name}+Qd",
+        net.nodes,
+        net.boundaries,
+        net.resistors,
+        [*net.parameters.values(), *params],
+        net.heat_inputs,
+        net.supply_air,
+        net.outputs,
+        net.description,
+        disturbances=[Disturbance("Qd", kind, node, magnitude="sd", length_scale="ld", **extra)],
+    )
+
+
+def _one(
+    net: RCNetwork, cal: Dataset, full: Dataset, split: int, start: dict | None = None
+) -> tuple[dict, object, tuple[str, ...]]:
+    t0 = time.process_time()
+    free = default_free(net, "ml", noise="all")
+    res = fit(net, cal, free, method="ml", start=start)
+    values = {**res.fixed, **res.estimates}
+    white = innovation_analysis(net, values, cal)
+    dt = float(np.median(np.diff(full.t)))
+    y_hat, _ = k_step_band(net, values, full, max(1, round(HORIZON_S / dt)))
+    err = (full.y - y_hat)[split:]
+    out = {
+        "loglik": res.llf,
+        "n_params": res.n_params,
+        "converged": res.converged,
+        "flags": list(res.flags),
+        "at_bound": [e.name for e in res.parameters.values() if e.at_bound],
+        "ljung_box_p": white.ljung_box_p,
+        "rmse_6h_K": float(np.sqrt(np.nanmean(err**2))),
+        "estimates": {k: float(v) for k, v in res.estimates.items()},
+        "cpu_s": round(time.process_time() - t0, 1),
+    }
+    return out, res, free
+
+
+def compare(
+    plain: RCNetwork,
+    frame: pd.DataFrame,
+    kind: str = "matern32",
+    node: str = "Ti",
+    calibration_fraction: float = 0.75,
+) -> dict:
+    """Fit ``plain`` and :func:`with_disturbance` of it; the test, the whiteness and the 6-h error of each."""
+    rich = with_disturbance(plain, kind, node)
+    split = int(calibration_fraction * len(frame))
+    full = Dataset.from_frame(frame, plain, time="time")
+    cal = Dataset.from_frame(frame.iloc[:split], plain, time="time")
+    a, res_a, free_a = _one(plain, cal, full, split)
+    # the search starts from the simpler model's estimates (as `select` does): the richer model's
+    # likelihood is then at least the simpler one's up to the disturbance's start
+    b, res_b, free_b = _one(
+        rich, cal, full, split, start={k: v for k, v in res_a.estimates.items() if k in free_a}
+    )
+    nest = nesting(plain, rich, free_a, free_b)
+    if nest is None:  # pragma: no cover - with_disturbance always nests
+        raise RuntimeError("the model with the disturbance does not nest the model without")
+    stat = 2.0 * (res_b.llf - res_a.llf)
+    p = float(chdtrc(nest.df, max(stat, 0.0)))
+    return {
+        "samples_calibration": split,
+        "samples_held_out": len(frame) - split,
+        "without": a,
+        "with": b,
+        "test": {
+            "restriction": nest.describe(),
+            "statistic": stat,
+            "df": nest.df,
+            "p_value": p,
+            "p_chi_bar": chi_bar_sf(stat, nest.df, nest.n_boundary),
+            "selected": "with" if p < ALPHA else "without",
+        },
+    }
+
+
+def bacher_madsen(shared: Path) -> tuple[RCNetwork, pd.DataFrame]:
+    """Bacher-Madsen PRBS experiment; the model the forward selection picks (TiTeTh, heater, solar)."""
+    frame = bacher_madsen_frame(shared, outdoor="To")
+    return load_model("TiTeTh+heater+solar").network, frame
+
+
+def armadillo(shared: Path) -> tuple[RCNetwork, pd.DataFrame]:
+    """Armadillo Box (pySIP data set H2, 30 min); interior and envelope, heater into the interior.
+
+    Without the solar input: with an aperture ``Aw Ps`` into the interior, ``Aw`` runs to 0 with and
+    without the disturbance (the irradiance column does not explain the room), and the flag would
+    hide the comparison.
+    """
+    raw = pd.read_csv(shared / "data" / "armadillo_pysip" / "armadillo_data_H2.csv")
+    frame = pd.DataFrame(
+        {"time": raw["Time"], "Ti": raw["T_int"], "To": raw["T_ext"], "Ph": raw["P_hea"], "Ps": raw["I_sol"]}
+    )
+    return load_model("TiTe+heater").network, frame.drop(columns="Ps")
+
+
+def leec(shared: Path) -> tuple[RCNetwork, pd.DataFrame]:
+    """LEEC classroom: the cleaning of validation/real_data.py (longest stretch without a frozen logger)."""
+    return leec_network(), leec_frame(shared)[0][["time", "Ti", "To", "Ts", "m", "Q"]]
+
+
+DATASETS: dict[str, tuple[str, Callable[[Path], tuple[RCNetwork, pd.DataFrame]]]] = {
+    "bacher_madsen_prbs": ("bacher_madsen_prbs/inputPRBS1.csv", bacher_madsen),
+    "armadillo_pysip": ("armadillo_pysip/armadillo_data_H2.csv", armadillo),
+    "leec_classroom_vav": ("leec_classroom_vav/LEEC_classroom_VAV_hourly.csv", leec),
+}
+
+
+#: The disturbance's kind per data set (see docs/validation.md for why).
+KINDS = {"bacher_madsen_prbs": "matern32", "armadillo_pysip": "matern32", "leec_classroom_vav": "matern32"}
+
+
+def markdown(results: dict) -> str:
+    """One row per data set and model."""
+    lines = [
+        "| data set | model | log L | k | LR (df) | p (chi2) | Ljung-Box p | 6-h RMSE held out (K) | at a bound |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, r in results.items():
+        t = r["test"]
+        for which in ("without", "with"):
+            m = r[which]
+            label = m["model"] + (" **(selected)**" if t["selected"] == which else "")
+            test = f"{t['statistic']:.1f} ({t['df']}) | {t['p_value']:.2g}" if which == "with" else "| "
+            lines.append(
+                f"| {name} | {label} | {m['loglik']:.1f} | {m['n_params']} | {test} | {m['ljung_box_p']:.2g} |"
+                f" {m['rmse_6h_K']:.3f} | {', '.join(m['at_bound']) or '-'} |"
+            )
+    return "\n".join(lines)
+
+
+def run(shared: Path, only: list[str] | None = None, kind: str | None = None, node: str = "Ti") -> dict:
+    """Every data set found under ``shared`` (or the ``only`` ones): :func:`compare` of its model."""
+    results = {}
+    for name, (path, load) in DATASETS.items():
+        if only and name not in only:
+            continue
+        if not (shared / "data" / path).is_file():
+            print(f"skipped {name}: {shared / 'data' / path} not found")
+            continue
+        plain, frame = load(shared)
+        res = compare(plain, frame, kind or KINDS[name], node)
+        res["without"]["model"], res["with"]["model"] = plain.name, f"{plain.name}+Qd"
+        results[name] = res
+        t = res["test"]
+        print(
+            f"{name}: LR {t['statistic']:.1f} (df {t['df']}, p {t['p_value']:.2g}); Ljung-Box p"
+            f" {res['without']['ljung_box_p']:.2g} -> {res['with']['ljung_box_p']:.2g}; 6-h RMSE"
+            f" {res['without']['rmse_6h_K']:.3f} -> {res['with']['rmse_6h_K']:.3f} K",
+            flush=True,
+        )
+    return results
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--shared", type=Path, default=DEFAULT_SHARED)
+    ap.add_argument("--out", type=Path, default=Path("validation-output"))
+    ap.add_argument(
+        "--kind", choices=("matern32", "periodic"), help="the disturbance's kind for every data set"
+    )
+    ap.add_argument("--node", default="Ti", help="the node the disturbance enters (default Ti)")
+    ap.add_argument(
+        "--only", action="append", choices=list(DATASETS), help="run only this data set (repeatable)"
+    )
+    args = ap.parse_args(argv)
+    if not (args.shared / "data").is_dir():
+        print(f"skipped: data not found under {args.shared / 'data'}")
+        return 0
+    results = run(args.shared, args.only, args.kind, args.node)
+    write_json_atomic(args.out / "latent_force.json", results)
+    print(markdown(results))
+    return 0 if all(math.isfinite(r["test"]["statistic"]) for r in results.values()) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
