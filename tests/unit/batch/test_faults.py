@@ -419,3 +419,21 @@ def test_out_at_a_file_is_one_line_and_exit_2(tmp_path, capsys):
     assert main(["fit-many", str(path), "--out", str(tmp_path / "taken")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "is a file, not a folder" in err
+
+
+def test_a_unit_whose_zone_runs_out_of_memory_is_split_and_only_that_zone_is_lost(tmp_path, quick):
+    """Issue 24: zones travel in units; a unit that fails is rerun zone by zone, so one zone costs only itself."""
+    distributed = pytest.importorskip("dask.distributed")
+    zones = ["a", "oom-0", "b", "c", "d"]
+    m = read_manifest(write_manifest(tmp_path, zones))
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as c:
+        run = run_batch(m, tmp_path / "out", scheduler=c.scheduler_address, unit=3)
+    assert (run.computed, run.failed, run.lost) == (4, 0, 1)
+    assert "MemoryError" in run.lost_reasons[0]
+    assert sorted(pd.read_parquet(run.results)["zone"]) == ["a", "b", "c", "d"]
+    # units [a, oom-0, b] and [c, d]; the first failed and ran again as three single zones
+    assert run.submitted == 2 + 3 and run.workers == 1
+    counts = pd.Series(computed(quick)).value_counts()
+    assert counts["a"] == 2 and counts["b"] == counts["c"] == counts["d"] == 1
