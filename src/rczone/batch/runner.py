@@ -296,6 +296,7 @@ def run_batch(
     t0 = time.perf_counter()
     with store.locked(), immediate():  # results stored as they arrive, whatever the caller stages
         fingerprints = {t.key: t.fingerprint for t in manifest.tasks}
+        store.clear_stream()  # segments of an interrupted run: its rows are in the parts
         done = store.done(manifest.tasks)
         todo = [t for t in manifest.tasks if t.key not in done]
         computed = failed = 0
@@ -324,7 +325,9 @@ def run_batch(
                 if isinstance(outcome, Lost):
                     lost.update((t.key, outcome.reason) for t in outcome.tasks)
                     continue
-                store.write_all([{**row, "fingerprint": fingerprints[row["key"]]} for row in outcome])
+                stored = [{**row, "fingerprint": fingerprints[row["key"]]} for row in outcome]
+                store.write_all(stored)
+                store.stream(stored)
                 for row in outcome:
                     computed += 1
                     failed += row["status"] != "ok"
@@ -337,6 +340,7 @@ def run_batch(
                 _close(*connection)
         table = store.table(manifest.tasks)
         path = store.consolidate(table)
+        store.clear_stream()  # results.parquet holds every row now
         totals = write_summary(table, store.folder, title=title)
     return BatchRun(
         total=len(manifest.tasks),

@@ -4,6 +4,7 @@ Layout of the output folder::
 
     parts/<task>.json      one row per finished task (zone x method), complete or absent
     results.parquet        the rows of the manifest's tasks, consolidated atomically
+    stream/*.parquet       the rows of a run in progress, in segments of a few hundred rows
     summary.json, report.html, *.png   the summary (see rczone.batch.summary)
     .lock                  held by the run writing into the folder
 
@@ -37,6 +38,7 @@ import os
 import re
 import stat
 import threading
+import time
 from collections.abc import Iterable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -60,6 +62,11 @@ LOCK = ".lock"
 _HELD: set[str] = set()  # folders locked by this process (the lock itself is per process)
 _HELD_GUARD = threading.Lock()
 _LOCK_FDS: set[int] = set()  # descriptors of the lock files held, closed in forked children
+STREAM = "stream"
+STREAM_ROWS = 256
+"""Rows gathered into one segment of the Parquet stream (:meth:`ResultStore.stream`)."""
+STREAM_SECONDS = 10.0
+"""Longest wait before gathered rows are written to the stream, s."""
 WRITERS = 8
 """Threads writing the parts of one unit of work (:meth:`ResultStore.write_all`)."""
 MAX_PART_BYTES = 1 << 20
@@ -163,6 +170,9 @@ class ResultStore:
         self.folder = ensure_folder(folder)
         self.parts = ensure_folder_in(self.folder, "parts")
         self._rows: dict[str, dict] | None = None
+        self._pending: list[dict] = []  # rows not yet in a stream segment
+        self._segments = 0
+        self._flushed = time.monotonic()
 
     @contextlib.contextmanager
     def locked(self) -> Iterator[ResultStore]:
@@ -265,14 +275,62 @@ class ResultStore:
         keys = sorted(rows) if tasks is None else sorted(self.done(tasks))
         if not keys:
             return pd.DataFrame(columns=["key", "zone", "method", "status", "error"])
-        df = pd.DataFrame([rows[k] for k in keys])
-        for c in df.columns:  # JSON null in a number column: NaN, so every column has one type
-            if c not in TEXT and df[c].dtype == object and all(_is_number(v) for v in df[c]):
-                df[c] = df[c].astype(float)
-        return df
+        return _frame([rows[k] for k in keys])
 
     def consolidate(self, table: pd.DataFrame | None = None) -> Path:
         """Write ``results.parquet`` (``table``, default all rows) atomically and return its path."""
-        buf = io.BytesIO()
-        (self.table() if table is None else table).to_parquet(buf, index=False)
-        return write_bytes_in(self.folder, RESULTS, buf.getvalue())
+        return write_bytes_in(self.folder, RESULTS, _parquet(self.table() if table is None else table))
+
+    def stream(self, rows: list[dict], *, flush: bool = False) -> Path | None:
+        """Add rows to the run's Parquet stream, ``stream/*.parquet``, readable while the run goes on.
+
+        Rows are gathered and written as one segment (atomically) once :data:`STREAM_ROWS` rows
+        or :data:`STREAM_SECONDS` have accumulated, so a segment costs one synced write per
+        hundreds of rows; ``pandas.read_parquet("<out>/stream")`` reads every segment. The parts
+        remain the record a rerun resumes from; :meth:`clear_stream` removes the segments once
+        ``results.parquet`` holds every row.
+
+        Parameters
+        ----------
+        rows : list of dict
+            Rows just stored (:meth:`write_all`).
+        flush : bool
+            Write the gathered rows now.
+
+        Returns
+        -------
+        Path or None
+            The segment written, if one was.
+        """
+        self._pending.extend(rows)
+        due = len(self._pending) >= STREAM_ROWS or time.monotonic() - self._flushed >= STREAM_SECONDS
+        if not self._pending or not (flush or due):
+            return None
+        self._segments += 1
+        name = f"{STREAM}/{os.getpid()}-{self._segments:06d}.parquet"
+        path = write_bytes_in(self.folder, name, _parquet(_frame(self._pending)))
+        self._pending, self._flushed = [], time.monotonic()
+        return path
+
+    def clear_stream(self) -> None:
+        """Remove the stream's segments (a link in place of ``stream/`` is refused, never followed)."""
+        folder = ensure_folder_in(self.folder, STREAM)
+        for p in folder.glob("*.parquet"):
+            with contextlib.suppress(FileNotFoundError):
+                p.unlink()  # removes a link planted there, never what it points to
+        self._pending, self._segments = [], 0
+
+
+def _frame(rows: list[dict]) -> pd.DataFrame:
+    """Rows as a table; JSON null in a number column becomes NaN, so every column has one type."""
+    df = pd.DataFrame(rows)
+    for c in df.columns:
+        if c not in TEXT and df[c].dtype == object and all(_is_number(v) for v in df[c]):
+            df[c] = df[c].astype(float)
+    return df
+
+
+def _parquet(df: pd.DataFrame) -> bytes:
+    buf = io.BytesIO()
+    df.to_parquet(buf, index=False)
+    return buf.getvalue()

@@ -437,3 +437,32 @@ def test_a_unit_whose_zone_runs_out_of_memory_is_split_and_only_that_zone_is_los
     assert run.submitted == 2 + 3 and run.workers == 1
     counts = pd.Series(computed(quick)).value_counts()
     assert counts["a"] == 2 and counts["b"] == counts["c"] == counts["d"] == 1
+
+
+def test_rows_stream_to_parquet_while_the_run_goes_on(tmp_path, quick, monkeypatch):
+    """Issue 24: the rows are readable as Parquet during the run; results.parquet replaces the stream at the end."""
+    import rczone.batch.store as store
+
+    monkeypatch.setattr(store, "STREAM_ROWS", 3)
+    zones = [f"z{i}" for i in range(8)]
+    out = tmp_path / "out"
+    seen = {}
+
+    def on_result(row, done, total):
+        if done == 7:
+            seen["stream"] = pd.read_parquet(out / "stream")
+
+    run = run_batch(
+        read_manifest(write_manifest(tmp_path, zones)),
+        out,
+        backend="processes",
+        workers=1,
+        on_result=on_result,
+    )
+    assert run.computed == 8
+    # segments of 3 rows: after 7 rows stored, the first 6 are in the stream, as stored
+    streamed = seen["stream"].sort_values("key")
+    assert len(streamed) == 6 and set(streamed["key"]) <= {f"{z}::ls" for z in zones}
+    assert (streamed["Rw"] == 0.005).all() and streamed["fingerprint"].str.len().eq(32).all()
+    assert list((out / "stream").iterdir()) == []  # the table holds every row now
+    assert len(pd.read_parquet(out / "results.parquet")) == 8
