@@ -297,7 +297,7 @@ def run_batch(
     with store.locked(), immediate():  # results stored as they arrive, whatever the caller stages
         fingerprints = {t.key: t.fingerprint for t in manifest.tasks}
         store.clear_stream()  # segments of an interrupted run: its rows are in the parts
-        done = store.done(manifest.tasks)
+        done = store.done(manifest.tasks, fingerprints)
         todo = [t for t in manifest.tasks if t.key not in done]
         computed = failed = 0
         compute = cpu = 0.0
@@ -338,7 +338,7 @@ def run_batch(
         finally:
             if connection:
                 _close(*connection)
-        table = store.table(manifest.tasks)
+        table = store.table(manifest.tasks, fingerprints)
         path = store.consolidate(table)
         store.clear_stream()  # results.parquet holds every row now
         totals = write_summary(table, store.folder, title=title)

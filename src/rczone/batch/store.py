@@ -39,7 +39,7 @@ import re
 import stat
 import threading
 import time
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
@@ -229,12 +229,19 @@ class ResultStore:
             self._rows = rows
         return self._rows
 
-    def done(self, tasks: Iterable[Task] | None = None) -> set[str]:
-        """Keys of the tasks whose result is on disk (of ``tasks``: with the same fingerprint)."""
+    def done(
+        self, tasks: Iterable[Task] | None = None, fingerprints: Mapping[str, str] | None = None
+    ) -> set[str]:
+        """Keys of the tasks whose result is on disk (of ``tasks``: with the same fingerprint).
+
+        ``fingerprints`` (task key to :attr:`~rczone.batch.manifest.Task.fingerprint`) saves
+        computing them again: each hashes the task's settings and files.
+        """
         rows = self._load()
         if tasks is None:
             return set(rows)
-        return {t.key for t in tasks if t.key in rows and rows[t.key].get("fingerprint") == t.fingerprint}
+        fp = fingerprints if fingerprints is not None else {t.key: t.fingerprint for t in tasks}
+        return {t.key for t in tasks if t.key in rows and rows[t.key].get("fingerprint") == fp[t.key]}
 
     def write(self, row: dict) -> Path:
         """Write one task's row atomically (:class:`~rczone.errors.OutputError` if it cannot be)."""
@@ -269,10 +276,12 @@ class ResultStore:
         data = json.dumps(row, allow_nan=True).encode("utf-8")
         return write_bytes_in(self.folder, f"parts/{part_name(row['key'])}", data), row
 
-    def table(self, tasks: Iterable[Task] | None = None) -> pd.DataFrame:
+    def table(
+        self, tasks: Iterable[Task] | None = None, fingerprints: Mapping[str, str] | None = None
+    ) -> pd.DataFrame:
         """Stored rows (one per task), in key order; of ``tasks``: those done with their fingerprint."""
         rows = self._load()
-        keys = sorted(rows) if tasks is None else sorted(self.done(tasks))
+        keys = sorted(rows) if tasks is None else sorted(self.done(tasks, fingerprints))
         if not keys:
             return pd.DataFrame(columns=["key", "zone", "method", "status", "error"])
         return _frame([rows[k] for k in keys])
