@@ -189,3 +189,26 @@ def test_a_local_dask_cluster_of_two_processes_gives_the_results_of_local_proces
     b = pd.read_parquet(plain.results).set_index("key")
     for col in ("Rw", "Cr", "Rw_se", "objective_value", "open_loop_rmse_K"):
         assert a[col].equals(b[col]), col
+
+
+def test_the_manifests_fit_settings_reach_the_fit(tmp_path):
+    """Issue 20: ``noise`` and ``seed`` of the manifest are the FitSettings the fit runs with."""
+    from rczone.batch.task import run_tasks, task_model
+    from rczone.network.stochastic import process_noise_names
+
+    zone = '[[zone]]\nid = "v"\nvirtual = { season = "autumn", mode = "forced", seed = 3 }\n'
+    rows = {}
+    for noise in ("measured", "all"):
+        (tmp_path / "m.toml").write_text(
+            f'methods = ["ml"]\ndiagnose = false\nn_starts = 1\nnoise = "{noise}"\nseed = 5\n{zone}'
+        )
+        (task,) = read_manifest(tmp_path / "m.toml").tasks
+        assert task.settings.noise == noise and task.settings.seed == 5
+        (rows[noise],) = run_tasks([task])
+        assert rows[noise]["status"] == "ok", rows[noise]["error"]
+    net = task_model(task).network
+    every = set(process_noise_names(net.state_names))
+    measured = set(process_noise_names(net.outputs))
+    assert measured < every  # the paper's 2-state model measures one of its two states
+    assert {n for n in every if f"{n}_se" in rows["all"]} == every
+    assert {n for n in every if f"{n}_se" in rows["measured"]} == measured
