@@ -172,6 +172,9 @@ class BatchRun(Result):
         Worker processes the run asked for (local) or found (a cluster).
     compute_seconds : float
         Sum over the calibrations computed in this run of their own time in the workers, s.
+    cpu_seconds : float
+        The same in processor time, s: what the calibrations cost where other processes share
+        the cores.
     submitted : int
         Units of work sent to the workers (a unit holds one or more zones).
     """
@@ -189,6 +192,7 @@ class BatchRun(Result):
     table: pd.DataFrame = field(default_factory=pd.DataFrame)
     workers: int = 1
     compute_seconds: float = 0.0
+    cpu_seconds: float = 0.0
     submitted: int = 0
 
     @property
@@ -262,6 +266,7 @@ class BatchRun(Result):
             "seconds": self.seconds,
             "workers": self.workers,
             "compute_seconds": self.compute_seconds,
+            "cpu_seconds": self.cpu_seconds,
             "submitted": self.submitted,
             "overhead": json_number(self.overhead),
         }

@@ -23,6 +23,10 @@ def fit_many(
     ] = None,
     workers: Annotated[int | None, typer.Option(help="Local worker processes (default: cores).")] = None,
     backend: Annotated[str, typer.Option(help="Local engine: auto, dask or processes.")] = "auto",
+    zones_per_task: Annotated[
+        int | None,
+        typer.Option(help="Zones per Dask task (default: about 16 tasks per worker, at most 64 zones)."),
+    ] = None,
 ) -> None:
     """Calibrate many zones; resumes where an earlier run stopped.
 
@@ -34,11 +38,12 @@ def fit_many(
 
     from rczone.batch import read_manifest, run_batch
     from rczone.cli.console import console, escape
+    from rczone.errors import ParameterError
 
     if workers is not None and workers < 1:
-        from rczone.errors import ParameterError
-
         raise ParameterError(f"--workers must be at least 1, got {workers}")
+    if zones_per_task is not None and zones_per_task < 1:
+        raise ParameterError(f"--zones-per-task must be at least 1, got {zones_per_task}")
     m = read_manifest(manifest)
     folder = out or manifest.with_suffix("").with_name(manifest.stem + "-results")
     err = console(stderr=True)
@@ -72,6 +77,7 @@ def fit_many(
             scheduler=scheduler,
             workers=workers,
             backend=backend,
+            unit=zones_per_task,
             on_result=on_result,
             on_start=on_start,
             title=f"rczone fit-many {manifest.name}",

@@ -419,3 +419,50 @@ def test_out_at_a_file_is_one_line_and_exit_2(tmp_path, capsys):
     assert main(["fit-many", str(path), "--out", str(tmp_path / "taken")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "is a file, not a folder" in err
+
+
+def test_a_unit_whose_zone_runs_out_of_memory_is_split_and_only_that_zone_is_lost(tmp_path, quick):
+    """Issue 24: zones travel in units; a unit that fails is rerun zone by zone, so one zone costs only itself."""
+    distributed = pytest.importorskip("dask.distributed")
+    zones = ["a", "oom-0", "b", "c", "d"]
+    m = read_manifest(write_manifest(tmp_path, zones))
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as c:
+        run = run_batch(m, tmp_path / "out", scheduler=c.scheduler_address, unit=3)
+    assert (run.computed, run.failed, run.lost) == (4, 0, 1)
+    assert "MemoryError" in run.lost_reasons[0]
+    assert sorted(pd.read_parquet(run.results)["zone"]) == ["a", "b", "c", "d"]
+    # units [a, oom-0, b] and [c, d]; the first failed and ran again as three single zones
+    assert run.submitted == 2 + 3 and run.workers == 1
+    counts = pd.Series(computed(quick)).value_counts()
+    assert counts["a"] == 2 and counts["b"] == counts["c"] == counts["d"] == 1
+
+
+def test_rows_stream_to_parquet_while_the_run_goes_on(tmp_path, quick, monkeypatch):
+    """Issue 24: the rows are readable as Parquet during the run; results.parquet replaces the stream at the end."""
+    import rczone.batch.store as store
+
+    monkeypatch.setattr(store, "STREAM_ROWS", 3)
+    zones = [f"z{i}" for i in range(8)]
+    out = tmp_path / "out"
+    seen = {}
+
+    def on_result(row, done, total):
+        if done == 7:
+            seen["stream"] = pd.read_parquet(out / "stream")
+
+    run = run_batch(
+        read_manifest(write_manifest(tmp_path, zones)),
+        out,
+        backend="processes",
+        workers=1,
+        on_result=on_result,
+    )
+    assert run.computed == 8
+    # segments of 3 rows: after 7 rows stored, the first 6 are in the stream, as stored
+    streamed = seen["stream"].sort_values("key")
+    assert len(streamed) == 6 and set(streamed["key"]) <= {f"{z}::ls" for z in zones}
+    assert (streamed["Rw"] == 0.005).all() and streamed["fingerprint"].str.len().eq(32).all()
+    assert list((out / "stream").iterdir()) == []  # the table holds every row now
+    assert len(pd.read_parquet(out / "results.parquet")) == 8

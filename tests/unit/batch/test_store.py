@@ -141,3 +141,20 @@ def test_a_file_where_the_folder_should_be_is_one_line(tmp_path):
     (tmp_path / "out").write_text("not a folder")
     with pytest.raises(OutputError, match=r"'.*out' is a file, not a folder; give a folder name"):
         ResultStore(tmp_path / "out")
+
+
+def test_a_units_rows_are_written_together_and_one_that_cannot_be_leaves_the_others_stored(tmp_path):
+    store = ResultStore(tmp_path)
+    rows = [row(f"z{i}::ls", Rw=0.001 * (i + 1), n_evals=np.int64(i)) for i in range(20)]
+    (store.parts / part_name("z7::ls")).mkdir()  # a folder where one part belongs
+    with pytest.raises(OutputError, match=r"z7_ls-.*\.json': it is a folder"):
+        store.write_all(rows)
+    assert store.done() == {r["key"] for r in rows} - {"z7::ls"}  # in memory: what was written
+    again = ResultStore(tmp_path)  # and on disk: every other part complete, nothing temporary left
+    assert again.done() == store.done()
+    assert again.table().set_index("key").loc["z19::ls", "Rw"] == 0.02
+    assert sorted(p.name for p in store.parts.iterdir() if p.is_file()) == sorted(
+        part_name(r["key"]) for r in rows if r["key"] != "z7::ls"
+    )
+    (store.parts / part_name("z7::ls")).rmdir()
+    assert len(store.write_all(rows)) == 20 and ResultStore(tmp_path).done() == {r["key"] for r in rows}
