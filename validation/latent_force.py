@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import chdtrc
 
-from rczone.atomic import write_json_atomic
+from rczone.files.atomic import write_json_atomic
 from rczone.estimation import Dataset, fit
 from rczone.estimation.fit import default_free
 from rczone.estimation.forecast import k_step_band
