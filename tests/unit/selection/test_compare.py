@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -107,7 +109,12 @@ def test_bad_selections(zone, models, kwargs, error, match):
 
 def test_a_richer_fit_that_ends_below_a_nested_model_is_retried_from_it(zone):
     """One local search from a poor start ends below the simpler model: the fit is repeated from it."""
-    poor = load_model(TRUE_MODEL).with_values({"Ci": 2e4, "Ce": 5e9, "Rie": 2e-6, "Rea": 5.0})
+    zm = load_model(TRUE_MODEL)
+    # a box of a room's size, and a start in its corner the single local search cannot leave
+    box = {"Ci": (1e4, 1e9), "Ce": (1e5, 1e10), "Rie": (1e-6, 1.0), "Rea": (1e-5, 10.0)}
+    params = [dataclasses.replace(p, bounds=box.get(n, p.bounds)) for n, p in zm.network.parameters.items()]
+    room = dataclasses.replace(zm, network=zm.network.replace_parameters(params))
+    poor = room.with_values({"Ci": 2e4, "Ce": 5e9, "Rie": 2e-6, "Rea": 5.0})
     sel = select_models([SIMPLER, poor], zone, n_starts=1)
     simple, rich = sel.candidates[SIMPLER], sel.candidates[TRUE_MODEL]
     assert rich.retried and rich.loglik > simple.loglik
