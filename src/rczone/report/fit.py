@@ -70,6 +70,10 @@ def fit_report(
         )
         rep.paragraph(f"{html.escape(o)}: open-loop RMSE {rmse:.3f} K, largest error {worst:.3f} K.")
     rep.table(parameter_rows(cal), "Estimates beside their construction (ASHRAE) values", digits=4)
+    if cal.plausibility is not None:
+        rep.paragraph(html.escape(cal.plausibility.line()) + ".")
+        for w in cal.plausibility.warnings:
+            rep.paragraph("Implausible: " + html.escape(w) + ".", "warn")
     add_residuals(rep, cal)
     if diag is not None:
         rep.heading("Can these data identify the parameters?")
