@@ -27,7 +27,7 @@ def models(ctx: typer.Context) -> None:
     from rich.table import Table
 
     from rczone.models import builtin_models, load_model
-    from rczone.models.library import OPTIONS
+    from rczone.models.library import OPTIONS, PARTS
 
     table = Table(
         title="Built-in models (`--model NAME`; any model file .toml or saved model .json works too)"
@@ -48,6 +48,7 @@ def models(ctx: typer.Context) -> None:
     console.print(table)
     console.print(
         f"Options of Ti, TiTe, TiTh, TiTeTh, TiTm (append with +, e.g. TiTe+heater+solar): {', '.join(OPTIONS)}."
+        f" The rest of the family is Ti with any of {', '.join(PARTS)} (e.g. TiTmTeThAeRia+heater+solar)."
         " `rczone models show NAME > mine.toml` writes a model file to edit."
     )
 
