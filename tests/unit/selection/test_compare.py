@@ -133,3 +133,18 @@ def test_candidate_conventions():
         "TiTm+heater+solar",
     ]
     assert family_candidates(["Ti", "To", "m", "Ts"])[0] == "Ti+air"
+
+
+def test_forward_steps_through_the_whole_family_are_one_part_richer_and_nested():
+    """60 candidates with solar data, 24 without; a step adds one part, and the structural rule confirms it."""
+    from rczone.selection.compare import _Nestings
+
+    assert len(family_candidates(["Ti", "To", "Ph"], extended=True)) == 24  # no Ae, As without Ps
+    names = family_candidates(["Ti", "To", "Ph", "Ps"], extended=True)
+    assert len(names) == 60 and names[0] == "Ti+heater+solar"
+    models = {n: load_model(n) for n in names}
+    nests = _Nestings(models, {n: candidate_free(m.network) for n, m in models.items()})
+    steps = nests.smallest_extensions("TiTeTh+heater+solar", ["Ti+heater+solar", "TiTh+heater+solar"])
+    assert steps == [f"{b}+heater+solar" for b in ("TiTmTeTh", "TiTeThTsn", "TiTeThAe", "TiTeThRia")]
+    assert nests.get("TiTeTh+heater+solar", "TiTeThRia+heater+solar").describe() == "Ria -> ∞"
+    assert set(nests.cache) == {("TiTeTh+heater+solar", s) for s in steps}  # nothing else was analysed
