@@ -13,6 +13,13 @@ def load_script():
     return load("model_selection")
 
 
+def test_the_comparison_table_puts_the_path_beside_the_published_one():
+    res = {"forward": {"path": ["Ti+solar", "TiTh+solar", "TiTeTh+solar", "TiTeThRia+solar"]}}
+    table = load_script().comparison(res)
+    assert "| rczone | Ti → TiTh → TiTeTh → TiTeThRia | TiTeThRia |" in table
+    assert "| Bacher & Madsen (2011) | Ti → TiTh → TiTeTh → … | TiTmTeThAeRia |" in table
+
+
 def test_skips_cleanly_without_data(tmp_path, capsys):
     assert load_script().main(["--shared", str(tmp_path / "nothing"), "--out", str(tmp_path)]) == 0
     assert "skipped: data not found" in capsys.readouterr().out
@@ -28,4 +35,7 @@ def test_forward_selection_runs_on_the_prbs_experiment(tmp_path):
     # each accepted step raised the likelihood significantly; the selected model is the last accepted
     assert all(s["p_value"] < 0.05 for s in steps if s["accepted"])
     assert res["selected"] == res["forward"]["path"][-1] != "Ti+heater+solar"
+    # the extended family carries the path past TiTeTh, where the classic five stop
+    path = [name.partition("+")[0] for name in res["forward"]["path"]]
+    assert path[:3] == ["Ti", "TiTh", "TiTeTh"] and len(path) > 3, path
     assert (tmp_path / "model_selection" / "report.html").is_file()

@@ -42,6 +42,7 @@ from rczone.estimation.openloop import (
 )
 from rczone.estimation.sampling import SamplerSettings
 from rczone.models import ZoneModel
+from rczone.models.plausibility import Plausibility, operating_flow, plausibility
 from rczone.network.stochastic import (
     INITIAL_STATE,
     initial_spread_name,
@@ -82,6 +83,9 @@ class Calibration(Result):
         :func:`rczone.workflow.checks.check_fit`); None when not made.
     identifiability : IdentifiabilityReport or None
         The identifiability analysis at the estimates; None when not made.
+    plausibility : Plausibility or None
+        UA, time constants and solar aperture of the fitted model against the model's values
+        before the fit, with warnings (:mod:`rczone.models.plausibility`); None when not made.
     verdict : Verdict
         The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
@@ -94,6 +98,7 @@ class Calibration(Result):
     open_loop_residuals: ResidualAnalysis | None = None
     checks: dict | None = None
     identifiability: Any = None
+    plausibility: Plausibility | None = None
     verdict: Verdict = field(init=False)
 
     def __post_init__(self) -> None:
@@ -145,6 +150,9 @@ class Calibration(Result):
             f"open-loop RMSE {self.open_loop.rmse_K:.3f} K, max {self.open_loop.max_abs_K:.3f} K;{own}"
             f" {r.n_evals} evaluations"
         )
+        if self.plausibility is not None:
+            lines.append(esc(self.plausibility.line()))
+            lines += [f"[yellow]implausible:[/] {esc(w)}" for w in self.plausibility.warnings]
         stretch = self.model.provenance.get("stretch") or {}
         if stretch.get("samples", 0) < stretch.get("of", 0):
             lines.append(
@@ -202,6 +210,7 @@ class Calibration(Result):
             if self.identifiability
             else {},
             checks=self.checks,
+            plausibility=self.plausibility.to_dict() if self.plausibility is not None else None,
             trustworthy=self.verdict.trustworthy,
             verdict=self.verdict.to_dict(),
             exit_code=self.exit_code,
@@ -334,7 +343,10 @@ def calibrate(
         olr = open_loop_analysis(ol.error, data)
         if kind.stochastic:
             inn = innovation_analysis(net, values, data, res.hold)
-    return Calibration(res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr)
+    plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
+    return Calibration(
+        res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr, plausibility=plaus
+    )
 
 
 #: Fewest measured samples (of every output) the residual analysis is made on (fewer: the statistics mean nothing).

@@ -27,7 +27,7 @@ def models(ctx: typer.Context) -> None:
     from rich.table import Table
 
     from rczone.models import builtin_models, load_model
-    from rczone.models.library import OPTIONS
+    from rczone.models.library import OPTIONS, PARTS
 
     table = Table(
         title="Built-in models (`--model NAME`; any model file .toml or saved model .json works too)"
@@ -48,6 +48,7 @@ def models(ctx: typer.Context) -> None:
     console.print(table)
     console.print(
         f"Options of Ti, TiTe, TiTh, TiTeTh, TiTm (append with +, e.g. TiTe+heater+solar): {', '.join(OPTIONS)}."
+        f" The rest of the family is Ti with any of {', '.join(PARTS)} (e.g. TiTmTeThAeRia+heater+solar)."
         " `rczone models show NAME > mine.toml` writes a model file to edit."
     )
 
@@ -60,11 +61,83 @@ def show(
     ] = None,
 ) -> None:
     """Print a model as a model file (TOML), the format `--model FILE.toml` reads."""
-    from rczone.files.atomic import write_text_atomic
     from rczone.models import load_model, model_to_toml
 
     zm = load_model(name)
     text = model_to_toml(zm, header=f"rczone model file, written from {zm.label}\nValues in SI units.")
+    _emit(text, out)
+
+
+@models_app.command("generate")
+def generate(
+    rooms: Annotated[
+        str,
+        typer.Option("--rooms", help="Number of rooms (named 1..N) or their names, comma-separated (a,b,c)."),
+    ],
+    wall: Annotated[
+        list[str] | None,
+        typer.Option("--wall", help="Two rooms that share a wall, A-B (repeat for each wall)."),
+    ] = None,
+    circuit: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--circuit",
+            help="A heating circuit and the rooms it serves, NAME=A,B (its heat is split by estimated shares);"
+            " repeat for each. Default: one heat input Q<room> per room.",
+        ),
+    ] = None,
+    mass: Annotated[bool, typer.Option("--mass", help="An internal-mass node in every room.")] = False,
+    measured: Annotated[
+        str | None,
+        typer.Option("--measured", help="Rooms whose air temperature is measured (default all): A,B."),
+    ] = None,
+    name: Annotated[str, typer.Option("--name", help="Name of the model.")] = "multizone",
+    out: Annotated[
+        Path | None, typer.Option("--out", "-o", help="Write the model file here instead of printing it.")
+    ] = None,
+) -> None:
+    """Generate a multi-zone model file (TOML): rooms, the walls between them and the heating circuits."""
+    from rczone.errors import ParameterError
+    from rczone.models import model_to_toml
+    from rczone.models.multizone import multizone
+
+    def names(text: str, what: str) -> list[str]:
+        out = [p.strip() for p in text.split(",")]
+        if not all(out):
+            raise ParameterError(f"{what} {text!r}: give room names separated by commas (A,B)")
+        return out
+
+    room_list: int | list[str] = int(rooms) if rooms.strip().isdigit() else names(rooms, "--rooms")
+    walls = []
+    for w in wall or []:
+        pair = [p.strip() for p in w.split("-")]
+        if len(pair) != 2 or not all(pair):
+            raise ParameterError(f"--wall {w!r}: give two rooms joined by a dash (1-2)")
+        walls.append(pair)
+    circuits = None
+    if circuit:
+        circuits = {}
+        for c in circuit:
+            key, sep, served = c.partition("=")
+            if not sep or not key.strip():
+                raise ParameterError(f"--circuit {c!r}: give NAME=ROOM,ROOM (Ph1=1,2)")
+            circuits[key.strip()] = names(served, f"--circuit {key.strip()}")
+    net = multizone(
+        room_list,
+        walls,
+        circuits=circuits,
+        mass=mass,
+        measured=names(measured, "--measured") if measured else None,
+        name=name,
+    )
+    text = model_to_toml(net, header=f"rczone model file, generated: {net.description}\nValues in SI units.")
+    _emit(text, out)
+
+
+def _emit(text: str, out: Path | None) -> None:
+    """Print a model file, or write it atomically to ``out``."""
+    from rczone.files.atomic import write_text_atomic
+
     if out is None:
         typer.echo(text, nl=False)
     else:

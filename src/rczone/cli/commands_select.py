@@ -43,7 +43,8 @@ def select(
         typer.Option(
             "--model",
             help=MODEL_HELP + " Repeat for each candidate (at least two). Default: the Bacher & Madsen"
-            " family (Ti, TiTe, TiTh, TiTeTh, TiTm) with the inputs the data have (Ph, Ps, Q, m and Ts).",
+            " family (Ti, TiTe, TiTh, TiTeTh, TiTm; with --forward every model of the family, Tm, Te, Th,"
+            " Tsn, Ae, As and Ria added one at a time) with the inputs the data have (Ph, Ps, Q, m and Ts).",
         ),
     ] = None,
     forward: Annotated[
@@ -132,8 +133,13 @@ def select(
 
         widest = load_model("TiTeTh+heater+solar+gain+air")
         frame = _read(data, column_map, [widest], required=list(widest.network.outputs))
-        zms = [model(m) for m in family_candidates(list(frame.columns))]
-        out.print("candidates: " + ", ".join(esc(zm.label) for zm in zms))
+        zms = [model(m) for m in family_candidates(list(frame.columns), extended=forward)]
+        if forward:
+            out.print(
+                f"candidates: the Bacher & Madsen family, {len(zms)} models grown one part at a time from {esc(zms[0].label)}"
+            )
+        else:
+            out.print("candidates: " + ", ".join(esc(zm.label) for zm in zms))
     if len(zms) < 2:
         raise ParameterError("give at least two candidate models (--model A --model B ...)")
     full = frame

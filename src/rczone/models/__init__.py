@@ -17,6 +17,7 @@ from rczone.models.zone import DiscreteModel, ModelInputs, ZoneModel  # isort: s
 from rczone.models.elements import SurfaceElement, elements_from_values, full_scale_values, surface_elements
 from rczone.models.library import FAMILY, family_model, family_network
 from rczone.models.modelfile import model_to_toml, read_model_file
+from rczone.models.multizone import multizone
 from rczone.models.paper import (
     LOW_ORDER_INPUTS,
     SURROUNDINGS,
@@ -30,6 +31,7 @@ from rczone.models.paper import (
     second_order_reduced,
     surroundings_to_tsd,
 )
+from rczone.models.plausibility import Plausibility, plausibility
 from rczone.models.registry import builtin_models, builtin_names, load_model
 from rczone.models.split import (
     WallSplit,
@@ -46,6 +48,7 @@ __all__ = [
     "SURROUNDINGS",
     "DiscreteModel",
     "ModelInputs",
+    "Plausibility",
     "SurfaceElement",
     "WallSplit",
     "ZoneModel",
@@ -65,9 +68,11 @@ __all__ = [
     "matched_split",
     "model_names",
     "model_to_toml",
+    "multizone",
     "outdoor_resistance",
     "paper_inputs",
     "paper_model",
+    "plausibility",
     "read_model_file",
     "reduced_values",
     "second_order",

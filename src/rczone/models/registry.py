@@ -41,7 +41,7 @@ def builtin_models() -> list[tuple[str, str]]:
 def _builtin(name: str) -> ZoneModel | None:
     if name in paper_names():
         return paper_model(name)
-    if name.split("+")[0].strip() in library.FAMILY:
+    if library.is_family_name(name):
         return library.family_model(name)
     return None
 

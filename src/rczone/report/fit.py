@@ -74,6 +74,10 @@ def fit_report(
         from rczone.report.posterior import add_posterior
 
         add_posterior(rep, r.posterior)
+    if cal.plausibility is not None:
+        rep.paragraph(html.escape(cal.plausibility.line()) + ".")
+        for w in cal.plausibility.warnings:
+            rep.paragraph("Implausible: " + html.escape(w) + ".", "warn")
     add_residuals(rep, cal)
     if diag is not None:
         rep.heading("Can these data identify the parameters?")

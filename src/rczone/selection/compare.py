@@ -395,14 +395,35 @@ def candidate_free(network, noise: str = "all") -> tuple[str, ...]:
     return default_free(network, "ml", noise=noise)
 
 
-def family_candidates(columns: Sequence[str]) -> list[str]:
-    """The Bacher & Madsen family with the options the data can drive (``Ph``, ``Ps``, ``Q``, ``m`` and ``Ts``)."""
-    from rczone.models.library import FAMILY
+def family_candidates(columns: Sequence[str], *, extended: bool = False) -> list[str]:
+    """The Bacher & Madsen family with the options the data can drive (``Ph``, ``Ps``, ``Q``, ``m`` and ``Ts``).
+
+    Parameters
+    ----------
+    columns : sequence of str
+        The data's columns.
+    extended : bool
+        Every base of the family (:func:`rczone.models.library.family_bases`, for forward
+        selection, which fits only the steps it takes) instead of the five classic ones.
+
+    Returns
+    -------
+    list of str
+    """
+    from rczone.models.library import FAMILY, family_bases, parse_name
 
     opts = [o for o, col in (("heater", "Ph"), ("solar", "Ps"), ("gain", "Q")) if col in columns]
     if "m" in columns and "Ts" in columns:
         opts.append("air")
-    return ["+".join((base, *opts)) for base in FAMILY]
+    out = []
+    for base in family_bases() if extended else FAMILY:
+        name = "+".join((base, *opts))
+        try:
+            parse_name(name)
+        except ParameterError:  # a solar part without solar data
+            continue
+        out.append(name)
+    return out
 
 
 def select_models(
@@ -478,20 +499,7 @@ def select_models(
             raise ParameterError(
                 f"bounds given for {b!r}, which no candidate estimates; {did_you_mean(b, known)}"
             )
-    nests: dict[tuple[str, str], Nesting] = {}
-    for a in names:
-        for b in names:
-            if a != b:
-                found = nesting(
-                    by_name[a].network,
-                    by_name[b].network,
-                    free[a],
-                    free[b],
-                    by_name[a].theta,
-                    by_name[b].theta,
-                )
-                if found is not None:
-                    nests[(a, b)] = found
+    nests = _Nestings(by_name, free)
     fitted: dict[str, Candidate] = {}
 
     def fit_one(name: str) -> Candidate:
@@ -515,13 +523,13 @@ def select_models(
             )
 
         cal = run(by_name[name])
-        simpler = [fitted[a] for (a, b) in nests if b == name and a in fitted]
+        simpler = [fitted[a] for a in fitted if nests.get(a, name) is not None]
         retried = False
         if simpler:
             best = max(simpler, key=lambda c: c.fit_loglik)
             if cal.result.llf < best.fit_loglik - LOGLIK_TOLERANCE:
                 # below a special case of itself: the search missed the optimum; start where the simpler one is
-                again = run(_warm_start(by_name[name], best, nests[(best.name, name)]))
+                again = run(_warm_start(by_name[name], best, nests.get(best.name, name)))
                 retried = True
                 if again.result.llf > cal.result.llf:
                     cal = again
@@ -537,8 +545,7 @@ def select_models(
         current = max(first, key=lambda c: c.loglik).name
         path = [current]
         while True:
-            ext = [b for b in names if (current, b) in nests and b not in path]
-            smallest = [b for b in ext if not any((c, b) in nests for c in ext if c != b)]
+            smallest = nests.smallest_extensions(current, path)
             if not smallest:
                 break
             tried = [fit_one(b) for b in smallest]
@@ -546,7 +553,7 @@ def select_models(
             # best sound extension is tested instead, and a flagged best is refused, not taken
             sound = [c for c in tried if c.trustworthy]
             best = max(sound or tried, key=lambda c: c.loglik)
-            test = likelihood_ratio_test(fitted[current], best, nests[(current, best.name)])
+            test = likelihood_ratio_test(fitted[current], best, nests.get(current, best.name))
             accept = test.rejects(alpha) and best.trustworthy
             flagged = {c.name: c.flag_reasons for c in tried if not c.trustworthy}
             passed_over.update(flagged)
@@ -581,8 +588,9 @@ def select_models(
         path, rule_used = [selected], rule
     tests = tuple(
         likelihood_ratio_test(fitted[a], fitted[b], nest)
-        for (a, b), nest in nests.items()
-        if a in fitted and b in fitted
+        for a in fitted
+        for b in fitted
+        if a != b and (nest := nests.get(a, b)) is not None
     )
     vuong = ()
     if basis.conditional:
@@ -599,7 +607,7 @@ def select_models(
             )
             for i, a in enumerate(names)
             for b in names[i + 1 :]
-            if (a, b) not in nests and (b, a) not in nests
+            if nests.get(a, b) is None and nests.get(b, a) is None
         )
     t = frame["time"].to_numpy(float)
     cands = {n: fitted[n] for n in names if n in fitted}
@@ -623,6 +631,47 @@ def select_models(
         vuong,
         noise=noise,
     )
+
+
+class _Nestings:
+    """The nestings between candidates, found when first asked for (:func:`rczone.selection.nesting.nesting`).
+
+    With many candidates (the extended family has 60 bases) most pairs are never needed: forward
+    selection asks only about the steps it takes. When every candidate is a family model with the
+    same options, the smallest extensions of a model are the candidates one part richer
+    (:func:`rczone.models.library.family_extensions`) that the structural rule confirms; otherwise
+    they are found among all candidates.
+    """
+
+    def __init__(self, models: Mapping[str, ZoneModel], free: Mapping[str, Sequence[str]]) -> None:
+        from rczone.models.library import family_extensions, is_family_name
+
+        self.models, self.free = models, free
+        self.cache: dict[tuple[str, str], Nesting | None] = {}
+        opts = {n.partition("+")[2] for n in models}
+        self.family = len(opts) == 1 and all(is_family_name(n) for n in models)
+        self.steps = family_extensions if self.family else None
+
+    def get(self, simple: str, rich: str) -> Nesting | None:
+        """How ``simple`` is nested in ``rich`` under the candidates' free parameters, or None."""
+        key = (simple, rich)
+        if key not in self.cache:
+            a, b = self.models[simple], self.models[rich]
+            self.cache[key] = nesting(
+                a.network, b.network, self.free[simple], self.free[rich], a.theta, b.theta
+            )
+        return self.cache[key]
+
+    def smallest_extensions(self, current: str, exclude: Sequence[str]) -> list[str]:
+        """The candidates ``current`` is nested in with no other candidate in between."""
+        if self.steps is not None:
+            return [
+                b
+                for b in self.steps(current)
+                if b in self.models and b not in exclude and self.get(current, b)
+            ]
+        ext = [b for b in self.models if b != current and b not in exclude and self.get(current, b)]
+        return [b for b in ext if not any(self.get(c, b) for c in ext if c != b)]
 
 
 def _condition(fitted: dict[str, Candidate], frame: pd.DataFrame, basis: Basis, constants) -> np.ndarray:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -107,7 +109,12 @@ def test_bad_selections(zone, models, kwargs, error, match):
 
 def test_a_richer_fit_that_ends_below_a_nested_model_is_retried_from_it(zone):
     """One local search from a poor start ends below the simpler model: the fit is repeated from it."""
-    poor = load_model(TRUE_MODEL).with_values({"Ci": 2e4, "Ce": 5e9, "Rie": 2e-6, "Rea": 5.0})
+    zm = load_model(TRUE_MODEL)
+    # a box of a room's size, and a start in its corner the single local search cannot leave
+    box = {"Ci": (1e4, 1e9), "Ce": (1e5, 1e10), "Rie": (1e-6, 1.0), "Rea": (1e-5, 10.0)}
+    params = [dataclasses.replace(p, bounds=box.get(n, p.bounds)) for n, p in zm.network.parameters.items()]
+    room = dataclasses.replace(zm, network=zm.network.replace_parameters(params))
+    poor = room.with_values({"Ci": 2e4, "Ce": 5e9, "Rie": 2e-6, "Rea": 5.0})
     sel = select_models([SIMPLER, poor], zone, n_starts=1)
     simple, rich = sel.candidates[SIMPLER], sel.candidates[TRUE_MODEL]
     assert rich.retried and rich.loglik > simple.loglik
@@ -126,3 +133,18 @@ def test_candidate_conventions():
         "TiTm+heater+solar",
     ]
     assert family_candidates(["Ti", "To", "m", "Ts"])[0] == "Ti+air"
+
+
+def test_forward_steps_through_the_whole_family_are_one_part_richer_and_nested():
+    """60 candidates with solar data, 24 without; a step adds one part, and the structural rule confirms it."""
+    from rczone.selection.compare import _Nestings
+
+    assert len(family_candidates(["Ti", "To", "Ph"], extended=True)) == 24  # no Ae, As without Ps
+    names = family_candidates(["Ti", "To", "Ph", "Ps"], extended=True)
+    assert len(names) == 60 and names[0] == "Ti+heater+solar"
+    models = {n: load_model(n) for n in names}
+    nests = _Nestings(models, {n: candidate_free(m.network) for n, m in models.items()})
+    steps = nests.smallest_extensions("TiTeTh+heater+solar", ["Ti+heater+solar", "TiTh+heater+solar"])
+    assert steps == [f"{b}+heater+solar" for b in ("TiTmTeTh", "TiTeThTsn", "TiTeThAe", "TiTeThRia")]
+    assert nests.get("TiTeTh+heater+solar", "TiTeThRia+heater+solar").describe() == "Ria -> ∞"
+    assert set(nests.cache) == {("TiTeTh+heater+solar", s) for s in steps}  # nothing else was analysed
