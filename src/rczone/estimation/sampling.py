@@ -6,8 +6,9 @@ search. The log posterior of the free parameters is
     log p(z | y) = log L(theta) + log p_eta(eta) + log |d eta / d z| + const,
 
 with ``log L`` the Kalman-filter likelihood of the ML objective (untempered), ``p_eta`` the prior
-on the optimizer's variable ``eta`` (:mod:`rczone.estimation.priors`: the declared priors, flat
-in ``eta`` within the bounds for the other parameters) and ``z = logit((eta - lo) / (hi - lo))``
+on the optimizer's variable ``eta`` (:mod:`rczone.estimation.priors`: the declared priors; for the
+other parameters flat in ``eta`` within the bounds, log-uniform for R and C, uniform in sigma for a
+noise level) and ``z = logit((eta - lo) / (hi - lo))``
 the unbounded variable the sampler moves in (log for positive parameters, then logit of the box:
 :meth:`~rczone.estimation.parameters.ParameterSpec.to_z`). The gradient is exact: the
 Objective's forward sensitivities, times the two Jacobians.
@@ -103,7 +104,8 @@ class LogPosterior:
         j, g, _ = self.objective.theta_value_and_gradient(theta)
         pen, dpen, _ = self.prior.terms(theta)
         one_minus = 0.5 * (1.0 - np.tanh(0.5 * z))
-        log_jac = float(np.sum(np.log(hi - lo) + np.log(f) + np.log(one_minus)))
+        # log f and log (1 - f) without underflow far out in the tails
+        log_jac = float(np.sum(np.log(hi - lo) - np.logaddexp(0.0, -z) - np.logaddexp(0.0, z)))
         value = -(j + pen) + log_jac
         if not math.isfinite(value):
             return -math.inf, np.zeros(z.size)
@@ -123,7 +125,7 @@ class LogPosterior:
 
 
 def posterior_of(objective: Objective) -> LogPosterior:
-    """The log posterior of an ML ``objective`` with the network's declared priors (flat otherwise).
+    """The log posterior of an ML ``objective`` with the network's declared priors (the ``"flat"`` default otherwise).
 
     Parameters
     ----------

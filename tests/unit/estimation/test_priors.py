@@ -63,7 +63,8 @@ def test_defaults_construction_log_normal_for_map_and_flat_for_sampling() -> Non
     assert construction.terms(theta)[0] == pytest.approx(
         0.5 * (math.log(2) / s) ** 2 + 0.5 * (math.log(4) / s) ** 2, rel=1e-12
     )
-    assert log_prior(spec, {}, default="flat").terms(theta)[0] == 0.0
+    # flat: log-uniform R and C (nothing to add on eta = log theta), a noise level uniform in sigma
+    assert log_prior(spec, {}, default="flat").terms(theta)[0] == pytest.approx(-math.log(0.07), rel=1e-12)
     declared = log_prior(spec, {"Rw": Prior("lognormal", median=0.0025, sigma=0.1)}, default="construction")
     assert declared.declared == ("Rw",)
     assert declared.terms(theta)[0] == pytest.approx(0.5 * (math.log(2) / math.log(2)) ** 2, rel=1e-12)
