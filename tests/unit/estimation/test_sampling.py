@@ -101,6 +101,9 @@ def test_short_run_has_the_shapes_and_json_and_refuses_to_call_itself_converged(
     assert lo < d["parameters"]["Cr"]["estimate"] < hi
     assert d["parameters"]["Cr"]["interval_95"] == d["posterior"]["parameters"]["Cr"]["interval_95"]
     assert set(res.to_frame().columns) >= {"estimate", "std_error", "ci_lower", "ci_upper"}
+    frame = post.to_frame()
+    assert frame.shape == (40, 5) and list(frame["chain"].unique()) == [0, 1]
+    np.testing.assert_array_equal(frame.loc[frame.chain == 1, "Rw"], post.draws[1, :, 1])
 
 
 @pytest.mark.slow
