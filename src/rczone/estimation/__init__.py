@@ -1,9 +1,10 @@
 """Identification of R, C and noise parameters from data (Lin et al. 2012 [1]_, section IV).
 
-``fit(network, data, free=[...], method="ls"|"ml"|"map")`` is the entry point; the
+``fit(network, data, free=[...], method="ls"|"ml"|"map"|"mcmc")`` is the entry point; the
 modules hold the pieces: :mod:`parameters` (free set, bounds, theta/eta), :mod:`kalman`
-(filter likelihood), :mod:`costs`, :mod:`optimize`, :mod:`uncertainty`, :mod:`result`,
-:mod:`validation` and a minimal :mod:`data` set.
+(filter likelihood), :mod:`costs`, :mod:`priors`, :mod:`optimize`, :mod:`uncertainty`,
+:mod:`sampling` and :mod:`posterior` (posterior draws), :mod:`result`, :mod:`validation` and a
+minimal :mod:`data` set.
 
 References
 ----------
@@ -16,13 +17,17 @@ from rczone.estimation.costs import Objective, ls_cost, ml_cost
 from rczone.estimation.data import Dataset
 from rczone.estimation.fit import fit
 from rczone.estimation.parameters import ParameterSpec, make_spec, noise_parameter_names
+from rczone.estimation.posterior import Posterior
 from rczone.estimation.result import FitResult
+from rczone.estimation.sampling import SamplerSettings
 
 __all__ = [
     "Dataset",
     "FitResult",
     "Objective",
     "ParameterSpec",
+    "Posterior",
+    "SamplerSettings",
     "fit",
     "ls_cost",
     "make_spec",

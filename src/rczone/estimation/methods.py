@@ -50,8 +50,8 @@ class Method(NamedTuple):
     search : {"minimize", "sample"}
         How :func:`rczone.estimation.fit.fit` finds the values: the global search for the minimum
         of the objective, or draws from the posterior (:mod:`rczone.estimation.sampling`: the
-        likelihood of ``kernel`` plus the declared priors, flat in the optimizer's variable for the
-        other parameters; the estimates are posterior means).
+        likelihood of ``kernel`` plus the declared priors, the ``"flat"`` default of
+        :mod:`rczone.estimation.priors` for the other parameters; the estimates are posterior means).
     """
 
     name: str

@@ -168,6 +168,16 @@ class Posterior:
             )
         return out
 
+    def to_frame(self):
+        """Every kept draw as a row: ``chain``, ``draw`` and one column per parameter (SI units)."""
+        import pandas as pd
+
+        chains, draws, _ = self.draws.shape
+        frame = pd.DataFrame(self.flat, columns=list(self.names))
+        frame.insert(0, "draw", np.tile(np.arange(draws), chains))
+        frame.insert(0, "chain", np.repeat(np.arange(chains), draws))
+        return frame
+
     def kept(self, n: int = KEPT_DRAWS) -> np.ndarray:
         """``n`` draws evenly spaced through all chains (fewer if there are fewer), shape ``(n, d)``."""
         flat = self.flat

@@ -21,12 +21,18 @@ A parameter without a declared prior takes the estimator's default (:data:`DEFAU
   ``prior_spread`` for every resistance and capacitance that has one (Kristensen, Madsen &
   Jørgensen 2004, sec. 2.2), flat in ``eta`` otherwise;
 * ``"flat"`` (posterior sampling): flat in ``eta`` within the parameter's bounds, i.e. log-uniform
-  (scale-invariant) for a positive parameter and uniform otherwise; the bounds make it proper.
+  (scale-invariant) for a resistance or a capacitance and uniform otherwise; the bounds make it
+  proper. A noise level (a standard deviation) is uniform on its own scale instead: its
+  likelihood does not vanish as it goes to zero (process noise explains what it leaves), so a
+  log-uniform prior would put the posterior's mass on that plateau down to the lower bound
+  (Gelman 2006 recommends the uniform on the standard deviation).
 
 References
 ----------
 Gelman, A., Carlin, J. B., Stern, H. S., Dunson, D. B., Vehtari, A. & Rubin, D. B. (2013).
 *Bayesian Data Analysis*, 3rd ed. CRC Press.
+Gelman, A. (2006). Prior distributions for variance parameters in hierarchical models. *Bayesian
+Analysis* 1(3), 515-534.
 Kristensen, N. R., Madsen, H. & Jørgensen, S. B. (2004). Parameter estimation in stochastic grey-box
 models. *Automatica* 40(2), 225-237.
 """
@@ -58,7 +64,8 @@ class LogPrior:
     spec : ParameterSpec
         The free parameters, their transforms and construction values.
     priors : tuple of (Prior or None)
-        The prior of each free parameter in the order of ``spec.names``; None for flat in ``eta``.
+        The prior of each free parameter in the order of ``spec.names`` (on the physical value);
+        None for flat in ``eta``.
     declared : tuple of str
         The free parameters whose prior the network declares.
     """
@@ -153,11 +160,13 @@ def log_prior(
     if not spread > 0:
         raise ParameterError(f"prior spread must be > 0, got {spread!r}")
     priors: list[Prior | None] = []
-    for name, kind, c in zip(spec.names, spec.kinds, spec.construction):
+    for name, kind, c, lo, hi in zip(spec.names, spec.kinds, spec.construction, spec.lower, spec.upper):
         if name in declared:
             priors.append(declared[name])
         elif default == "construction" and kind in ("resistance", "capacitance") and math.isfinite(c):
             priors.append(Prior("lognormal", median=float(c), sigma=float(spread)))
+        elif default == "flat" and kind == "noise":
+            priors.append(Prior("uniform", lower=float(lo), upper=float(hi)))
         else:
             priors.append(None)
     return LogPrior(spec, tuple(priors), tuple(n for n in spec.names if n in declared))

@@ -6,8 +6,9 @@ search. The log posterior of the free parameters is
     log p(z | y) = log L(theta) + log p_eta(eta) + log |d eta / d z| + const,
 
 with ``log L`` the Kalman-filter likelihood of the ML objective (untempered), ``p_eta`` the prior
-on the optimizer's variable ``eta`` (:mod:`rczone.estimation.priors`: the declared priors, flat
-in ``eta`` within the bounds for the other parameters) and ``z = logit((eta - lo) / (hi - lo))``
+on the optimizer's variable ``eta`` (:mod:`rczone.estimation.priors`: the declared priors; for the
+other parameters flat in ``eta`` within the bounds, log-uniform for R and C, uniform in sigma for a
+noise level) and ``z = logit((eta - lo) / (hi - lo))``
 the unbounded variable the sampler moves in (log for positive parameters, then logit of the box:
 :meth:`~rczone.estimation.parameters.ParameterSpec.to_z`). The gradient is exact: the
 Objective's forward sensitivities, times the two Jacobians.
@@ -103,13 +104,27 @@ class LogPosterior:
         j, g, _ = self.objective.theta_value_and_gradient(theta)
         pen, dpen, _ = self.prior.terms(theta)
         one_minus = 0.5 * (1.0 - np.tanh(0.5 * z))
-        log_jac = float(np.sum(np.log(hi - lo) + np.log(f) + np.log(one_minus)))
+        # log f and log (1 - f) without underflow far out in the tails
+        log_jac = float(np.sum(np.log(hi - lo) - np.logaddexp(0.0, -z) - np.logaddexp(0.0, z)))
         value = -(j + pen) + log_jac
         if not math.isfinite(value):
             return -math.inf, np.zeros(z.size)
         deta_dz = (hi - lo) * f * one_minus
         grad = -(g + dpen) * spec.jacobian(eta) * deta_dz + (1.0 - 2.0 * f)
         return value, grad
+
+    def value(self, z: np.ndarray) -> float:
+        """``log p`` alone (one likelihood evaluation, no sensitivities: for samplers without gradients)."""
+        spec = self.objective.spec
+        z = np.asarray(z, dtype=float)
+        theta = self.to_theta(z)
+        j = self.objective.theta_cost(theta)
+        pen = self.prior.terms(theta)[0]
+        log_jac = float(
+            np.sum(np.log(spec.eta_upper - spec.eta_lower) - np.logaddexp(0.0, -z) - np.logaddexp(0.0, z))
+        )
+        value = -(j + pen) + log_jac
+        return value if math.isfinite(value) else -math.inf
 
     def to_z(self, theta: np.ndarray) -> np.ndarray:
         """The sampler's variable of physical values ``theta``."""
@@ -123,7 +138,7 @@ class LogPosterior:
 
 
 def posterior_of(objective: Objective) -> LogPosterior:
-    """The log posterior of an ML ``objective`` with the network's declared priors (flat otherwise).
+    """The log posterior of an ML ``objective`` with the network's declared priors (the ``"flat"`` default otherwise).
 
     Parameters
     ----------
@@ -197,8 +212,27 @@ def _run_nuts(logp: LogPosterior, starts: np.ndarray, settings: SamplerSettings,
     return _Run(z, idata, seconds, f"nutpie {nutpie.__version__} (NUTS)")
 
 
-def _starts(logp: LogPosterior, mode: np.ndarray, chains: int, rng: np.random.Generator) -> np.ndarray:
-    """Over-dispersed starts around ``mode`` (theta): two Fisher standard deviations in eta, at most 0.5."""
+def over_dispersed_starts(
+    logp: LogPosterior, mode: np.ndarray, chains: int, rng: np.random.Generator
+) -> np.ndarray:
+    """Over-dispersed starts around ``mode``: two Fisher standard deviations in eta, at most 0.5.
+
+    Parameters
+    ----------
+    logp : LogPosterior
+        The log posterior (its objective gives the Fisher information).
+    mode : ndarray, shape (d,)
+        Physical values the starts scatter around (the ML estimate).
+    chains : int
+        Starts wanted.
+    rng : numpy.random.Generator
+        Draws the scatter.
+
+    Returns
+    -------
+    ndarray, shape (chains, d)
+        Starts in the sampler's variable ``z``, inside the bounds.
+    """
     spec = logp.objective.spec
     eta = spec.to_eta(mode)
     curv = logp.objective.curvature(eta)
@@ -243,7 +277,7 @@ def sample(logp: LogPosterior, *, settings: SamplerSettings, rng: np.random.Gene
     t0 = time.perf_counter()
     mode = minimize_from(logp.objective, spec, spec.start, "lbfgs")
     mode_seconds = time.perf_counter() - t0
-    starts = _starts(logp, mode.end, settings.chains, rng)
+    starts = over_dispersed_starts(logp, mode.end, settings.chains, rng)
     run = _run_nuts(logp, starts, settings, int(rng.integers(2**31 - 1)))
     theta = logp.to_theta(run.z)
     post = az.convert_to_inference_data(

@@ -63,3 +63,33 @@ def test_no_residual_analysis_on_a_handful_of_measurements(zone):
     few.loc[few.index[8:], "Ti"] = np.nan  # eight measured samples
     cal = calibrate(TRUE_MODEL, few, "ml", n_starts=1, uncertainty=False)
     assert cal.innovations is None and cal.open_loop_residuals is None
+
+
+@pytest.mark.parametrize(
+    "kept",
+    [
+        {"names": ["Ci"], "values": [[1.0, 2.0], [1.0, 2.0]]},  # a column too many
+        {"names": ["Ci"], "values": [[1.0]]},  # one draw is no spread
+        {"names": ["Ci"], "values": [[1.0], ["x"]]},
+        {"names": ["Ci"], "values": [[1.0], [float("nan")]]},
+        {"values": [[1.0], [2.0]]},
+    ],
+)
+def test_malformed_saved_draws_are_an_error(zone, ml, kept):
+    bad = ml.model.with_values({}, posterior_draws=kept)
+    with pytest.raises(DataError, match="posterior draws are malformed"):
+        prediction(bad, zone.iloc[400:])
+
+
+def test_saved_draws_replace_the_covariance_in_the_band(zone, ml):
+    # draws spread as the covariance says: the band's parameter part comes from the draws instead
+    names, cov = saved_covariance(ml.model)
+    mean = np.array([ml.result.estimates[n] for n in names])
+    draws = np.random.default_rng(2).multivariate_normal(mean, cov, size=200)
+    sampled = ml.model.with_values({}, posterior_draws={"names": names, "values": draws.tolist()})
+    later = zone.iloc[400:]
+    pred, delta = prediction(sampled, later), prediction(ml.model, later)
+    assert "200 posterior draws" in pred.band_source and "covariance" not in pred.band_source
+    np.testing.assert_allclose(np.mean(pred.sd_parameters), np.mean(delta.sd_parameters), rtol=0.3)
+    lo, hi = pred.band
+    assert np.all(lo <= pred.predicted + 1e-9) and np.all(hi >= pred.predicted - 1e-9)

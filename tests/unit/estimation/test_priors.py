@@ -9,7 +9,7 @@ import pytest
 from scipy import stats
 
 from rczone.errors import ParameterError
-from rczone.estimation import Objective, make_spec
+from rczone.estimation import Objective, fit, make_spec
 from rczone.estimation.priors import log_prior
 from rczone.network import Parameter, Prior
 
@@ -63,7 +63,8 @@ def test_defaults_construction_log_normal_for_map_and_flat_for_sampling() -> Non
     assert construction.terms(theta)[0] == pytest.approx(
         0.5 * (math.log(2) / s) ** 2 + 0.5 * (math.log(4) / s) ** 2, rel=1e-12
     )
-    assert log_prior(spec, {}, default="flat").terms(theta)[0] == 0.0
+    # flat: log-uniform R and C (nothing to add on eta = log theta), a noise level uniform in sigma
+    assert log_prior(spec, {}, default="flat").terms(theta)[0] == pytest.approx(-math.log(0.07), rel=1e-12)
     declared = log_prior(spec, {"Rw": Prior("lognormal", median=0.0025, sigma=0.1)}, default="construction")
     assert declared.declared == ("Rw",)
     assert declared.terms(theta)[0] == pytest.approx(0.5 * (math.log(2) / math.log(2)) ** 2, rel=1e-12)
@@ -117,3 +118,17 @@ def test_map_without_declared_prior_keeps_the_compiled_search() -> None:
     mp = Objective(NET2, data, spec, "map")
     assert not mp.declared_prior
     assert mp.compiled is not None
+
+
+def test_a_tight_declared_prior_holds_the_map_estimate_at_its_mean() -> None:
+    # a normal prior of 1 % on Rw, 30 % off the value the data say: MAP follows the prior, ML the data
+    data = data2(noise=0.02, rng=np.random.default_rng(4))
+    net = NET2.replace_parameters(
+        [Parameter("Rw", "resistance", 0.01, prior=Prior("normal", mean=0.013, sigma=0.013 * 1e-3))]
+    )
+    free = ["Cr", "Rw", "sigma_v"]
+    fixed = {"sigma_w_Ti": 1e-6}
+    ml = fit(net, data, free, method="ml", fixed=fixed, n_starts=1)
+    mp = fit(net, data, free, method="map", fixed=fixed, n_starts=1, correlation_time_s=600.0)
+    assert ml.estimates["Rw"] == pytest.approx(0.01, rel=0.02)
+    assert mp.estimates["Rw"] == pytest.approx(0.013, rel=1e-3)

@@ -42,7 +42,8 @@ def test_log_posterior_gradient_matches_central_differences() -> None:
 
 
 def test_log_posterior_includes_the_jacobian_of_the_transform() -> None:
-    # flat prior in eta: log p(z) - log p(z') = log L difference + log (d eta / d z) difference
+    # the default prior of a noise level is uniform in sigma, i.e. p_eta = sigma on eta = log sigma:
+    # log p(z) - log p(z') = log L difference + log sigma difference + log (d eta / d z) difference
     spec = make_spec(NET2, ["sigma_v"], fixed={"Cr": 8e5})
     obj = Objective(NET2, noisy(), spec, "mcmc")
     logp = posterior_of(obj)
@@ -50,8 +51,10 @@ def test_log_posterior_includes_the_jacobian_of_the_transform() -> None:
     z = [logp.to_z(t) for t in th]
     lo, hi = spec.eta_lower[0], spec.eta_upper[0]
     f = [(math.log(t[0]) - lo) / (hi - lo) for t in th]
-    expect = -(obj(spec.to_eta(th[0])) - obj(spec.to_eta(th[1]))) + math.log(
-        f[0] * (1 - f[0]) / (f[1] * (1 - f[1]))
+    expect = (
+        -(obj(spec.to_eta(th[0])) - obj(spec.to_eta(th[1])))
+        + math.log(th[0][0] / th[1][0])
+        + math.log(f[0] * (1 - f[0]) / (f[1] * (1 - f[1])))
     )
     assert logp(z[0])[0] - logp(z[1])[0] == pytest.approx(expect, rel=1e-9)
 
@@ -98,6 +101,9 @@ def test_short_run_has_the_shapes_and_json_and_refuses_to_call_itself_converged(
     assert lo < d["parameters"]["Cr"]["estimate"] < hi
     assert d["parameters"]["Cr"]["interval_95"] == d["posterior"]["parameters"]["Cr"]["interval_95"]
     assert set(res.to_frame().columns) >= {"estimate", "std_error", "ci_lower", "ci_upper"}
+    frame = post.to_frame()
+    assert frame.shape == (40, 5) and list(frame["chain"].unique()) == [0, 1]
+    np.testing.assert_array_equal(frame.loc[frame.chain == 1, "Rw"], post.draws[1, :, 1])
 
 
 @pytest.mark.slow
