@@ -33,6 +33,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
@@ -169,6 +170,18 @@ def _as_params(parameters: Iterable[Parameter] | Mapping[str, Parameter]) -> dic
             raise NetworkError(f"parameter {p.name!r} is declared twice")
         out[p.name] = p
     return out
+
+
+class AssembledMatrices(NamedTuple):
+    """The matrices of a network's state space at some parameter values, and its capacities."""
+
+    A: np.ndarray  #: (n, n)
+    N: np.ndarray  #: (n_flows, n, n)
+    B: np.ndarray  #: (n, p)
+    M: np.ndarray  #: (n_flows, n, p)
+    C: np.ndarray  #: (ny, n)
+    D: np.ndarray  #: (ny, p)
+    capacities: np.ndarray  #: (n,), J/K
 
 
 @dataclass(frozen=True, eq=False)
@@ -481,7 +494,8 @@ class RCNetwork:
         -------
         BilinearStateSpace
         """
-        A, N, B, M, C, D, cap = self._assemble(self.values(theta), float)
+        m = self._assemble(self.values(theta), float)
+        A, N, B, M, C, D, cap = m.A, m.N, m.B, m.M, m.C, m.D, m.capacities
         return BilinearStateSpace(
             A=A,
             N=N,
@@ -536,7 +550,8 @@ class RCNetwork:
             step = h * (vals[name] if log else 1.0)
             vals[name] = vals[name] + 1j * step
             vals = evaluate_ties(self.parameters, vals, self._tie_order)
-            mats = self._assemble(vals, complex)[:6]
+            a = self._assemble(vals, complex)
+            mats = (a.A, a.N, a.B, a.M, a.C, a.D)
             out.append(StateSpaceDerivative(*(np.imag(m_) / h for m_ in mats)))
         return out
 
@@ -599,8 +614,8 @@ class RCNetwork:
             "cap": [nd.capacity for nd in self.nodes if nd.capacity is not None],
         }
 
-    def _assemble(self, vals: Mapping[str, float | complex], dtype: type) -> tuple[np.ndarray, ...]:
-        """Matrices ``(A, N, B, M, C, D, capacities)`` from resolved parameter values."""
+    def _assemble(self, vals: Mapping[str, float | complex], dtype: type) -> AssembledMatrices:
+        """The matrices of the state space and the capacities from resolved parameter values."""
         st = self._structure
 
         def v(x: Value) -> float | complex:
@@ -637,7 +652,7 @@ class RCNetwork:
         _check_positive(cap, st["cap"], "capacity")
         inv = (1.0 / cap)[:, None]
         Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
-        return (Axx * inv, Nx, Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
+        return AssembledMatrices(Axx * inv, Nx, Bx * inv, Mf[:, xs] * inv[None], C, D, cap)
 
     @cached_property
     def conductance_form(self) -> ConductanceForm | None:
