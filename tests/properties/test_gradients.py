@@ -49,7 +49,17 @@ def complex_state_space(net, base: dict) -> BilinearStateSpace:
     vals = evaluate_ties(net.parameters, base, net._tie_order)
     built = net._assemble(vals, complex)
     return BilinearStateSpace(
-        *built.matrices, net.state_names, net.input_names, net.flow_names, net.outputs, built.capacities.real
+        built.A,
+        built.N,
+        built.B,
+        built.M,
+        built.C,
+        built.D,
+        net.state_names,
+        net.input_names,
+        net.flow_names,
+        net.outputs,
+        built.capacities.real,
     )
 
 

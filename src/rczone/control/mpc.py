@@ -213,6 +213,16 @@ def _shifted(z: np.ndarray, n: int, H: int) -> np.ndarray:
     return np.concatenate([np.vstack([x[1:], x[-1:]]).ravel(), *(np.r_[v[1:], v[-1]] for v in rest)])
 
 
+class QPMatrices(NamedTuple):
+    """The sparse QP ``min 1/2 z'Pz + q'z, lower <= Az <= upper`` as OSQP takes it."""
+
+    P: sp.csc_matrix  #: upper triangle of the quadratic term
+    q: np.ndarray  #: linear term
+    A: sp.csc_matrix  #: constraint matrix
+    lower: np.ndarray
+    upper: np.ndarray
+
+
 class _Triplets:
     """A sparse matrix assembled block by block (rows grow as constraints are added)."""
 
@@ -352,7 +362,7 @@ class MPC:
         qx = w * CP_AIR * m * active  # on the output at the start of each step (k >= 1 free)
         return QPData(np.array(Ad), np.array(Ed), np.array(G), np.array(const), qm, w, qx)
 
-    def _qp(self, x0, u, fc, q: QPData, m_prev: float, p_prev: float):
+    def _qp(self, x0, u, fc, q: QPData, m_prev: float, p_prev: float) -> QPMatrices:
         """The sparse QP ``min 1/2 z'Pz + q'z, l <= Az <= u`` in z = [x_1..x_H, m, P (kW), s]."""
         s = self.settings
         H, n = len(q.qm), len(x0)
@@ -407,7 +417,7 @@ class MPC:
         )
         qv[im] -= 2 * s.move_weight * m_prev
         qv[ip] -= 2 * s.move_weight * p_prev / 1e3
-        return sp.triu(P, format="csc"), qv, A.matrix(nz), np.array(lo), np.array(hi)
+        return QPMatrices(sp.triu(P, format="csc"), qv, A.matrix(nz), np.array(lo), np.array(hi))
 
     def plan(
         self, x0: np.ndarray, forecast: Forecast, *, nominal: tuple[np.ndarray, np.ndarray] | None = None
@@ -426,10 +436,19 @@ class MPC:
         n = len(x0)
         for _ in range(self.settings.linearizations):
             q = self.linearize(x0, u, forecast, m, reheat)
-            P, qv, A, lo, hi = self._qp(x0, u, forecast, q, m_prev, p_prev)
+            qp = self._qp(x0, u, forecast, q, m_prev, p_prev)
             solver = osqp.OSQP()
             solver.setup(
-                P, qv, A, lo, hi, verbose=False, eps_abs=1e-5, eps_rel=1e-5, max_iter=20000, polishing=True
+                qp.P,
+                qp.q,
+                qp.A,
+                qp.lower,
+                qp.upper,
+                verbose=False,
+                eps_abs=1e-5,
+                eps_rel=1e-5,
+                max_iter=20000,
+                polishing=True,
             )
             if z is not None:  # the last step's solution shifted, then the last pass's
                 solver.warm_start(x=z)

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from typing import NamedTuple
 
 import numpy as np
 
@@ -105,6 +106,8 @@ def measured_states(ss: BilinearStateSpace) -> dict[int, int]:
 def auto_initial_state(ss: BilinearStateSpace, u0: np.ndarray, m0: np.ndarray, y0: np.ndarray) -> np.ndarray:
     """Measured states at their first measurement, the others at the conditional steady state.
 
+    Computed by :func:`rczone.kernels.problem.initial_state`, the compiled engine's own start.
+
     Parameters
     ----------
     ss : BilinearStateSpace
@@ -116,32 +119,86 @@ def auto_initial_state(ss: BilinearStateSpace, u0: np.ndarray, m0: np.ndarray, y
     Returns
     -------
     ndarray, shape (n,)
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        The steady state of the unmeasured states is singular.
     """
-    A, B = ss.matrices(m0) if ss.n_flows else (ss.A, ss.B)
-    meas = {i: j for i, j in measured_states(ss).items() if math.isfinite(y0[j])}
-    x = np.zeros(ss.n_states)
-    fixed = np.array(sorted(meas), dtype=int)
-    free = np.array([i for i in range(ss.n_states) if i not in meas], dtype=int)
-    x[fixed] = [y0[meas[i]] for i in fixed]
-    if free.size == 1:  # the common 2-state case, without the LAPACK call
-        f = free[0]
-        x[f] = -(B[f] @ u0 + A[f, fixed] @ x[fixed]) / A[f, f]
-    elif free.size:
-        rhs = -(B[free] @ u0) - A[np.ix_(free, fixed)] @ x[fixed]
-        x[free] = np.linalg.solve(A[np.ix_(free, free)], rhs)
-    return x
+    n = ss.n_states
+    given = np.zeros(n, dtype=bool)
+    return _start(ss, StartData(u0, m0, y0), given, np.zeros(n), _no_directions(ss, 0))[0]
 
 
 def initial_state(ss: BilinearStateSpace, values: Mapping[str, float], data: Dataset) -> np.ndarray:
     """Initial state from ``x0_<state>`` values where given, else :func:`auto_initial_state`."""
     names = initial_state_names(ss.state_names)
-    if all(n in values for n in names):
-        return np.array([values[n] for n in names])
-    x = auto_initial_state(ss, data.u[0], data.m[0], data.y[0])
-    for i, n in enumerate(names):
-        if n in values:
-            x[i] = values[n]
-    return x
+    given = np.array([nm in values for nm in names], dtype=bool)
+    x0 = np.array([float(values[nm]) if g else 0.0 for nm, g in zip(names, given, strict=True)])
+    return _start(ss, StartData(data.u[0], data.m[0], data.y[0]), given, x0, _no_directions(ss, 0))[0]
+
+
+class StartData(NamedTuple):
+    """The first sample of a data set: what the initial state is derived from."""
+
+    u0: np.ndarray  #: (p,)
+    m0: np.ndarray  #: (n_flows,)
+    y0: np.ndarray  #: (ny,), NaN where not measured
+
+
+class Directions(NamedTuple):
+    """Derivatives of the state-space matrices along ``q`` parameter directions."""
+
+    dA: np.ndarray  #: (q, n, n)
+    dN: np.ndarray  #: (q, n_flows, n, n)
+    dB: np.ndarray  #: (q, n, p)
+    dM: np.ndarray  #: (q, n_flows, n, p)
+
+
+def _no_directions(ss: BilinearStateSpace, q: int) -> Directions:
+    n, p, nf = ss.n_states, ss.n_inputs, ss.n_flows
+    return Directions(
+        np.zeros((q, n, n)), np.zeros((q, nf, n, n)), np.zeros((q, n, p)), np.zeros((q, nf, n, p))
+    )
+
+
+def _start(
+    ss: BilinearStateSpace,
+    first: StartData,
+    given: np.ndarray,
+    x0: np.ndarray,
+    directions: Directions,
+    given_direction: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The initial state and its derivatives (q, n) by :func:`rczone.kernels.problem.initial_state`.
+
+    ``given`` (bool, n) marks the states whose value ``x0`` is given; ``given_direction`` (int,
+    n) the direction along which a given state moves with unit derivative (-1: none).
+    """
+    from rczone.kernels.problem import initial_state as start_kernel
+
+    direct = measured_states(ss)
+    states = np.array(sorted(direct), dtype=np.int64)
+    first_y = np.asarray(first.y0, dtype=float)[[direct[i] for i in states.tolist()]]
+    f = np.ascontiguousarray
+    n = ss.n_states
+    x, dx, ok = start_kernel(
+        f(ss.A, dtype=float),
+        f(ss.N, dtype=float),
+        f(ss.B, dtype=float),
+        f(ss.M, dtype=float),
+        *(f(d, dtype=float) for d in directions),
+        f(first.m0, dtype=float),
+        f(first.u0, dtype=float),
+        f(first_y),
+        states,
+        f(given, dtype=bool),
+        f(x0, dtype=float),
+        np.full(n, -1, dtype=np.int64) if given_direction is None else f(given_direction, dtype=np.int64),
+    )
+    if not ok:
+        raise np.linalg.LinAlgError("the steady state that starts the unmeasured states is singular")
+    return x, dx
 
 
 def network_theta(network: RCNetwork, values: Mapping[str, float]) -> dict[str, float]:
@@ -169,15 +226,19 @@ def noise_values(
 def trapezoid_sse(t: np.ndarray, e: np.ndarray) -> float:
     """``int e(t)^2 dt`` by the trapezoid rule, skipping intervals with a missing end.
 
+    The compiled engine's own rule (:func:`rczone.kernels.problem.trapezoid`).
+
     Parameters
     ----------
     t : ndarray, shape (N,)
     e : ndarray, shape (N, ny)
         Errors; NaN where the measurement is missing. Outputs are summed.
     """
-    sq = e * e
-    seg = 0.5 * (sq[:-1] + sq[1:]) * np.diff(t)[:, None]
-    return float(np.sum(seg[np.isfinite(seg)]))
+    N, ny = e.shape
+    f = np.ascontiguousarray
+    return float(
+        trapezoid(f(t, dtype=float), f(e, dtype=float), np.empty((N, ny, 0)), np.zeros(0), np.zeros(0))
+    )
 
 
 def simulate_output(
@@ -213,36 +274,20 @@ def run_filter(
 
 
 def _initial_state_derivatives(
-    ss: BilinearStateSpace, derivs: list, values: Mapping[str, float], data: Dataset, wrt: Sequence[str]
+    ss: BilinearStateSpace,
+    values: Mapping[str, float],
+    data: Dataset,
+    wrt: Sequence[str],
+    directions: Directions,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`initial_state` and its derivatives (len(wrt), n) along ``derivs`` (None: no state-space change)."""
-    n = ss.n_states
+    """:func:`initial_state` and its derivatives (len(wrt), n) along ``directions`` of the state space."""
     names = initial_state_names(ss.state_names)
-    x = initial_state(ss, values, data)
-    dx = np.zeros((len(wrt), n))
-    if not all(nm in values for nm in names):
-        m0, u0 = data.m[0], data.u[0]
-        meas = {i for i, j in measured_states(ss).items() if math.isfinite(data.y[0, j])}
-        free = np.array([i for i in range(n) if i not in meas], dtype=int)
-        if free.size:
-            A, _ = ss.matrices(m0) if ss.n_flows else (ss.A, ss.B)
-            x_auto = auto_initial_state(ss, u0, m0, data.y[0])
-            rows = []
-            for d in derivs:
-                if d is None:
-                    rows.append(np.zeros(free.size))
-                    continue
-                dA = d.dA + np.tensordot(m0, d.dN, axes=1)
-                dB = d.dB + np.tensordot(m0, d.dM, axes=1)
-                rows.append(-(dA[free] @ x_auto + dB[free] @ u0))
-            if rows:
-                dx[:, free] = np.linalg.solve(A[np.ix_(free, free)], np.array(rows).T).T
-    for i, nm in enumerate(names):
-        if nm in values:
-            dx[:, i] = 0.0
-            if nm in wrt:
-                dx[list(wrt).index(nm), i] = 1.0
-    return x, dx
+    given = np.array([nm in values for nm in names], dtype=bool)
+    x0 = np.array([float(values[nm]) if g else 0.0 for nm, g in zip(names, given, strict=True)])
+    moves = np.array(
+        [list(wrt).index(nm) if g and nm in wrt else -1 for nm, g in zip(names, given, strict=True)]
+    )
+    return _start(ss, StartData(data.u[0], data.m[0], data.y[0]), given, x0, directions, moves)
 
 
 def general_cost(
@@ -314,7 +359,7 @@ def general_cost(
         for k, d in enumerate(derivs):  # the disturbances' diffusion follows their hyper-parameters
             if d is not None and d.dQ is not None:
                 dqc[k] += d.dQ
-    x0, dx0 = _initial_state_derivatives(ss, derivs, values, data, wrt)
+    x0, dx0 = _initial_state_derivatives(ss, values, data, wrt, Directions(dA0, dN, dB0, dM))
     keys, which = data.intervals
     foh = hold == "foh"
     f = np.ascontiguousarray

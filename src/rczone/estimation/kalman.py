@@ -171,7 +171,8 @@ def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, Filter
 
     With ``keep`` the intermediate results are returned too (the trace of the kernel).
     """
-    Phi, Gamma0, Gamma1, Qd, which, u, y, x0, P0, C, D, R = problem
+    Phi, Gamma0, Gamma1, Qd, which = problem.Phi, problem.G0, problem.G1, problem.Qd, problem.which
+    u, y, x0, P0, C, D, R = problem.u, problem.y, problem.x0, problem.P0, problem.C, problem.D, problem.R
     f = np.ascontiguousarray
     r = measurement_variances(R).astype(float)
     N, ny = y.shape

@@ -178,7 +178,7 @@ def symmetric_eigen(A: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.nd
 @njit(cache=True, error_model="numpy")
 def spectral_modal(
     A: np.ndarray, B: np.ndarray, scale: np.ndarray, qc: np.ndarray, h: float, foh: bool
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+) -> ModalDynamics:
     """The exact discretization of an RC model in its modal coordinates ``xi = V' diag(scale) x``.
 
     ``S = diag(scale) A diag(scale)^-1`` (symmetrized, which removes only rounding) is
@@ -190,13 +190,9 @@ def spectral_modal(
 
     Returns
     -------
-    V : ndarray, shape (n, n)
-    e : ndarray, shape (n,)
-        ``e^{lam h}``.
-    H0, H1 : ndarray, shape (n, p)
-        The hold matrices in modal coordinates.
-    Qm : ndarray, shape (n, n)
-        ``Qd`` in modal coordinates.
+    ModalDynamics
+        Of this one interval: ``V`` (n, n); ``e`` (n,), ``e^{lam h}``; ``H0, H1`` (n, p), the hold
+        matrices in modal coordinates; ``Qm`` (n, n), ``Qd`` in modal coordinates.
     """
     n = A.shape[0]
     p = B.shape[1]
@@ -211,7 +207,7 @@ def spectral_modal(
     for i in range(n):
         x = lam[i] * h
         em = math.expm1(x)
-        e[i] = em + 1.0
+        e[i] = math.exp(x)  # not em + 1, which loses a fast mode's e^x (below ~1e-8 relative accuracy)
         w1[i] = phi1(x, em) * h
         if foh:
             w2[i] = phi2(x, em) * h
@@ -233,7 +229,7 @@ def spectral_modal(
             acc *= phi1(x, math.expm1(x)) * h
             Qm[i, j] = acc
             Qm[j, i] = acc
-    return V, e, H0, H1, Qm
+    return ModalDynamics(V, e, H0, H1, Qm)
 
 
 @njit(cache=True, error_model="numpy")
@@ -252,7 +248,8 @@ def spectral_discretize(
     """Exact ``Phi, G0, G1, Qd`` of an RC model: :func:`spectral_modal` brought back by ``T = diag(scale)^-1 V``."""
     n = A.shape[0]
     p = B.shape[1]
-    V, e, H0, H1, Qm = spectral_modal(A, B, scale, qc, h, foh)
+    modal = spectral_modal(A, B, scale, qc, h, foh)
+    V, e, H0, H1, Qm = modal.V, modal.e, modal.H0, modal.H1, modal.Qm
     T = np.empty((n, n))
     for i in range(n):
         for j in range(n):
@@ -297,7 +294,8 @@ def modal_matrices(
     Qm = np.empty((K, n, n))
     for k in range(K):
         A, B = _key_matrices(A0, N, B0, M, keys[k])
-        V[k], e[k], H0[k], H1[k], Qm[k] = spectral_modal(A, B, scale, qc, keys[k, 0], foh)
+        step = spectral_modal(A, B, scale, qc, keys[k, 0], foh)
+        V[k], e[k], H0[k], H1[k], Qm[k] = step.V, step.e, step.H0, step.H1, step.Qm
     return ModalDynamics(V, e, H0, H1, Qm)
 
 

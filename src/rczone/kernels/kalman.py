@@ -163,11 +163,13 @@ def kalman_filter(
     """
     Phi, G0, G1, Qd = dyn
     dPhi, dG0, dG1, dQd = ddyn
-    C, D, r, dC, dD, dr = obs
+    C, D, r = obs.C, obs.D, obs.r
+    dC, dD, dr = obs.dC, obs.dD, obs.dr
     x0, P0, dx0, dP0 = prior
     u, y, which = series
     foh, open_loop, steady_rtol = opts
-    e_out, de_out, xp_out, xf_out, Pp_out, S_out, Pf_out = trace
+    e_out, de_out, xp_out, xf_out = trace.e, trace.de, trace.xp, trace.xf
+    Pp_out, S_out, Pf_out = trace.Pp, trace.S, trace.Pf
     N, ny = y.shape
     n = x0.shape[0]
     p = u.shape[1]
@@ -521,7 +523,7 @@ def kalman_filter_modal(
     n_obs : int
         -1 for an invalid model.
     """
-    V, e, H0, H1, Qm = modal
+    V, e, H0, H1, Qm = modal.V, modal.e, modal.H0, modal.H1, modal.Qm
     C, D, r = obs.C, obs.D, obs.r
     x0, P0 = prior.x0, prior.P0
     u, y, which = series

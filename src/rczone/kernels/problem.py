@@ -287,7 +287,10 @@ def element_values(theta: np.ndarray, prob) -> tuple[ElementValues, bool]:
     """
     L = prob.form.L
     out_state = prob.form.output_state
-    res_idx, res_k, cap_idx, cap_k, sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, x0_idx, x0_k, _ = prob.slots
+    sl = prob.slots
+    res_idx, res_k, cap_idx, cap_k = sl.res_idx, sl.res_k, sl.cap_idx, sl.cap_k
+    sv_idx, sv_k, sw_idx, sw_k = sl.sv_idx, sl.sv_k, sl.sw_idx, sl.sw_k
+    sx_idx, sx_k, x0_idx, x0_k = sl.sx_idx, sl.sx_k, sl.x0_idx, sl.x0_k
     nr, n = L.shape
     ny = out_state.shape[0]
     ok = True
@@ -326,10 +329,15 @@ def assembled(theta: np.ndarray, prob, q: int) -> tuple[Assembled, AssembledDeri
     but meaningless) or the steady state that starts the unmeasured states is singular.
     """
     vals, valid = element_values(theta, prob)
-    L, P, E, Gb0, Nf, Mf, out_state = prob.form
+    form = prob.form
+    L, P, E, Gb0 = form.L, form.P, form.E, form.Gb0
+    Nf, Mf, out_state = form.Nf, form.Mf, form.output_state
     m, u, y = prob.data.m, prob.data.u, prob.data.y
-    res_idx, res_k, cap_idx, cap_k, sv_idx, sv_k, sw_idx, sw_k, sx_idx, sx_k, x0_idx, _, x0_given = prob.slots
-    res, cap, sv, sw, sx, x0v = vals
+    sl = prob.slots
+    res_idx, res_k, cap_idx, cap_k = sl.res_idx, sl.res_k, sl.cap_idx, sl.cap_k
+    sv_idx, sv_k, sw_idx, sw_k = sl.sv_idx, sl.sv_k, sl.sw_idx, sl.sw_k
+    sx_idx, sx_k, x0_idx, x0_given = sl.sx_idx, sl.sx_k, sl.x0_idx, sl.x0_given
+    res, cap, sv, sw, sx, x0v = vals.res, vals.cap, vals.sv, vals.sw, vals.sx, vals.x0
     n = L.shape[1]
     ny = out_state.shape[0]
     A0, N, B0, M = assemble(L, P, E, Gb0, Nf, Mf, res, cap)
@@ -410,7 +418,7 @@ def value_fused(theta: np.ndarray, prob) -> float:
     mod, _, ok = assembled(theta, prob, _no_directions(theta))
     if not ok:
         return math.inf
-    t, m, u, y, _, _, groups = prob.data
+    t, m, u, y, groups = prob.data.t, prob.data.m, prob.data.u, prob.data.y, prob.data.groups
     foh, sym_rtol, steady_rtol, _ = prob.consts
     scratch = prob.scratch
     N_t = t.shape[0]
@@ -441,7 +449,7 @@ def value_general(theta: np.ndarray, prob) -> float:
     mod, _, ok = assembled(theta, prob, _no_directions(theta))
     if not ok:
         return math.inf
-    t, _, u, y, keys, which, _ = prob.data
+    t, u, y, keys, which = prob.data.t, prob.data.u, prob.data.y, prob.data.keys, prob.data.which
     foh, _, steady_rtol, _ = prob.consts
     kind = prob.kind
     n = mod.A0.shape[0]
@@ -496,7 +504,7 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
     mod, der, ok = assembled(theta, prob, d)
     if not ok:
         return math.inf, grad, curv
-    t, _, u, y, keys, which, _ = prob.data
+    t, u, y, keys, which = prob.data.t, prob.data.u, prob.data.y, prob.data.keys, prob.data.which
     foh, _, steady_rtol, _ = prob.consts
     kind = prob.kind
     n = mod.A0.shape[0]

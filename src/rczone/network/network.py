@@ -173,7 +173,6 @@ def _as_params(parameters: Iterable[Parameter] | Mapping[str, Parameter]) -> dic
     return out
 
 
-@dataclass(frozen=True, eq=False)
 class ConductanceForm:
     """Constant arrays of a network without massless nodes (see :attr:`RCNetwork.conductance_form`)."""
 
@@ -191,8 +190,18 @@ class ConductanceForm:
 class Assembled(NamedTuple):
     """What :meth:`RCNetwork._assemble` builds: the bilinear matrices and the per-state constants."""
 
-    matrices: tuple[np.ndarray, ...]
-    """``(A, N, B, M, C, D)``."""
+    A: np.ndarray
+    """(n, n)"""
+    N: np.ndarray
+    """(n_flows, n, n)"""
+    B: np.ndarray
+    """(n, p)"""
+    M: np.ndarray
+    """(n_flows, n, p)"""
+    C: np.ndarray
+    """(ny, n)"""
+    D: np.ndarray
+    """(ny, p)"""
     capacities: np.ndarray
     """Heat capacity per state, J/K (NaN for a latent state of a disturbance)."""
     diffusion: np.ndarray
@@ -542,14 +551,13 @@ class RCNetwork:
         BilinearStateSpace
         """
         built = self._assemble(self.values(theta), float)
-        A, N, B, M, C, D = built.matrices
         return BilinearStateSpace(
-            A=A,
-            N=N,
-            B=B,
-            M=M,
-            C=C,
-            D=D,
+            A=built.A,
+            N=built.N,
+            B=built.B,
+            M=built.M,
+            C=built.C,
+            D=built.D,
             state_names=self.state_names,
             input_names=self.input_names,
             flow_names=self.flow_names,
@@ -599,7 +607,7 @@ class RCNetwork:
             vals[name] = vals[name] + 1j * step
             vals = evaluate_ties(self.parameters, vals, self._tie_order)
             built = self._assemble(vals, complex)
-            mats = (*built.matrices, built.diffusion)
+            mats = (built.A, built.N, built.B, built.M, built.C, built.D, built.diffusion)
             out.append(StateSpaceDerivative(*(np.imag(m_) / h for m_ in mats)))
         return out
 
@@ -706,7 +714,7 @@ class RCNetwork:
         Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
         A, B, M = Axx * inv, Bx[:, :p] * inv, Mf[:, xs] * inv[None]
         if not nl:
-            return Assembled((A, Nx, B, M, C, D), cap, np.zeros(xs.size))
+            return Assembled(A, Nx, B, M, C, D, cap, np.zeros(xs.size))
         # state (x, s): dx = (A x + Bd s + B u) dt, ds = F s dt + noise; y = C x + Cd s + D u
         nx = xs.size
         A = np.block([[A, Bx[:, p:] * inv], [np.zeros((nl, nx), dtype), F]])
@@ -717,7 +725,7 @@ class RCNetwork:
         C = np.concatenate([C, D[:, p:]], axis=1)
         cap = np.concatenate([cap, np.full(nl, np.nan)])
         diffusion = np.concatenate([np.zeros(nx, dtype), qd])
-        return Assembled((A, Nx, B, M, C, D[:, :p]), cap, diffusion)
+        return Assembled(A, Nx, B, M, C, D[:, :p], cap, diffusion)
 
     def _latent_blocks(
         self, vals: Mapping[str, float | complex], dtype: type, nn: int
