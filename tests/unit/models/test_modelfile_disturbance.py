@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from rczone.errors import ModelFileError
@@ -157,3 +159,27 @@ def test_bad_disturbance_in_a_saved_model_is_refused(tmp_path) -> None:
     bad["network"]["disturbances"][1]["colour"] = 1
     with pytest.raises(ModelFileError, match="unknown key 'colour'"):
         load_model(str(_write(tmp_path, json.dumps(bad), "m.json")))
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "match"),
+    [BAD[0], BAD[1], BAD[6], BAD[8]],
+    ids=["kind", "node", "period", "length"],
+)
+def test_the_command_line_reports_a_bad_disturbance_in_one_line_with_exit_2(
+    tmp_path, capsys, old, new, match
+):
+    """`rczone fit` on a model file with a bad [[disturbance]]: one error line naming the file, exit 2, no fit."""
+    from rczone.cli.main import main
+
+    t = np.arange(50) * 600.0
+    pd.DataFrame({"time": t, "Ti": 20 + np.sin(t / 4e3), "To": 5.0, "Ph": 100.0}).to_csv(
+        tmp_path / "d.csv", index=False
+    )
+    model = _write(tmp_path, TEXT.replace(old, new, 1))
+    assert main(["fit", str(tmp_path / "d.csv"), "--model", str(model)]) == 2
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if not ln.startswith("warning: ")]
+    assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in err, err
+    assert "m.toml" in err
+    assert re.search(match, err), err
