@@ -40,8 +40,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import problems  # noqa: E402
 from rczone.atomic import write_json_atomic  # noqa: E402
+
+import problems  # noqa: E402
 from rczone.estimation import Objective, fit, make_spec  # noqa: E402
 from rczone.estimation.optimize import minimize_from  # noqa: E402
 from rczone.estimation.sampling import SamplerSettings, over_dispersed_starts, posterior_of, sample  # noqa: E402
