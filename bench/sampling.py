@@ -40,12 +40,11 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from rczone.atomic import write_json_atomic  # noqa: E402
-
 import problems  # noqa: E402
 from rczone.estimation import Objective, fit, make_spec  # noqa: E402
 from rczone.estimation.optimize import minimize_from  # noqa: E402
 from rczone.estimation.sampling import SamplerSettings, over_dispersed_starts, posterior_of, sample  # noqa: E402
+from rczone.files.atomic import write_json_atomic  # noqa: E402
 
 FREE = ["Ro", "Ri", "Cw", "Ci", "sigma_w_Tw", "sigma_v"]
 FIXED = {"sigma_w_Ti": 0.0, "sigma_x0_Tw": 0.1, "sigma_x0_Ti": 0.1, "x0_Tw": 26.6, "x0_Ti": 26.7}
