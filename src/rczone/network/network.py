@@ -173,6 +173,7 @@ def _as_params(parameters: Iterable[Parameter] | Mapping[str, Parameter]) -> dic
     return out
 
 
+@dataclass(frozen=True, eq=False)
 class ConductanceForm:
     """Constant arrays of a network without massless nodes (see :attr:`RCNetwork.conductance_form`)."""
 
