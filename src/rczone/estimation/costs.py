@@ -402,7 +402,9 @@ class Objective:
         eta = np.asarray(eta, dtype=float)
         theta = self.spec.to_theta(eta)
         if self._adjoint:
-            j, g = gradient_fused(np.asarray(theta, dtype=np.float64), self._packed)
+            theta = np.asarray(theta, dtype=np.float64)
+            j, g = gradient_fused(theta, self._packed)
+            j, g, _ = self._with_declared_prior(theta, j, g, np.zeros(theta.size))
         else:
             j, g, _ = self.theta_value_and_gradient(theta)
         if not math.isfinite(j):
