@@ -176,6 +176,7 @@ def jml_cases(rng: np.random.Generator) -> list[Case]:
             fixed=noise_fixed,
             uncertainty=False,
             n_starts=1,
+            optimizer="nelder-mead",  # the compiled direct search, as the plain fit (the default is L-BFGS)
         )
         return np.array([res.estimates[n] for n in free])
 

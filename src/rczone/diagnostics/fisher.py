@@ -108,14 +108,15 @@ def marginal_fisher(S: np.ndarray, nuisance: np.ndarray, weight: float) -> np.nd
     Returns
     -------
     ndarray, shape (P, P)
-        ``w (S'S - S'V (V'V)^+ V'S)``, the Schur complement of the nuisance block.
+        ``w (S'S - S'V (V'V)^+ V'S)``, the Schur complement of the nuisance block, computed as
+        ``w (PS)'(PS)`` with ``PS`` the part of ``S`` the nuisances cannot absorb
+        (:func:`project_out`, an orthogonal projection by least squares): the same matrix, positive
+        semidefinite by construction, without the cancellation of the difference when a parameter's
+        sensitivity lies almost in the nuisances' span (there the difference kept rounding errors
+        larger than the result, and a verdict could flip with the last digits of the inputs).
     """
-    F = weight * (S.T @ S)
-    if nuisance.shape[1] == 0:
-        return F
-    Fsn = weight * (S.T @ nuisance)
-    Fnn = weight * (nuisance.T @ nuisance)
-    return F - Fsn @ np.linalg.pinv(Fnn, rcond=1e-13) @ Fsn.T
+    R = project_out(S, nuisance)
+    return weight * (R.T @ R)
 
 
 def project_out(delta: np.ndarray, nuisance: np.ndarray) -> np.ndarray:

@@ -167,9 +167,9 @@ def fit(
         construction value), or posterior sampling (:mod:`rczone.estimation.sampling`; the
         estimates are posterior means, the standard errors posterior standard deviations).
     optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
-        The local method. ``"auto"``: the compiled Nelder-Mead for a two-state single-output problem
-        (the fused kernel, cheapest per evaluation), L-BFGS with the exact gradient otherwise (one
-        evaluation per step; Nelder-Mead needs tens of thousands in ten dimensions).
+        The local method. ``"auto"``: L-BFGS with the exact gradient (one evaluation per step, a
+        gradient costing a few likelihoods: :meth:`~rczone.estimation.costs.Objective.value_and_gradient`);
+        the direct searches need tens of times more evaluations.
     n_starts : int, optional
         Local searches: default automatic (2 or more, see the search); ``1`` is one local search
         from the start values (no global phase); ``k`` runs exactly ``k``.
@@ -247,7 +247,7 @@ def fit(
         return sample_fit(objective, settings=sampler or SamplerSettings(), rng=rng)
     scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if meth.kernel == "ls" else 0.0
     if optimizer == "auto":
-        optimizer = "nelder-mead" if objective.engine == "rc2-fused" else "lbfgs"
+        optimizer = "lbfgs"  # every Objective has its exact gradient
     outcomes, search = global_search(
         objective, spec, method, rng, optimizer, n_starts, max_evals, scale=scale
     )

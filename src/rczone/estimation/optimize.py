@@ -48,6 +48,9 @@ LBFGS_RESCALES = 2
 #: Largest |z| of a start: a start exactly on a bound (z infinite) begins this far inside it.
 Z_LIMIT = 30.0
 
+#: Fraction of each parameter's range (in eta) by which an L-BFGS end point stays inside its bounds.
+INSIDE = 1e-9
+
 #: Nelder-Mead stopping tolerance on the cost (scaled to 1 at the start).
 FATOL = 1e-12
 
@@ -264,9 +267,13 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
             bounds=list(zip(spec.eta_lower * scale, spec.eta_upper * scale)),
             options={"maxfun": min(left, budget or left), "ftol": 1e-15, "gtol": 1e-9, "maxiter": max_evals},
         )
-        eta = np.clip(res.x / scale, spec.eta_lower, spec.eta_upper)
+        # strictly inside the box, as the direct searches' transform keeps every point: an estimate
+        # exactly on a bound could not start a later fit (starts must lie inside the bounds)
+        inside = INSIDE * (spec.eta_upper - spec.eta_lower)
+        end = np.clip(res.x / scale, spec.eta_lower, spec.eta_upper)
+        eta = np.clip(end, spec.eta_lower + inside, spec.eta_upper - inside)
         converged = bool(res.success) or (
-            "ABNORMAL" in str(res.message) and _is_stationary(fun(res.x)[1] * scale, eta, spec)
+            "ABNORMAL" in str(res.message) and _is_stationary(fun(res.x)[1] * scale, end, spec)
         )
         if converged:
             return eta, True, str(res.message)

@@ -19,9 +19,15 @@ converged. The search here is a two-phase stochastic method [1]_:
    that reached the best one are reported. The result is *converged* only when the best optimum
    was reached from more than one start, or when a second local method started at it finds nothing
    better (where it does find lower, the first method continues from there and the check repeats,
-   a few rounds at most).
+   a few rounds at most). A gradient search (``"lbfgs"``, the default of
+   :func:`~rczone.estimation.fit.fit`) is checked by itself from a point displaced by
+   :data:`DISPLACEMENT` of the box (:func:`displaced`): a second start near the optimum, which a
+   stalled search does not come back from, and no derivative-free sweep.
 
-Nelder-Mead searches are restarted at their end point while that still lowers the cost.
+Nelder-Mead searches are restarted at their end point while that still lowers the cost. Searches
+from sampled points run in stages (:func:`budgeted_search`): :data:`GRADIENT_STAGE` evaluations for
+a gradient search (each step uses the exact gradient), the fewest a finished search took for a
+direct search.
 
 References
 ----------
@@ -65,12 +71,19 @@ MAX_AUTO_STARTS = 8
 #: :data:`MAX_STAGES` stages only while it is below the best optimum found so far.
 MIN_BUDGET = 100
 MAX_STAGES = 4
+#: Evaluation budget of one stage of a gradient search (L-BFGS, one evaluation per step) from a sampled
+#: point: each step uses the exact gradient, so this many take a search much further than
+#: :data:`MIN_BUDGET` direct-search evaluations; a search still above the best optimum by then is stopped.
+GRADIENT_STAGE = 50
+#: Displacement (fraction of each parameter's range in eta) of the restart that confirms a gradient
+#: search's optimum found by one start: a second start, not a second method.
+DISPLACEMENT = 0.05
 #: Restarts of Nelder-Mead from its own end point (a fresh simplex) while they still lower the cost.
 NM_RESTARTS = 2
 #: Rounds of the polish (second method, then the first again) of an optimum found by one start.
 POLISH_ROUNDS = 3
 #: The second method used to confirm an optimum found by one start only.
-SECOND_METHOD = {"nelder-mead": "powell", "powell": "nelder-mead", "lbfgs": "nelder-mead"}
+SECOND_METHOD = {"nelder-mead": "powell", "powell": "nelder-mead", "lbfgs": "lbfgs"}
 
 
 @dataclass(frozen=True)
@@ -199,6 +212,20 @@ def _physical_at_bound(spec: ParameterSpec, theta: np.ndarray) -> bool:
     return bool(np.any(spec.near_bound(theta) & physical))
 
 
+def displaced(spec: ParameterSpec, theta: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """``theta`` moved by :data:`DISPLACEMENT` of each parameter's range in eta, in random directions, inside the box.
+
+    The start of the restart that confirms a gradient search's optimum: a search that stalled
+    short of a minimum (a flat stretch, a line-search failure) does not come back to the same
+    point from there; a minimum does.
+    """
+    eta = spec.to_eta(theta)
+    lo, hi = spec.eta_lower, spec.eta_upper
+    step = DISPLACEMENT * (hi - lo) * rng.choice([-1.0, 1.0], eta.size)
+    out = np.where((eta + step > lo) & (eta + step < hi), eta + step, eta - step)
+    return spec.to_theta(np.clip(out, lo + 1e-6 * (hi - lo), hi - 1e-6 * (hi - lo)))
+
+
 def min_local_searches(n_free: int) -> int:
     """Local searches the adaptive search runs at least before it may stop: ``max(2, n_free // 2 - 1)``.
 
@@ -271,7 +298,10 @@ def budgeted_search(
     above the best optimum found, is stopped (its outcome says so). One that is below continues, so a
     better basin is never given up.
     """
-    stage = max(MIN_BUDGET, min(o.n_evals for o in done))
+    if optimizer == "lbfgs":
+        stage = GRADIENT_STAGE
+    else:
+        stage = max(MIN_BUDGET, min(o.n_evals for o in done))
     if max_evals is not None:
         stage = min(stage, max_evals)
     best = (
@@ -416,12 +446,14 @@ def global_search(
         converged = True
         reason = f"the best optimum was reached from {optima[0].count} of {n_runs} starts"
     else:
-        # polish: a second method from the best point; where it finds lower, the first method again
+        # polish: a second method from the best point (a gradient search: itself from a displaced
+        # point, a second start); where it finds lower, the first method again
         second = SECOND_METHOD.get(optimizer, "powell")
         converged = False
         for _ in range(POLISH_ROUNDS):
             best = optima[0]
-            check = minimize_from(cost, spec, best.theta, second, max_evals)
+            at = displaced(spec, best.theta, rng) if second == optimizer else best.theta
+            check = minimize_from(cost, spec, at, second, max_evals)
             outcomes.append(check)
             if check.cost >= best.cost - tol_of(best.cost):
                 converged, confirmed_by = True, second
@@ -429,15 +461,19 @@ def global_search(
             outcomes.append(local_search(cost, spec, check.end, optimizer, max_evals, tol_of))
             optima, tol = merge_optima(outcomes, method, scale)
         optima, tol = merge_optima(outcomes, method, scale)
+        check_by = (
+            f"a restart of {second} near it"
+            if second == optimizer
+            else f"a second method ({second}) started there"
+        )
         if converged:
             reason = (
-                f"the best optimum was reached from 1 of {n_runs} starts and a second method ({second})"
-                " started there found nothing better"
+                f"the best optimum was reached from 1 of {n_runs} starts and {check_by} found nothing better"
             )
         else:
             reason = (
-                f"the best optimum was reached from only 1 of {n_runs} starts and a second method ({second})"
-                f" kept finding lower costs from there ({POLISH_ROUNDS} rounds): the search has not settled"
+                f"the best optimum was reached from only 1 of {n_runs} starts and {check_by}"
+                f" kept finding lower costs ({POLISH_ROUNDS} rounds): the search has not settled"
             )
     best = optima[0]
     winner = outcomes[best.starts[0]]

@@ -81,7 +81,8 @@ def test_estimate_at_a_bound_is_flagged() -> None:
     )
     assert res.parameters["R"].at_bound and not res.parameters["Cr"].at_bound
     assert any("R is at a bound" in f for f in res.flags)
-    assert res.estimates["R"] == pytest.approx(5e-3, rel=1e-12)
+    # on the bound but strictly inside it (1e-9 of the range in eta), so the estimate can start a later fit
+    assert res.estimates["R"] == pytest.approx(5e-3, rel=1e-8) and res.estimates["R"] < 5e-3
 
 
 @pytest.mark.parametrize(

@@ -88,3 +88,19 @@ def test_latin_hypercube_has_one_point_per_stratum() -> None:
     assert u.shape == (16, 3) and np.all((u >= 0) & (u < 1))
     for j in range(3):
         assert sorted(np.floor(u[:, j] * 16).astype(int)) == list(range(16))
+
+
+def test_a_gradient_search_is_confirmed_by_a_restart_near_its_optimum_not_a_direct_search() -> None:
+    from rczone.estimation.search import DISPLACEMENT, displaced
+
+    spec = _spec()
+    outs, s = global_search(two_basins, spec, "ml", np.random.default_rng(0), optimizer="lbfgs", n_starts=1)
+    assert s.confirmed_by == "lbfgs" and s.converged and "restart of lbfgs near it" in s.reason
+    assert len(outs) == 2 and outs[1].end[1] == pytest.approx(outs[0].end[1], rel=1e-4)  # came back
+    # the restart starts DISPLACEMENT of the box away in every parameter, inside the box
+    theta = np.array([1e6, 0.9])  # R near its upper bound 1: the step goes the other way
+    moved = spec.to_eta(displaced(spec, theta, np.random.default_rng(2))) - spec.to_eta(theta)
+    np.testing.assert_allclose(np.abs(moved), DISPLACEMENT * (spec.eta_upper - spec.eta_lower), rtol=1e-9)
+    assert moved[1] < 0
+    outs, s = global_search(two_basins, spec, "ml", np.random.default_rng(0), optimizer="lbfgs")
+    assert min(o.cost for o in outs) == pytest.approx(0.0, abs=1e-8) and s.converged  # the deep basin
