@@ -38,12 +38,26 @@ References
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from rczone.kernels.discretize import interval_derivatives
 from rczone.kernels.problem import LS, MAP, assembled, with_prior
+
+
+class Adjoints(NamedTuple):
+    """The adjoints (derivatives of ``-log L``) of the filter's inputs, zeroed by the caller."""
+
+    Phi: np.ndarray  #: (K, 2, 2)
+    G0: np.ndarray  #: (K, 2, p)
+    G1: np.ndarray  #: (K, 2, p)
+    Qd: np.ndarray  #: (K, 2, 2)
+    x0: np.ndarray  #: (2,)
+    P0: np.ndarray  #: (2, 2)
+    r: np.ndarray  #: (1,)
+
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -62,7 +76,7 @@ def nll_rc2_adjoint(
     u: np.ndarray,
     y: np.ndarray,
     foh: bool,
-    bars: tuple,
+    bars: Adjoints,
 ) -> tuple[float, int]:
     """``-log L`` (without ``0.5 n log 2 pi``) of a 2-state, 1-output model and the adjoints of its inputs.
 
@@ -79,8 +93,8 @@ def nll_rc2_adjoint(
     u, y : ndarray, shapes (N, p), (N,)
         Inputs; measurements (NaN where missing).
     foh : bool
-    bars : tuple of ndarray
-        ``(Phi_bar, G0_bar, G1_bar, Qd_bar, x0_bar, P0_bar, r_bar)`` of shapes (K, 2, 2),
+    bars : Adjoints
+        ``(Phi, G0, G1, Qd, x0, P0, r)`` adjoints of shapes (K, 2, 2),
         (K, 2, p), (K, 2, p), (K, 2, 2), (2,), (2, 2), (1,), zeroed by the caller; they receive
         the derivatives of ``-log L``.
 
@@ -91,7 +105,8 @@ def nll_rc2_adjoint(
     n_obs : int
         Observed samples; -1 for an invalid model.
     """
-    Phi_bar, G0_bar, G1_bar, Qd_bar, x0_bar, P0_bar, r_bar = bars
+    Phi_bar, G0_bar, G1_bar, Qd_bar = bars.Phi, bars.G0, bars.G1, bars.Qd
+    x0_bar, P0_bar, r_bar = bars.x0, bars.P0, bars.r
     n_t = y.shape[0]
     p = u.shape[1]
     c0, c1 = c[0], c[1]
@@ -222,7 +237,7 @@ def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     mod, der, ok = assembled(theta, prob, d)
     if not ok or prob.kind == LS:
         return math.inf, grad
-    _, _, u, y, keys, which, _ = prob.data
+    u, y, keys, which = prob.data.u, prob.data.y, prob.data.keys, prob.data.which
     foh = prob.consts.foh
     p = mod.B0.shape[1]
     K = keys.shape[0]
@@ -232,7 +247,7 @@ def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     )  # fmt: skip
     Phi, G0, G1, Qd = mats
     dPhi, dG0, dG1, dQd = dmats
-    bars = (
+    bars = Adjoints(
         np.zeros((K, 2, 2)),
         np.zeros((K, 2, p)),
         np.zeros((K, 2, p)),
@@ -246,7 +261,8 @@ def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     )
     if n_obs < 0:
         return math.inf, grad
-    Phi_bar, G0_bar, G1_bar, Qd_bar, x0_bar, P0_bar, r_bar = bars
+    Phi_bar, G0_bar, G1_bar, Qd_bar = bars.Phi, bars.G0, bars.G1, bars.Qd
+    x0_bar, P0_bar, r_bar = bars.x0, bars.P0, bars.r
     for i in range(d):
         acc = r_bar[0] * der.dr[0, i]
         for a in range(2):
