@@ -32,7 +32,10 @@ def test_bic_selects_the_true_structure_over_a_simpler_and_a_richer_nested_one(b
     sel = by_bic
     assert sel.selected == TRUE_MODEL and sel.rule == "bic"
     c = sel.candidates
-    assert c[SIMPLER].loglik < c[TRUE_MODEL].loglik <= c[RICHER].loglik + 1e-6
+    # the richer model nests the true one (Aw = 0): its optimum is at least as high, up to the search's
+    # tolerance (its gradient search stops just inside the box, a few 1e-6 of log L below Aw = 0);
+    # 1e-3 is still a thousand times below what would move a likelihood-ratio test (1.92 at 5 %)
+    assert c[SIMPLER].loglik < c[TRUE_MODEL].loglik <= c[RICHER].loglik + 1e-3
     # R, C, Aw, the measurement noise and the process noise of every state
     assert [c[n].n_params for n in CANDIDATES] == [4, 7, 8]
     n = sel.samples["n_obs"]
