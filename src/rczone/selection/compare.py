@@ -703,7 +703,9 @@ def _warm_start(zm: ZoneModel, simpler: Candidate, nest: Nesting) -> ZoneModel:
         elif not any(k == q for q, _ in nest.restriction):
             # (without declared bounds the box is relative to the start: a limit value would ruin it)
             theta[k] = v
-    noise = {k: v for k, v in source.noise.items() if kind_of(k) == MEASUREMENT_NOISE}
+    # a measurement noise at the data's floor (the lower bound of its box) starts 1 % above it:
+    # a start on a bound is refused, and the richer model shares the simpler one's data and floor
+    noise = {k: v * 1.01 for k, v in source.noise.items() if kind_of(k) == MEASUREMENT_NOISE}
     for k, v in source.noise.items():
         if kind_of(k) == PROCESS_NOISE:
             state = nest.node_map.get(target_of(k))

@@ -159,3 +159,22 @@ def test_forward_steps_through_the_whole_family_are_one_part_richer_and_nested()
     assert steps == [f"{b}+heater+solar" for b in ("TiTmTeTh", "TiTeThTsn", "TiTeThAe", "TiTeThRia")]
     assert nests.get("TiTeTh+heater+solar", "TiTeThRia+heater+solar").describe() == "Ria -> ∞"
     assert set(nests.cache) == {("TiTeTh+heater+solar", s) for s in steps}  # nothing else was analysed
+
+
+def test_a_warm_start_from_a_measurement_noise_at_its_floor_starts_inside_the_box(zone):
+    """The simpler fit's sigma_v on the data's floor (its lower bound) is carried 1 % inside, not refused."""
+    from types import SimpleNamespace
+
+    from rczone.calibration import calibrate
+    from rczone.estimation.resolution import noise_floor
+    from rczone.selection.compare import _warm_start
+
+    floor = noise_floor(zone["Ti"].to_numpy(float))
+    simple = load_model(SIMPLER)
+    simple = simple.with_values({}, {**simple.noise, "sigma_v": floor})
+    rich = load_model(TRUE_MODEL)
+    free = candidate_free(rich.network)
+    nest = nesting(simple.network, rich.network, candidate_free(simple.network), free)
+    warm = _warm_start(rich, SimpleNamespace(calibration=SimpleNamespace(model=simple)), nest)
+    assert warm.noise["sigma_v"] == pytest.approx(1.01 * floor, rel=1e-12)
+    assert calibrate(warm, zone, "ml", free, n_starts=1).result.llf > 0  # the start is accepted
