@@ -287,6 +287,7 @@ def horizon_scores(
     start: float | None = None,
     parameters: bool = True,
     label: str = "data",
+    hold: str | None = None,
 ) -> HorizonScores:
     """Score a model at several horizons at once, with persistence and ARX next to it.
 
@@ -307,6 +308,8 @@ def horizon_scores(
         Include the estimates' uncertainty in the band.
     label : str
         The data's name.
+    hold : {"zoh", "foh"}, optional
+        Inter-sample behaviour of the inputs; default the one the model was fitted with.
 
     Returns
     -------
@@ -321,7 +324,7 @@ def horizon_scores(
             "k-step predictions need the model's noise levels; fit the model by ML (rczone fit --method ml"
             " --save-model ...) or score open loop only (--horizons open)"
         )
-    setup = prediction_setup(zm, frame, constants, start=start)
+    setup = prediction_setup(zm, frame, constants, start=start, hold=hold)
     data, first = setup.data, setup.first
     predictor = setup.predictor(horizons)
     y_hat = predictor(setup.values)

@@ -45,6 +45,7 @@ from rczone.network.stochastic import (
     target_of,
 )
 from rczone.results import Result
+from rczone.simulation.simulate import HOLDS
 
 
 def predict(
@@ -323,6 +324,8 @@ class PredictionSetup:
         The unmeasured nodes' start estimated from data (None: steady state or the filter's).
     start_note : str
         Where the open-loop prediction starts, in words.
+    hold : {"zoh", "foh"}
+        Inter-sample behaviour of the inputs (the fit's, recorded with the model).
     """
 
     model: ZoneModel
@@ -332,6 +335,7 @@ class PredictionSetup:
     has_noise: bool
     start: InitialStateEstimate | None
     start_note: str
+    hold: str = "zoh"
 
     @property
     def dt(self) -> float:
@@ -346,15 +350,15 @@ class PredictionSetup:
         ks = [h for h in horizons if h is not None]
 
         def run(v: Mapping[str, float]) -> np.ndarray:
-            bands = k_step_bands(net, v, data, ks) if ks else {}
+            bands = k_step_bands(net, v, data, ks, self.hold) if ks else {}
             out = []
             for h in horizons:
                 if h is not None:
                     out.append(bands[h].y_hat)
                 elif self.has_noise:
-                    out.append(noise_band(net, v, data, known=known)[0])
+                    out.append(noise_band(net, v, data, hold=self.hold, known=known)[0])
                 else:
-                    out.append(open_loop_error(net, v, data).y_hat)
+                    out.append(open_loop_error(net, v, data, self.hold).y_hat)
             return np.stack(out)
 
         return run
@@ -382,11 +386,13 @@ class PredictionSetup:
                 return sd, ["the open-loop RMSE of the least-squares fit"]
             return np.full(shape, np.nan), []
         ks = [h for h in horizons if h is not None]
-        bands = k_step_bands(net, self.values, data, ks) if ks else {}
+        bands = k_step_bands(net, self.values, data, ks, self.hold) if ks else {}
         known = max(self.first, 1)
         sd = np.stack(
             [
-                bands[h].sd if h is not None else noise_band(net, self.values, data, known=known)[1]
+                bands[h].sd
+                if h is not None
+                else noise_band(net, self.values, data, hold=self.hold, known=known)[1]
                 for h in horizons
             ]
         )
@@ -407,6 +413,7 @@ def prediction_setup(
     *,
     start: float | None = None,
     initial_state: str = "warmup",
+    hold: str | None = None,
 ) -> PredictionSetup:
     """The data and start of a model's predictions; the samples before ``start`` only warm the filter up.
 
@@ -421,8 +428,14 @@ def prediction_setup(
         Time (s, on the data's axis) of the first scored sample; default the first sample.
     initial_state : {"warmup", "steady", "estimated"}
         Open loop: where the unmeasured nodes start (see :func:`prediction`).
+    hold : {"zoh", "foh"}, optional
+        Inter-sample behaviour of the inputs; default the one the model was fitted with (its
+        provenance), else ``"zoh"``.
     """
     zm = as_model(model)
+    hold = model_hold(zm) if hold is None else hold
+    if hold not in HOLDS:
+        raise DataError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
     if initial_state not in INITIAL_STATES:
         raise DataError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
     data = dataset(zm, frame, constants)
@@ -454,7 +467,18 @@ def prediction_setup(
         values.update(begin.values)
         if has_noise:
             values.update({initial_spread_name(target_of(k)): v for k, v in begin.sd.items()})
-    return PredictionSetup(zm, data, first, values, has_noise, begin, note)
+    return PredictionSetup(zm, data, first, values, has_noise, begin, note, hold)
+
+
+def model_hold(zm: ZoneModel) -> str:
+    """The inter-sample behaviour a model was fitted with (``provenance["hold"]``), else ``"zoh"``.
+
+    Parameters
+    ----------
+    zm : ZoneModel
+    """
+    hold = zm.provenance.get("hold")
+    return hold if isinstance(hold, str) and hold in HOLDS else "zoh"
 
 
 def window(data: Dataset, first: int) -> Dataset:
@@ -488,6 +512,7 @@ def prediction(
     *,
     start: float | None = None,
     calibrated: bool = True,
+    hold: str | None = None,
 ) -> Prediction:
     """Open-loop (or ``steps``-ahead) prediction of ``model`` on data with a two-sigma band.
 
@@ -532,6 +557,8 @@ def prediction(
         filter up and are not scored.
     calibrated : bool
         Apply the fit's per-horizon band factors (when the model has them).
+    hold : {"zoh", "foh"}, optional
+        Inter-sample behaviour of the inputs; default the one the model was fitted with.
 
     Returns
     -------
@@ -542,7 +569,7 @@ def prediction(
             f"a {steps}-step prediction needs the model's noise levels; fit the model by ML"
             " (rczone fit --method ml --save-model ...) or predict open loop"
         )
-    setup = prediction_setup(model, frame, constants, start=start, initial_state=initial_state)
+    setup = prediction_setup(model, frame, constants, start=start, initial_state=initial_state, hold=hold)
     return setup_prediction(
         setup, steps, parameters=parameters, calibrated=calibrated, frame=frame, label=label
     )
@@ -589,10 +616,10 @@ def setup_prediction(
 
         def band(v: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
             if not setup.has_noise:
-                return open_loop_error(net, v, data).y_hat, sd_ls
+                return open_loop_error(net, v, data, setup.hold).y_hat, sd_ls
             if steps is None:
-                return noise_band(net, v, data, known=known)
-            one = k_step_bands(net, v, data, [steps])[steps]
+                return noise_band(net, v, data, hold=setup.hold, known=known)
+            one = k_step_bands(net, v, data, [steps], setup.hold)[steps]
             return one.y_hat, one.sd
 
         lower, upper, sd_par = posterior_band(band, setup.values, *kept, np.random.default_rng(0))
@@ -648,10 +675,10 @@ def hidden_states(setup: PredictionSetup) -> HiddenStates:
 
     net, first = setup.model.network, setup.first
     if setup.has_noise:
-        est = smooth_states(net, setup.values, setup.data)
+        est = smooth_states(net, setup.values, setup.data, hold=setup.hold)
         sd = np.sqrt(np.maximum(np.einsum("kii->ki", est.P), 0.0))
         return HiddenStates(net.state_names, est.x[first:], sd[first:], "smoothed")
-    x, _ = simulate_output(net, setup.values, setup.data)
+    x, _ = simulate_output(net, setup.values, setup.data, setup.hold)
     return HiddenStates(net.state_names, x[first:], np.full_like(x[first:], np.nan), "simulated")
 
 

@@ -288,6 +288,13 @@ def predict(
             " to the scored data themselves ('estimated': uses the data it scores, not a held-out score).",
         ),
     ] = "warmup",
+    hold: Annotated[
+        str | None,
+        typer.Option(
+            "--hold",
+            help="Inputs between samples: held (zoh) or linear (foh); default the one the model was fitted with.",
+        ),
+    ] = None,
     warmup: Annotated[
         str | None,
         typer.Option(
@@ -342,14 +349,28 @@ def predict(
             raise ParameterError("give --steps or --horizons, not both")
         chosen = parse_horizons(horizons) if horizons is not None else [steps]
         scores = horizon_scores(
-            zm, frame, constants(const), horizons=chosen, baselines=baselines, start=start, label=label
+            zm,
+            frame,
+            constants(const),
+            horizons=chosen,
+            baselines=baselines,
+            start=start,
+            label=label,
+            hold=hold,
         )
         _emit(scores, lambda: horizons_report(scores), json_out, out, report_dir)
         return
     from rczone.report.predict import prediction_report
 
     pred = prediction(
-        zm, frame, constants(const), steps=steps, initial_state=initial_state, label=label, start=start
+        zm,
+        frame,
+        constants(const),
+        steps=steps,
+        initial_state=initial_state,
+        label=label,
+        start=start,
+        hold=hold,
     )
     _emit(pred, lambda: prediction_report(pred, label, zm.label), json_out, out, report_dir)
 

@@ -174,6 +174,7 @@ def predict(
     columns: PathLike | None = None,
     parameters: bool = True,
     label: str | None = None,
+    hold: str | None = None,
 ) -> Prediction:
     """Predict data with a model, open loop or ``steps`` ahead, with a 2-sigma band: ``rczone predict``.
 
@@ -196,6 +197,8 @@ def predict(
         Include the estimates' uncertainty in the band.
     label : str, optional
         The data's name in titles and the JSON.
+    hold : {"zoh", "foh"}, optional
+        Inputs between samples; default the one the model was fitted with.
 
     Returns
     -------
@@ -214,6 +217,7 @@ def predict(
         parameters=parameters,
         initial_state=initial_state,
         label=label or name,
+        hold=hold,
     )
 
 
