@@ -2,16 +2,32 @@
 
 from __future__ import annotations
 
+import os
+import sys
+
+#: Exit code of an interrupted command (Ctrl-C), as a shell reports a SIGINT.
+INTERRUPTED = 130
+
 
 def run() -> int:
     """The console script: :func:`rczone.cli.main.main`, with Ctrl-C during start-up giving 130 too.
 
     Importing the command modules (typer, rich, and the numerical stack they pull in) takes a
     moment; an interrupt then would otherwise end in a traceback or a signal exit instead of the
-    documented 130.
+    documented 130. After an interrupt the process ends at once: worker pools that the same Ctrl-C
+    tore down would otherwise print "Exception ignored" noise from their exit handlers, and every
+    output is already whole or absent (:func:`rczone.files.atomic.all_or_nothing`).
     """
     try:
         from rczone.cli.main import main
     except KeyboardInterrupt:
-        return 130
-    return main()
+        return INTERRUPTED
+    code = main()
+    if code == INTERRUPTED:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except (OSError, ValueError):  # a closed pipe: nothing more to say
+                pass
+        os._exit(INTERRUPTED)
+    return code
