@@ -241,9 +241,11 @@ def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     foh = prob.consts.foh
     p = mod.B0.shape[1]
     K = keys.shape[0]
+    # `prob.kind != LS` (a boolean, not the literal True): the same compiled specialization as the
+    # forward kernel's call, so a first run compiles interval_derivatives once, not twice
     mats, dmats = interval_derivatives(
         mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
-        np.sqrt(mod.cap), foh, True,
+        np.sqrt(mod.cap), foh, prob.kind != LS,
     )  # fmt: skip
     Phi, G0, G1, Qd = mats
     dPhi, dG0, dG1, dQd = dmats
