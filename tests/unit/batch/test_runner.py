@@ -150,7 +150,8 @@ def test_fit_many_prints_the_runs_summary_and_the_result_follows_the_protocol(
     d = run.to_dict()
     assert {k: v for k, v in d.items() if k != "run"} == json.loads((out / "summary.json").read_text())
     assert d["run"]["computed"] == 3 and d["run"]["failed"] == 2 and d["run"]["total"] == 3
-    assert 0 < d["run"]["cpu_seconds"] <= 1.5 * d["run"]["compute_seconds"] and d["run"]["submitted"] == 3
+    # both clocks are recorded (their ratio depends on the machine's load: not a property to test)
+    assert d["run"]["cpu_seconds"] > 0 and d["run"]["compute_seconds"] > 0 and d["run"]["submitted"] == 3
     table, stored = run.to_frame(), pd.read_parquet(out / "results.parquet")
     assert list(table.columns) == list(stored.columns) and table["key"].tolist() == stored["key"].tolist()
     pd.testing.assert_series_equal(table["Rw"], stored["Rw"])
