@@ -24,6 +24,11 @@ def run() -> int:
         return INTERRUPTED
     code = main()
     if code == INTERRUPTED:
+        import multiprocessing
+
+        for child in multiprocessing.active_children():  # a worker pool's processes end with us
+            child.terminate()
+            child.join(timeout=5)
         for stream in (sys.stdout, sys.stderr):
             try:
                 stream.flush()

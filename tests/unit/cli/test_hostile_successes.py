@@ -208,7 +208,19 @@ def _interrupt(args: list[str], wait_for: str, tmp_path: Path, delay: float = 0.
         time.sleep(0.1)
     time.sleep(delay)
     os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
-    return proc.wait(timeout=120), err.read_text()
+    code = proc.wait(timeout=120)
+    # nothing of the command outlives it (a worker pool's processes included)
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.1)
+    else:
+        os.killpg(proc.pid, signal.SIGKILL)
+        raise AssertionError("processes of the interrupted command are still running")
+    return code, err.read_text()
 
 
 @pytest.mark.skipif(os.name == "nt", reason="process groups")
