@@ -21,7 +21,7 @@ from rczone.estimation.methods import DEFAULT_METHOD
 from rczone.estimation.sampling import SamplerSettings
 from rczone.models import ZoneModel
 from rczone.workflow.checks import fit_and_check
-from rczone.workflow.datasource import DataSource, data_source
+from rczone.workflow.datasource import DataSource, data_source, frame_and_label
 from rczone.workflow.settings import FitSettings
 
 PathLike = str | os.PathLike
@@ -54,16 +54,6 @@ def load_data(
     """
     zm = as_model(model) if model is not None else None
     return data_source(source, columns).frame(zm)
-
-
-def _frame(
-    data: pd.DataFrame | PathLike | DataSource, columns: PathLike | None, zm: ZoneModel
-) -> tuple[pd.DataFrame, str]:
-    """A frame and its name from a frame, a source or what names one."""
-    if isinstance(data, pd.DataFrame):
-        return data, str(data.attrs.get("name", "data"))
-    source = data_source(data, columns)
-    return source.frame(zm), source.label
 
 
 def fit(
@@ -156,10 +146,10 @@ def fit(
         bounds=dict(bounds or {}),
         fixed=dict(fixed or {}),
     )
-    frame, name = _frame(data, columns, zm)
+    frame, name = frame_and_label(data, columns, zm)
     others = {}
     for k, other in enumerate(check_on):
-        f, other_name = _frame(other, columns, zm)
+        f, other_name = frame_and_label(other, columns, zm)
         others[other_name if other_name not in others and other_name != "data" else f"data {k + 1}"] = f
     return fit_and_check(zm, frame, settings, label=label or name, others=others)
 
@@ -208,7 +198,7 @@ def predict(
     if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or steps < 1):
         raise ParameterError(f"steps must be a positive integer, got {steps!r}")
     zm = as_model(model)
-    frame, name = _frame(data, columns, zm)
+    frame, name = frame_and_label(data, columns, zm)
     return prediction(
         zm,
         frame,
@@ -269,7 +259,7 @@ def simulate(
     from rczone.simulation.simulate import steady_state
 
     zm = as_model(model)
-    frame, _ = _frame(data, columns, zm)
+    frame, _ = frame_and_label(data, columns, zm)
     given = frame_from(frame)
     missing = [o for o in zm.network.outputs if o not in given]  # a simulation needs no measurement
     given = given.assign(**{o: float("nan") for o in missing}) if missing else given
@@ -345,7 +335,7 @@ def diagnose(
     from rczone.diagnostics import diagnose as run
 
     zm = as_model(model)
-    frame, name = _frame(data, columns, zm)
+    frame, name = frame_and_label(data, columns, zm)
     rep = run(
         zm,
         frame,

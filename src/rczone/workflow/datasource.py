@@ -220,3 +220,23 @@ def data_source(spec: str | os.PathLike | DataSource, columns: str | os.PathLike
     raise DataError(
         f"data file {str(spec)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
     )
+
+
+def frame_and_label(
+    data: pd.DataFrame | str | os.PathLike | DataSource, columns: str | os.PathLike | None, model: ZoneModel
+) -> tuple[pd.DataFrame, str]:
+    """The frame ``model`` reads from ``data`` and the data's name: a frame as given, else its source's.
+
+    Parameters
+    ----------
+    data : DataFrame, str, path or DataSource
+        A frame (its name from ``attrs["name"]``), a source, or what names one (:func:`data_source`).
+    columns : str or path, optional
+        A column map for a file.
+    model : ZoneModel
+        The model whose signals are read.
+    """
+    if isinstance(data, pd.DataFrame):
+        return data, str(data.attrs.get("name", "data"))
+    source = data_source(data, columns)
+    return source.frame(model), source.label

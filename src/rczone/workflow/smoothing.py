@@ -14,10 +14,11 @@ from collections.abc import Mapping
 import pandas as pd
 
 from rczone.calibration import ModelLike, as_model, dataset, noise_values, time_index
+from rczone.calibration.prediction import model_hold
 from rczone.errors import DataError
 from rczone.estimation.smoother import SmoothedStates, smooth_states
 from rczone.network.stochastic import INITIAL_STATE, kind_of
-from rczone.workflow.datasource import DataSource, data_source
+from rczone.workflow.datasource import DataSource, frame_and_label
 
 PathLike = str | os.PathLike
 
@@ -56,11 +57,7 @@ def smooth(
         The model has no noise levels.
     """
     zm = as_model(model)
-    if isinstance(data, pd.DataFrame):
-        frame, name = data, str(data.attrs.get("name", "data"))
-    else:
-        source = data_source(data, columns)
-        frame, name = source.frame(zm), source.label
+    frame, name = frame_and_label(data, columns, zm)
     # the initial state a fit found is that of its own data, not of these
     values = {k: v for k, v in noise_values(zm).items() if kind_of(k) != INITIAL_STATE}
     if not values:
@@ -69,7 +66,7 @@ def smooth(
             " (rczone fit --method ml --save-model ...)"
         )
     data_set = dataset(zm, frame, constants)
-    out = smooth_states(zm.network, {**zm.theta, **values}, data_set)
+    out = smooth_states(zm.network, {**zm.theta, **values}, data_set, hold=model_hold(zm))
     return SmoothedStates(
         data_set.t,
         zm.network.state_names,

@@ -54,3 +54,15 @@ def test_smooth_gives_a_column_per_node_and_its_sd_indexed_by_the_datas_time_sta
 def test_smooth_without_noise_levels_is_one_clear_error():
     with pytest.raises(rczone.DataError, match=r"noise levels.*fit it by ML"):
         rczone.smooth("second-order-paper", "C")
+
+
+def test_smooth_holds_the_inputs_as_the_model_was_fitted(model_and_frame):
+    import dataclasses
+
+    zm, frame = model_and_frame
+    foh = dataclasses.replace(zm, provenance={**zm.provenance, "hold": "foh"})
+    values = {**zm.theta, **{k: v for k, v in NOISE.items() if k != "x0_Tw"}}
+    direct = smooth_states(zm.network, values, dataset(zm, frame), hold="foh")
+    tw = rczone.smooth(foh, frame).to_frame()["Tw"].to_numpy()
+    np.testing.assert_array_equal(tw, direct.x[:, 1])
+    assert np.max(np.abs(tw - rczone.smooth(zm, frame).to_frame()["Tw"].to_numpy())) > 1e-4
