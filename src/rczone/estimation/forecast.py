@@ -108,14 +108,15 @@ def k_step_bands(
         live = origin + i + 1 < N  # origins whose next step is still inside the data
         origin, x, P = origin[live], x[live], P[live]
         w = which[origin + i]
-        x = np.einsum("kij,kj->ki", Phi[w], x) + drive[origin + i]
-        P = np.einsum("kij,kjl,kml->kim", Phi[w], P, Phi[w]) + Qd[w]
+        F = Phi[w]  # stacked matrix products (matmul), not a three-operand einsum: 10-20x faster
+        x = (F @ x[:, :, None])[:, :, 0] + drive[origin + i]
+        P = F @ P @ F.transpose(0, 2, 1) + Qd[w]
         if i + 1 in reach:
             target = origin + i + 1
             band = bands[i + 1]
             band.y_hat[target] = x @ C.T + u[target] @ args.D.T
-            S = np.einsum("ij,kjl,ml->kim", C, P, C) + R
-            band.sd[target] = np.sqrt(np.einsum("kii->ki", S))
+            var = np.einsum("ij,kjl,il->ki", C, P, C, optimize=True) + np.diag(R)
+            band.sd[target] = np.sqrt(var)
     return bands
 
 
