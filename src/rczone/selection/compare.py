@@ -56,6 +56,7 @@ import pandas as pd
 from scipy.special import chdtrc
 
 from rczone.calibration import Calibration, ModelLike, as_model, calibrate, complete_stretch, frame_from
+from rczone.calibration.dataset import ignored_channels
 from rczone.errors import DataError, ParameterError, did_you_mean
 from rczone.estimation.fit import default_free
 from rczone.models import ZoneModel
@@ -279,6 +280,8 @@ class Selection(Result):
     model_specs : dict of str to str
         What names each candidate on the command line (``--model``), when it is not its label
         (a model file).
+    ignored_channels : tuple of str
+        Channels the data's column map mapped that no candidate uses.
     """
 
     candidates: Mapping[str, Candidate]
@@ -298,6 +301,7 @@ class Selection(Result):
     noise: str = "all"
     fit_args: tuple[str, ...] = ()
     model_specs: Mapping[str, str] = field(default_factory=dict)
+    ignored_channels: tuple[str, ...] = ()
 
     @property
     def best(self) -> Candidate:
@@ -368,6 +372,7 @@ class Selection(Result):
             if self.best.calibration.innovations is not None
             else None,
             "exit_code": self.exit_code,
+            "ignored_channels": list(self.ignored_channels),
         }
 
 
@@ -559,6 +564,7 @@ def select_models(
     if dup:
         raise ParameterError(f"candidate {dup[0]!r} is given twice")
     by_name = dict(zip(names, zms))
+    ignored = ignored_channels(frame)
     basis = comparison_basis({n: zm.network for n, zm in by_name.items()})
     if basis.conditional:
         if forward:
@@ -709,6 +715,7 @@ def select_models(
         basis,
         vuong,
         noise=noise,
+        ignored_channels=ignored,
     )
 
 
