@@ -21,6 +21,7 @@ from rczone.calibration.dataset import (
     as_model,
     dataset,
     frame_from,
+    ignored_channels,
 )
 from rczone.estimation import Dataset, FitResult, fit
 from rczone.estimation.fit import default_free
@@ -203,6 +204,7 @@ class Calibration(Result):
             innovations=self.innovations.to_dict() if self.innovations is not None else None,
             open_loop_residuals=self.open_loop_residuals.to_dict() if self.open_loop_residuals else None,
             constants=self.model.provenance.get("constants") or {},
+            ignored_channels=list(self.model.provenance.get("ignored_channels") or []),
             identifiability={
                 k: {"verdict": v.verdict, "reason": v.reason}
                 for k, v in self.identifiability.parameters.items()
@@ -276,6 +278,7 @@ def calibrate(
     """
     zm = as_model(model)
     net = zm.network
+    ignored = ignored_channels(frame)
     frame = frame_from(frame)
     used = zm.constants_used(frame, constants)
     data = dataset(zm, frame, constants)
@@ -332,6 +335,7 @@ def calibrate(
         baselines=baseline_models(data),
         **({"posterior_draws": posterior_draws(res)} if res.posterior is not None else {}),
         hold=hold,
+        **({"ignored_channels": list(ignored)} if ignored else {}),
         **dict(provenance or {}),
     )
     if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say

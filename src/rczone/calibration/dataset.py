@@ -51,6 +51,20 @@ def frame_from(data: pd.DataFrame) -> pd.DataFrame:
     )
 
 
+def ignored_channels(frame: pd.DataFrame) -> tuple[str, ...]:
+    """The channels a column map mapped that the model (or every candidate) does not use, as loaded.
+
+    A trend log read through a map lists them in ``frame.attrs["ignored_channels"]``
+    (:meth:`rczone.data.zonedata.ZoneData.to_frame`); the results of a fit, a selection and a
+    prediction repeat them in their JSON, so a script sees what the map carried that was not used.
+
+    Parameters
+    ----------
+    frame : DataFrame
+    """
+    return tuple(str(n) for n in frame.attrs.get("ignored_channels") or ())
+
+
 def time_index(frame: pd.DataFrame, t: np.ndarray) -> pd.DatetimeIndex | None:
     """The time stamps of the samples at ``t`` (as :func:`frame_from` made them), in the data's time zone.
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from rczone.calibration.dataset import ModelLike, as_model
+from rczone.calibration.dataset import ModelLike, as_model, ignored_channels
 from rczone.calibration.prediction import PredictionSetup, prediction_setup, saved_covariance, write_series
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.baselines import ARX, fit_arx, k_step_baselines, open_loop_baselines
@@ -109,6 +109,8 @@ class HorizonScores(Result):
         Where the band, the open-loop start and the ARX model come from, in words.
     model_label, data_label : str
     warmup_samples : int
+    ignored_channels : tuple of str
+        Channels the data's column map mapped that the model does not use.
     """
 
     table: pd.DataFrame
@@ -124,6 +126,7 @@ class HorizonScores(Result):
     model_label: str = "model"
     data_label: str = "data"
     warmup_samples: int = 0
+    ignored_channels: tuple[str, ...] = ()
 
     def _repr_line(self) -> str:
         return (
@@ -184,6 +187,7 @@ class HorizonScores(Result):
             "band": self.band_source,
             "baselines": self.baseline_note,
             "scores": rows,
+            "ignored_channels": list(self.ignored_channels),
         }
 
     def series_frame(self) -> pd.DataFrame:
@@ -376,6 +380,7 @@ def horizon_scores(
         model_label=zm.label,
         data_label=label,
         warmup_samples=first,
+        ignored_channels=ignored_channels(frame),
     )
 
 

@@ -22,6 +22,7 @@ from rczone.calibration.dataset import (
     ModelLike,
     as_model,
     dataset,
+    ignored_channels,
     time_index,
 )
 from rczone.errors import DataError
@@ -110,6 +111,8 @@ class Prediction(Result):
         A posterior predictive band (a model fitted by sampling:
         :func:`~rczone.estimation.forecast.posterior_band`), of the probability of plus or minus two
         standard deviations; None: the band is ``predicted -+ 2 sd``.
+    ignored_channels : tuple of str
+        Channels the data's column map mapped that the model does not use.
     """
 
     t: np.ndarray
@@ -130,6 +133,7 @@ class Prediction(Result):
     warmup_samples: int = 0
     lower: np.ndarray | None = None
     upper: np.ndarray | None = None
+    ignored_channels: tuple[str, ...] = ()
 
     @property
     def band(self) -> tuple[np.ndarray, np.ndarray]:
@@ -265,6 +269,7 @@ class Prediction(Result):
                 for part, a in (("noise", self.sd_noise), ("estimates", self.sd_parameters))
                 if a is not None and np.isfinite(a).any()
             },
+            "ignored_channels": list(self.ignored_channels),
         }
 
     def write(self, path: str | os.PathLike) -> None:
@@ -654,6 +659,7 @@ def setup_prediction(
         warmup_samples=first,
         lower=lower,
         upper=upper,
+        ignored_channels=ignored_channels(frame) if frame is not None else (),
     )
 
 

@@ -54,6 +54,15 @@ def diagnose(
         ),
     ] = "auto",
     seed: Annotated[int, typer.Option(help="Seed of the quick fit's global search.")] = 0,
+    hold: Annotated[
+        str | None,
+        typer.Option(
+            "--hold",
+            metavar="zoh|foh",
+            help="Inputs between samples: held (zoh) or linear (foh); default the one the model was fitted"
+            " with, else zoh.",
+        ),
+    ] = None,
     json_out: Annotated[
         Path | None, typer.Option("--json", help="Write the verdicts and evidence as JSON ('-': stdout).")
     ] = None,
@@ -87,6 +96,7 @@ def diagnose(
             constants=constants(const),
             operating_point=operating_point,
             seed=seed,
+            hold=hold,
         )
     rep = dataclasses.replace(rep, data_label=label)
     console = out_console(json_out)

@@ -12,11 +12,14 @@ from rczone.cli.common import (
     BoundsOption,
     ColumnMapOption,
     ConstantsOption,
+    FixOption,
     HoldOption,
     bounds,
     constants,
     data_label,
     esc,
+    fixed,
+    free_list,
     model,
     out_console,
     parameter_kinds,
@@ -74,6 +77,15 @@ def select(
     const: ConstantsOption = None,
     hold: HoldOption = "zoh",
     bound: BoundsOption = None,
+    free: Annotated[
+        list[str] | None,
+        typer.Option(
+            metavar="+NAME",
+            help="Estimate NAME too in every candidate that has it, e.g. --free +x0_Te or, with --noise"
+            " measured, --free +sigma_w_Te (repeatable or comma-separated).",
+        ),
+    ] = None,
+    fix: FixOption = None,
     json_out: Annotated[
         Path | None,
         typer.Option("--json", help="Write the table, tests and selection as JSON ('-': stdout)."),
@@ -149,6 +161,7 @@ def select(
 
         frame = split_frame(frame, at)[0]
     box = bounds(bound, parameter_kinds(*zms))
+    added, held = free_list(free), fixed(fix, parameter_kinds(*zms))
 
     def progress(name: str) -> None:
         console.print(f"fitting {esc(name)} (ML)")
@@ -167,6 +180,8 @@ def select(
             noise=noise.strip().lower(),
             hold=hold,
             bounds=box,
+            free=added,
+            fixed=held,
         )
     sel = dataclasses.replace(
         sel,
@@ -181,6 +196,7 @@ def select(
             n_starts=n_starts,
             seed=seed,
             bounds=box,
+            fixed=held,
         ),
         model_specs=specs,
     )

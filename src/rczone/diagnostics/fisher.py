@@ -56,6 +56,7 @@ def nuisance_responses(
     m: np.ndarray | None,
     offsets: Sequence[str] = (),
     initial_state: bool = True,
+    hold: str = "zoh",
 ) -> tuple[np.ndarray, list[str]]:
     """Output responses to each unit initial state (zero inputs) and to a unit constant of each offset input.
 
@@ -69,6 +70,8 @@ def nuisance_responses(
         Inputs whose unknown constant offset is a nuisance.
     initial_state : bool
         Include the initial state of every node.
+    hold : {"zoh", "foh"}
+        Inputs between samples (:func:`rczone.simulation.simulate`).
 
     Returns
     -------
@@ -81,12 +84,12 @@ def nuisance_responses(
     n = ss.n_states
     cols, names = [], []
     for i, s in enumerate(ss.state_names if initial_state else ()):
-        cols.append(simulate(ss, t, zero, mm, x0=np.eye(n)[i]).y)
+        cols.append(simulate(ss, t, zero, mm, x0=np.eye(n)[i], hold=hold).y)
         names.append(f"x0[{s}]")
     for h in offsets:
         uq = zero.copy()
         uq[:, ss.input_names.index(h)] = 1.0
-        cols.append(simulate(ss, t, uq, mm, x0=np.zeros(n)).y)
+        cols.append(simulate(ss, t, uq, mm, x0=np.zeros(n), hold=hold).y)
         names.append(f"offset[{h}]")
     if not cols:
         return np.zeros((t.size, ss.C.shape[0], 0)), names

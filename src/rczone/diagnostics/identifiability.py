@@ -293,6 +293,8 @@ class IdentifiabilityReport(Result):
             lines.append(f"{style}operating point:{'[/]' if style else ''} {esc(op.reason)}")
         if len(self.outputs) > 1:
             lines.append("outputs analysed together: " + ", ".join(esc(o) for o in self.outputs))
+        if self.settings.get("hold") == "foh":
+            lines.append("inputs between samples: linear (foh)")
         held = self.settings.get("constants") or {}
         if held:
             lines.append("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in held.items()))
@@ -369,14 +371,15 @@ def _residual(
     values: Mapping[str, float],
     data: Dataset,
     offsets: Sequence[str],
+    hold: str = "zoh",
 ) -> tuple[float, np.ndarray]:
     """RMS of data minus simulation after re-fitting initial state and offsets; and the initial state."""
     ss = network.state_space(theta)
     x0 = initial_state(ss, values, data)
     mm = data.m if data.m.shape[1] else None
-    y = simulate(ss, data.t, data.u, mm, x0=x0).y
+    y = simulate(ss, data.t, data.u, mm, x0=x0, hold=hold).y
     ok = np.isfinite(data.y)
-    nuis, _ = nuisance_responses(ss, data.t, data.u, data.m, offsets)
+    nuis, _ = nuisance_responses(ss, data.t, data.u, data.m, offsets, hold=hold)
     return rms(project_out(_stack(data.y - y, ok), _stack(nuis, ok))), x0
 
 
@@ -391,6 +394,7 @@ def choose_operating_point(
     mode: str = "auto",
     constants: Mapping[str, float] | None = None,
     seed: int = 0,
+    hold: str = "zoh",
 ) -> OperatingPoint:
     """The model's values if they reproduce the data, else a quick fit's estimates (see the module notes).
 
@@ -406,11 +410,17 @@ def choose_operating_point(
         Parameters diagnosed; the quick fit estimates these and the model's default free ones.
     mode : {"auto", "model", "fit"}
         ``"model"`` always uses the model's values, ``"fit"`` always fits first.
+    constants : mapping, optional
+        Inputs held constant (SI units), for the fit.
+    seed : int
+        Seed of the fit's global search.
+    hold : {"zoh", "foh"}
+        Inputs between samples, in the residuals and the fit.
     """
     net = zm.network
     theta = dict(zm.theta)
     threshold = CONSISTENT_FACTOR * math.hypot(sigma_K, model_error_K)
-    r_model, x0 = _residual(net, theta, {}, data, offsets)
+    r_model, x0 = _residual(net, theta, {}, data, offsets, hold)
     states = dict(zip(net.state_names, map(float, x0), strict=True))
     what = "after re-fitting the initial state" + (" and the heat-gain offset" if offsets else "")
     if mode == "model" or (mode == "auto" and r_model <= threshold):
@@ -424,10 +434,12 @@ def choose_operating_point(
     from rczone.estimation.fit import default_free
 
     fit_free = tuple(dict.fromkeys((*default_free(net, "ls"), *free)))
-    cal = calibrate(zm, frame, "ls", free=fit_free, constants=constants, uncertainty=False, seed=seed)
+    cal = calibrate(
+        zm, frame, "ls", free=fit_free, constants=constants, uncertainty=False, seed=seed, hold=hold
+    )
     fitted = dict(cal.model.theta)
     x0_values = dict(cal.model.provenance.get("initial_state") or {})
-    r_fit, x0 = _residual(net, fitted, x0_values, data, offsets)
+    r_fit, x0 = _residual(net, fitted, x0_values, data, offsets, hold)
     if mode == "fit":
         why = "as asked"
     else:
@@ -544,6 +556,7 @@ def diagnose(
     initial_state_nuisance: bool = True,
     operating_point: str = "auto",
     seed: int = 0,
+    hold: str | None = None,
 ) -> IdentifiabilityReport:
     """Tell whether ``frame`` can identify the ``free`` parameters of ``model``.
 
@@ -580,18 +593,29 @@ def diagnose(
         regardless; ``"fit"`` always the quick fit's.
     seed : int
         Seed of the quick fit's global search.
+    hold : {"zoh", "foh"}, optional
+        Inputs between samples, in the sensitivities, the responses and the quick fit (held or
+        linear, as in :func:`rczone.simulation.simulate`; on coarse data the choice moves the
+        optimum); default the one a fitted model was fitted with (its provenance), else ``"zoh"``.
 
     Returns
     -------
     IdentifiabilityReport
     """
     from rczone.calibration import dataset, frame_from
+    from rczone.calibration.prediction import model_hold
     from rczone.models import load_model
+    from rczone.simulation.simulate import HOLDS
 
     _check_settings(sigma_K, correlation_time_s, model_error_K, operating_point)
     zm = load_model(model)
     if theta:
         zm = zm.with_values(theta)
+    hold = model_hold(zm) if hold is None else str(hold).strip().lower()
+    if hold not in HOLDS:
+        raise ParameterError(
+            f"hold must be one of {', '.join(HOLDS)}, got {hold!r}; " + did_you_mean(hold, HOLDS)
+        )
     net = zm.network
     if free is None:
         free = default_diagnosed(net, zm.theta)
@@ -611,7 +635,7 @@ def diagnose(
                     f"heat_input {h!r} is not an input of the model; " + did_you_mean(h, net.input_names)
                 )
     op = choose_operating_point(
-        zm, frame, data, free, sigma_K, model_error_K, offsets, operating_point, constants, seed
+        zm, frame, data, free, sigma_K, model_error_K, offsets, operating_point, constants, seed, hold
     )
     check_free(net, free, op.theta)
     theta = op.theta
@@ -622,9 +646,9 @@ def diagnose(
     mm = data.m if data.m.shape[1] else None
     x0 = np.array([op.initial_state[s] for s in net.state_names])
     ok = np.isfinite(data.y)
-    sens = output_sensitivities(net, theta, free, t, u, mm, x0=x0)
+    sens = output_sensitivities(net, theta, free, t, u, mm, x0=x0, hold=hold)
     S = _stack(sens.dy, ok)
-    nuis_t, _ = nuisance_responses(ss, t, u, data.m, offsets, initial_state_nuisance)
+    nuis_t, _ = nuisance_responses(ss, t, u, data.m, offsets, initial_state_nuisance, hold=hold)
     nuis = _stack(nuis_t, ok)
     dt = float(np.median(np.diff(t)))
     w = sample_weight(dt, sigma_K, correlation_time_s)
@@ -658,7 +682,7 @@ def diagnose(
     for j, name in enumerate(free):
         changes = []
         for factor in (0.1, 10.0):
-            alt = simulate(net.state_space({**theta, name: vals[name] * factor}), t, u, mm, x0=x0)
+            alt = simulate(net.state_space({**theta, name: vals[name] * factor}), t, u, mm, x0=x0, hold=hold)
             changes.append(rms(project_out(_stack(alt.y, ok) - y0, nuis)))
         others = [(abs(corr[j, k]), free[k]) for k in range(len(free)) if k != j]
         rho, partner = max(others) if others else (0.0, None)
@@ -693,6 +717,7 @@ def diagnose(
             "model_error_K": model_error_K,
             "heat_offset_nuisance": list(offsets),
             "initial_state_nuisance": initial_state_nuisance,
+            "hold": hold,
             "constants": zm.constants_used(frame, constants),
             "samples": data.n_samples,
             "model": zm.label,

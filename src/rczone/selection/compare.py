@@ -49,15 +49,20 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 from scipy.special import chdtrc
 
 from rczone.calibration import Calibration, ModelLike, as_model, calibrate, complete_stretch, frame_from
+from rczone.calibration.dataset import ignored_channels
 from rczone.errors import DataError, ParameterError, did_you_mean
 from rczone.estimation.fit import default_free
 from rczone.models import ZoneModel
+
+if TYPE_CHECKING:
+    from rczone.workflow.settings import FitSettings
 from rczone.network.stochastic import MEASUREMENT_NOISE, PROCESS_NOISE, kind_of, process_noise_name, target_of
 from rczone.results import Result
 from rczone.results.verdict import EXIT_UNTRUSTED
@@ -275,6 +280,8 @@ class Selection(Result):
     model_specs : dict of str to str
         What names each candidate on the command line (``--model``), when it is not its label
         (a model file).
+    ignored_channels : tuple of str
+        Channels the data's column map mapped that no candidate uses.
     """
 
     candidates: Mapping[str, Candidate]
@@ -294,6 +301,7 @@ class Selection(Result):
     noise: str = "all"
     fit_args: tuple[str, ...] = ()
     model_specs: Mapping[str, str] = field(default_factory=dict)
+    ignored_channels: tuple[str, ...] = ()
 
     @property
     def best(self) -> Candidate:
@@ -364,6 +372,7 @@ class Selection(Result):
             if self.best.calibration.innovations is not None
             else None,
             "exit_code": self.exit_code,
+            "ignored_channels": list(self.ignored_channels),
         }
 
 
@@ -393,6 +402,70 @@ def common_stretch(models: Sequence[ZoneModel], frame: pd.DataFrame, constants) 
 def candidate_free(network, noise: str = "all") -> tuple[str, ...]:
     """The free parameters of a candidate: the ML default, with every state's process noise for ``"all"``."""
     return default_free(network, "ml", noise=noise)
+
+
+def parameter_names(network) -> set[str]:
+    """Every name a candidate's fit can free or fix: its free R, C and gains, noise levels and initial states.
+
+    Parameters
+    ----------
+    network : RCNetwork
+    """
+    from rczone.estimation.parameters import noise_parameter_names
+
+    return {*network.free_parameter_names, *noise_parameter_names(network)}
+
+
+def candidate_settings(
+    models: Mapping[str, ZoneModel],
+    noise: str = "all",
+    free: Sequence[str] | None = None,
+    fixed: Mapping[str, float | None] | None = None,
+) -> dict[str, FitSettings]:
+    """Each candidate's fit settings: ML, ``noise``, and the added and fixed parameters it has.
+
+    The entries are checked once, by :class:`~rczone.workflow.settings.FitSettings` (as for
+    ``rczone fit``), then each candidate keeps the names it has; a name no candidate has is an
+    error with the close names.
+
+    Parameters
+    ----------
+    models : mapping of str to ZoneModel
+        The candidates by name.
+    noise : {"all", "measured"}
+        Process noise on every state or on the measured ones.
+    free : sequence of str, optional
+        ``"+NAME"`` entries added to the default free sets.
+    fixed : mapping of str to float or None, optional
+        Parameters held at a value (None: the model's).
+
+    Returns
+    -------
+    dict of str to FitSettings
+    """
+    from rczone.workflow.settings import ADD, FitSettings
+
+    whole = FitSettings(method="ml", noise=noise, free=tuple(free or ()) or None, fixed=dict(fixed or {}))
+    replaced = [n for n in whole.free or () if not n.startswith(ADD)]
+    if replaced:
+        raise ParameterError(
+            f"select adds parameters to each candidate's own free set: write {ADD}{replaced[0]}"
+            f" (--free {ADD}{replaced[0]}); the candidates' free sets cannot be replaced by one list"
+        )
+    names = {n: parameter_names(zm.network) for n, zm in models.items()}
+    known = set().union(*names.values())
+    asked = [*(n[len(ADD) :] for n in whole.free or ()), *whole.fixed]
+    for name in asked:
+        if name not in known:
+            raise ParameterError(f"no candidate has a parameter {name!r}; " + did_you_mean(name, known))
+    return {
+        c: dataclasses.replace(
+            whole,
+            free=tuple(n for n in whole.free or () if n[len(ADD) :] in names[c]) or None,
+            fixed={k: v for k, v in whole.fixed.items() if k in names[c]},
+        )
+        for c in models
+    }
 
 
 def family_candidates(columns: Sequence[str], *, extended: bool = False) -> list[str]:
@@ -439,6 +512,8 @@ def select_models(
     noise: str = "all",
     hold: str = "zoh",
     bounds: Mapping[str, tuple[float, float]] | None = None,
+    free: Sequence[str] | None = None,
+    fixed: Mapping[str, float | None] | None = None,
 ) -> Selection:
     """Fit the candidate ``models`` to ``frame`` by ML and choose one (see the module notes).
 
@@ -467,6 +542,13 @@ def select_models(
     bounds : mapping of str to (float, float), optional
         Search bounds (SI units), each applied to the candidates that have the parameter; a name no
         candidate has is an error.
+    free : sequence of str, optional
+        Parameters added to every candidate's free set that has them, each written ``"+NAME"`` (a
+        noise level ``sigma_w_Te``, an initial state ``x0_Te``, a parameter the model declares
+        fixed), as ``rczone fit --free +NAME``; a name no candidate has is an error.
+    fixed : mapping of str to float or None, optional
+        Parameters held at a value (None: the model's) in every candidate that has them, as
+        ``rczone fit --fix``; a name no candidate has is an error.
     """
     if rule not in RULES:
         raise ParameterError(f"rule must be one of {RULES}, got {rule!r}")
@@ -482,6 +564,7 @@ def select_models(
     if dup:
         raise ParameterError(f"candidate {dup[0]!r} is given twice")
     by_name = dict(zip(names, zms))
+    ignored = ignored_channels(frame)
     basis = comparison_basis({n: zm.network for n, zm in by_name.items()})
     if basis.conditional:
         if forward:
@@ -491,7 +574,8 @@ def select_models(
             )
         check_measured(by_name, frame_from(frame), constants, basis)
     frame = common_stretch(zms, frame_from(frame), constants)
-    free = {n: candidate_free(zm.network, noise) for n, zm in by_name.items()}
+    own = candidate_settings(by_name, noise, free, fixed)
+    free = {n: own[n].free_for(zm.network) for n, zm in by_name.items()}
     bounds = dict(bounds or {})
     known = {p for names_ in free.values() for p in names_}
     for b in bounds:
@@ -509,7 +593,7 @@ def select_models(
             progress(name)
 
         def run(zm: ZoneModel) -> Calibration:
-            own = {k: v for k, v in bounds.items() if k in free[name]}
+            box = {k: v for k, v in bounds.items() if k in free[name]}
             return calibrate(
                 zm,
                 frame,
@@ -519,7 +603,8 @@ def select_models(
                 seed=seed,
                 constants=constants,
                 hold=hold,
-                bounds=own or None,
+                bounds=box or None,
+                fixed=own[name].fixed or None,
             )
 
         cal = run(by_name[name])
@@ -630,6 +715,7 @@ def select_models(
         basis,
         vuong,
         noise=noise,
+        ignored_channels=ignored,
     )
 
 

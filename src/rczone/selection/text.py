@@ -166,7 +166,9 @@ def fit_command(sel) -> str:
     return shlex.join([*args, *sel.fit_args])
 
 
-def fit_arguments(sel, *, columns=None, constants=None, hold="zoh", n_starts=None, seed=0, bounds=None):
+def fit_arguments(
+    sel, *, columns=None, constants=None, hold="zoh", n_starts=None, seed=0, bounds=None, fixed=None
+):
     """The ``rczone fit`` options that repeat the selected model's fit as ``select`` made it.
 
     Parameters
@@ -185,6 +187,9 @@ def fit_arguments(sel, *, columns=None, constants=None, hold="zoh", n_starts=Non
         Seed of the global search.
     bounds : mapping of str to (float, float), optional
         Search bounds; those of parameters the selected fit estimates are kept.
+    fixed : mapping of str to float or None, optional
+        Parameters held (None: the model's value); those the selected model has are kept, and the
+        parameters its fit estimated beyond ``rczone fit``'s default set are freed with ``+NAME``.
 
     Returns
     -------
@@ -205,4 +210,15 @@ def fit_arguments(sel, *, columns=None, constants=None, hold="zoh", n_starts=Non
     for name, (lo, hi) in (bounds or {}).items():
         if name in free:
             args += ["--bounds", f"{name}={lo!r},{hi!r}"]
+    from rczone.estimation.fit import default_free
+    from rczone.selection.compare import parameter_names
+
+    net = sel.best.calibration.model.network
+    for name, value in (fixed or {}).items():
+        if name in parameter_names(net):
+            args += ["--fix", name if value is None else f"{name}={value!r}"]
+    default = set(default_free(net, "ml", noise=sel.noise))
+    args += [
+        a for name in sel.best.calibration.result.names if name not in default for a in ("--free", "+" + name)
+    ]
     return tuple(args)

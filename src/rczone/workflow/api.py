@@ -298,6 +298,7 @@ def diagnose(
     constants: Mapping[str, float] | None = None,
     columns: PathLike | None = None,
     label: str | None = None,
+    hold: str | None = None,
 ):
     """Can these data identify the model's parameters, and why: ``rczone diagnose`` in Python.
 
@@ -324,6 +325,8 @@ def diagnose(
         A column map for ``data`` given as a file.
     label : str, optional
         The data's name in titles and the JSON.
+    hold : {"zoh", "foh"}, optional
+        Inputs between samples; default the one the model was fitted with, else ``"zoh"``.
 
     Returns
     -------
@@ -344,6 +347,7 @@ def diagnose(
         model_error_K=model_error,
         constants=dict(constants) if constants else None,
         operating_point=operating_point,
+        hold=hold,
         seed=seed,
     )
     return dataclasses.replace(rep, data_label=label or name)

@@ -9,6 +9,7 @@ import json
 
 import pytest
 
+import rczone
 from rczone.cli.main import main
 from tests.unit.selection.synthetic import prbs_zone
 
@@ -89,3 +90,28 @@ def test_the_fit_alone_line_of_select_runs_as_printed(files, capsys, monkeypatch
     assert words[:5] == ["rczone", "fit", "bms.csv", "--model", "TiTe+heater"]
     assert {"--columns", "--hold", "--starts", "--seed"} <= set(words)
     assert main(words[1:]) in (0, 3)  # exit 2 before the fix: the map was dropped
+
+
+def test_the_json_of_fit_select_and_predict_lists_the_ignored_channels(files, capsys):
+    """The irradiance the map carries and no model uses is listed in every JSON, not only on stderr."""
+    _, mapped = _fit(files, "bms.csv", "--columns", str(files / "map.toml"))
+    assert mapped["ignored_channels"] == ["Ps"]
+    _, plain = _fit(files, "zone.csv")  # no map: nothing mapped, nothing ignored
+    assert plain["ignored_channels"] == []
+    # a map whose every channel the model uses ignores nothing
+    (files / "used.toml").write_text(MAP.replace('Ps = { column = "sun", unit = "W/m2" }\n', ""))
+    _, used = _fit(files, "bms.csv", "--columns", str(files / "used.toml"))
+    assert used["ignored_channels"] == []
+    cmap = ["--columns", str(files / "map.toml")]
+    sel, model = files / "sel.json", files / "ml.json"
+    args = ["select", str(files / "bms.csv"), "--model", "Ti+heater", "--model", "TiTe+heater", *cmap]
+    assert main([*args, "--starts", "1", "--json", str(sel), "--save-model", str(model)]) in (0, 3)
+    assert json.loads(sel.read_text())["ignored_channels"] == ["Ps"]
+    # the Python API's results say the same (the CLI writes their to_dict())
+    api = rczone.predict(model, files / "bms.csv", columns=files / "map.toml")
+    assert api.to_dict()["ignored_channels"] == ["Ps"] and api.ignored_channels == ("Ps",)
+    for extra in ([], ["--horizons", "1,open"]):
+        pred = files / "pred.json"
+        assert main(["predict", str(model), str(files / "bms.csv"), *cmap, *extra, "--json", str(pred)]) == 0
+        assert json.loads(pred.read_text())["ignored_channels"] == ["Ps"]
+    capsys.readouterr()

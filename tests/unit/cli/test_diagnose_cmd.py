@@ -329,3 +329,46 @@ def test_a_parameter_at_its_bound_is_never_identifiable(tmp_path, capsys):
     assert "upper bound" in ci["reason"] and "widen the bounds" in ci["advice"]
     # the other parameters are not at a bound and keep verdicts from their own evidence
     assert all(d["parameters"][n]["at_bound"] is None for n in ("Ce", "Rie", "Rea"))
+
+
+def test_diagnose_hold_is_the_one_asked_for_else_the_fitted_models(tmp_path, capsys):
+    """Half-hourly data simulated with a linear (FOH) heater: --hold foh reproduces them, zoh does not.
+
+    Truth by construction: the data are the FOH simulation plus 0.02 K of noise, so at the true
+    values the FOH residual is the noise level and the ZOH one is larger. A model fitted with FOH
+    (provenance ``hold``) is diagnosed with FOH unless told otherwise.
+    """
+    from rczone.simulation import steady_state
+
+    zm = family("TiTe+heater")
+    frame = heated(zm, "prbs", hours=96, dt=1800.0, noise=0.0)
+    u = frame[list(zm.network.input_names)].to_numpy()
+    t = frame["time"].to_numpy()
+    ss = zm.state_space()
+    y = simulate(ss, t, u, x0=steady_state(ss, u[0], 0.0), hold="foh").y[:, 0]
+    frame["Ti"] = y + 0.02 * np.random.default_rng(5).standard_normal(t.size)
+    frame.to_csv(tmp_path / "d.csv", index=False)
+    zm.with_values({}, hold="foh").save(tmp_path / "foh.json")
+    zm.save(tmp_path / "plain.json")
+    runs = {}
+    for name, model, extra in (
+        ("zoh", "plain.json", ["--hold", "zoh"]),
+        ("plain", "plain.json", []),
+        ("foh", "plain.json", ["--hold", "FOH"]),
+        ("fitted", "foh.json", []),
+        ("fitted-zoh", "foh.json", ["--hold", "zoh"]),
+    ):
+        out = tmp_path / f"diagnosed-{name}.json"
+        args = ["diagnose", str(tmp_path / "d.csv"), "--model", str(tmp_path / model), "--json", str(out)]
+        assert main([*args, "--operating-point", "model", *extra]) == 0, capsys.readouterr().err
+        runs[name] = _json(out)
+    res = {k: v["operating_point"]["residual_K"] for k, v in runs.items()}
+    assert res["foh"] == pytest.approx(0.02, rel=0.25) and res["zoh"] > 2 * res["foh"]
+    assert [runs[k]["settings"]["hold"] for k in runs] == ["zoh", "zoh", "foh", "foh", "zoh"]
+    se = {k: v["expected_rel_se"] for k, v in runs.items()}
+    assert se["plain"] == se["zoh"] == se["fitted-zoh"] and se["fitted"] == se["foh"] != se["zoh"]
+    assert "inputs between samples: linear (foh)" in " ".join(capsys.readouterr().out.split())
+    rc = main(
+        ["diagnose", str(tmp_path / "d.csv"), "--model", str(tmp_path / "plain.json"), "--hold", "linear"]
+    )
+    _one_error(capsys, rc, "hold must be one of zoh, foh")

@@ -118,3 +118,45 @@ def test_a_flagged_fit_is_passed_over_not_selected(files, tmp_path, capsys):
     step = fwd["forward"]["steps"][0]
     assert step["p_value"] < 0.05 and not step["accepted"] and step["refused_flagged"]
     assert fwd["selected"] == "Ti+heater" and "refused: the fit of" in text
+
+
+def test_select_fixes_and_frees_noise_and_initial_states_like_fit(files, tmp_path, capsys):
+    """--fix sigma_v=0.02 (the data's true measurement noise) and --free +sigma_w_Te +x0_Te, parsed as fit parses them.
+
+    Each candidate gets the names it has (Ti+heater has no Te); the "same fit alone" line repeats them,
+    and ``rczone fit`` with it reaches the log-likelihood select reported for the selected model.
+    """
+    import shlex
+
+    out, model = tmp_path / "sel.json", tmp_path / "best.json"
+    args = ["select", str(files / "zone.csv"), "--model", "Ti+heater", "--model", "TiTe+heater"]
+    extra = ["--noise", "measured", "--starts", "1", "--fix", "sigma_v=0.02", "--free", "+sigma_w_Te,+x0_Te"]
+    assert main([*args, *extra, "--json", str(out), "--save-model", str(model)]) == 0
+    text = capsys.readouterr().out
+    res = json.loads(out.read_text())
+    ti, tite = (set(res["models"][n]["parameters"]) for n in ("Ti+heater", "TiTe+heater"))
+    assert ti == {"Ci", "Ria", "sigma_w_Ti"}
+    assert tite == {"Ci", "Ce", "Rie", "Rea", "sigma_w_Ti", "sigma_w_Te", "x0_Te"}
+    assert res["selected"] == "TiTe+heater" and json.loads(model.read_text())["noise"]["sigma_v"] == 0.02
+    line = next(ln for ln in text.splitlines() if ln.startswith("rczone fit "))
+    alone = shlex.split(line)[2:]
+    assert "--fix" in alone and "sigma_v=0.02" in alone and "+x0_Te" in alone and "+sigma_w_Te" in alone
+    fit_json = tmp_path / "fit.json"
+    assert main(["fit", *alone, "--no-profiles", "--json", str(fit_json)]) in (0, 3)
+    llf = json.loads(fit_json.read_text())["llf"]
+    assert llf == pytest.approx(res["models"]["TiTe+heater"]["loglik_fit"], abs=0.05)
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--free", "sigma_w_Te"], "write +sigma_w_Te"),
+        (["--fix", "sigma_q"], "no candidate has a parameter 'sigma_q'"),
+        (["--fix", "sigma_v", "--free", "+sigma_v"], "both free and fixed"),
+        (["--fix", "sigma_v=abc"], "--fix must be NAME or NAME=VALUE"),
+    ],
+)
+def test_select_fix_and_free_mistakes_exit_2_with_one_line(files, capsys, extra, message):
+    rc = main(["select", str(files / "zone.csv"), "--model", "Ti+heater", "--model", "TiTe+heater", *extra])
+    err = capsys.readouterr().err
+    assert rc == 2 and message in err and "Traceback" not in err, err
