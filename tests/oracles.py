@@ -1,4 +1,4 @@
-"""Plain NumPy oracles of the compiled paths: the filter, the simulation loop and the identification costs.
+"""Plain NumPy oracles of the compiled paths: the filter, the spectral discretization, the simulation loop, the costs.
 
 These are the references the tests compare rczone's compiled kernels and engines with. They
 are written from the textbook recursions in the plainest form (one Python loop over the
@@ -33,6 +33,7 @@ from rczone.estimation.kalman import (
 )
 from rczone.network import RCNetwork
 from rczone.network.stochastic import initial_state_names
+from rczone.simulation.discretize import foh, zoh
 from rczone.simulation.simulate import transition_matrices
 
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -117,6 +118,190 @@ def kalman_filter_reference(problem: FilterProblem) -> FilterOutput:
         n_obs=n_obs,
         P_filt=Pf_all,
     )
+
+
+# ----------------------------------------------------------------------------- the spectral discretization
+#
+# The NumPy form of the spectral formulas of rczone.simulation.discretize (its module notes), batched
+# over intervals; production computes them compiled (rczone.kernels.discretize.interval_matrices).
+
+
+def spectral_decomposition(A: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigen-decomposition of ``S = diag(scale) A diag(scale)^{-1}`` for a stack of matrices.
+
+    ``S`` is symmetrized (``(S + S')/2``, which removes only rounding) and decomposed by a
+    closed-form Jacobi rotation for ``n <= 2`` and by LAPACK's symmetric solver otherwise.
+
+    Parameters
+    ----------
+    A : ndarray, shape (K, n, n)
+    scale : ndarray, shape (n,)
+        From :func:`symmetrizing_scale`.
+
+    Returns
+    -------
+    lam : ndarray, shape (K, n)
+        Eigenvalues of ``A``, 1/s.
+    V : ndarray, shape (K, n, n)
+        Orthogonal eigenvectors of ``S`` (columns).
+
+    References
+    ----------
+    .. [1] G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., 2013, Algorithm 8.5.1
+       (the symmetric 2-by-2 Schur decomposition).
+    """
+    S = scale[:, None] * A / scale[None, :]
+    S = 0.5 * (S + np.swapaxes(S, -1, -2))
+    n = S.shape[-1]
+    if n == 1:
+        return S[:, :, 0].copy(), np.ones_like(S)
+    if n == 2:
+        return _jacobi2(S[:, 0, 0], S[:, 0, 1], S[:, 1, 1])
+    return np.linalg.eigh(S)
+
+
+def _jacobi2(a: np.ndarray, b: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Closed-form eigen-decomposition of symmetric 2x2 matrices ``[[a, b], [b, d]]``.
+
+    The rotation ``J = [[c, s], [-s, c]]`` with ``t = s/c`` the smaller root of
+    ``t^2 + 2 tau t - 1 = 0``, ``tau = (d - a)/(2 b)``, gives ``J' S J = diag(a - t b, d + t b)``
+    without cancellation (Golub & Van Loan, Algorithm 8.5.1).
+    """
+    nz = b != 0.0
+    bb = np.where(nz, b, 1.0)
+    tau = (d - a) / (2.0 * bb)
+    # 1/(|tau| + hypot(1, tau)) stays finite for huge |tau|
+    t = np.where(nz, np.copysign(1.0, tau) / (np.abs(tau) + np.hypot(1.0, tau)), 0.0)
+    c = 1.0 / np.sqrt(1.0 + t * t)
+    s = t * c
+    lam = np.stack([a - t * b, d + t * b], axis=-1)
+    V = np.empty((*a.shape, 2, 2))
+    V[..., 0, 0], V[..., 0, 1], V[..., 1, 0], V[..., 1, 1] = c, s, -s, c
+    return lam, V
+
+
+def phi_weights(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``e^x``, ``(e^x - 1)/x`` and ``(e^x - 1 - x)/x^2`` evaluated without cancellation.
+
+    With ``x = lam dt`` these are ``Phi``'s eigenvalues and ``phi1/dt``, ``phi2/dt`` of the
+    hold integrals. ``exp`` and ``expm1`` keep the first two accurate to rounding for any ``x``. The
+    third uses its Taylor series ``sum_k x^k/(k+2)!`` (k <= 12, truncation below ``1e-19``)
+    for ``|x| < 0.2`` and ``(expm1(x) - x)/x^2`` (relative rounding ``< 2 eps/|x| <= 1e-15``)
+    otherwise.
+    """
+    x = np.asarray(x, dtype=float)
+    em1 = np.expm1(x)
+    zero = x == 0.0
+    w1 = np.where(zero, 1.0, em1 / np.where(zero, 1.0, x))
+    small = np.abs(x) < _SERIES_LIMIT
+    xs = np.where(small, 1.0, x)
+    series = np.full_like(x, _PHI2_SERIES[-1])
+    for c in _PHI2_SERIES[-2::-1]:
+        series = series * x + c
+    w2 = np.where(small, series, (em1 - xs) / (xs * xs))
+    return np.exp(x), w1, w2
+
+
+_SERIES_LIMIT = 0.2
+
+
+#: Taylor coefficients 1/(k+2)! of (e^x - 1 - x)/x^2, k = 0..12.
+_PHI2_SERIES = tuple(1.0 / float(np.prod(np.arange(1, k + 3))) for k in range(13))
+
+
+def spectral_transition(
+    lam: np.ndarray, V: np.ndarray, scale: np.ndarray, B: np.ndarray, dt: np.ndarray, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact ZOH/FOH matrices of ``dx/dt = A x + B u`` from the spectral form of ``A``.
+
+    ``Phi = T E T^{-1}``, ``G = T diag(w) T^{-1} B`` with ``T = diag(scale)^{-1} V`` (see the
+    module notes); identical to :func:`zoh` / :func:`foh` up to rounding.
+
+    Parameters
+    ----------
+    lam, V : ndarray, shapes (K, n), (K, n, n)
+        From :func:`spectral_decomposition`.
+    scale : ndarray, shape (n,)
+    B : ndarray, shape (K, n, p)
+    dt : ndarray, shape (K,)
+        Sample intervals, s.
+    hold : {"zoh", "foh"}
+
+    Returns
+    -------
+    Phi : ndarray, shape (K, n, n)
+    G0, G1 : ndarray, shape (K, n, p)
+        ``G1`` is zero for ZOH.
+
+    References
+    ----------
+    .. [1] N. J. Higham, *Functions of Matrices*, SIAM, 2008, section 1.2 (functions of a
+       diagonalizable matrix) and section 10.7.4 (the phi functions of exponential
+       integrators).
+    """
+    dt = np.asarray(dt, dtype=float)
+    e, w1, w2 = phi_weights(lam * dt[:, None])
+    T = V / scale[None, :, None]
+    Ti = np.swapaxes(V, -1, -2) * scale[None, None, :]
+    Phi = (T * e[:, None, :]) @ Ti
+    TiB = Ti @ B
+    if hold == "zoh":
+        G0 = T @ (TiB * (w1 * dt[:, None])[:, :, None])
+        return Phi, G0, np.zeros_like(G0)
+    G1 = T @ (TiB * (w2 * dt[:, None])[:, :, None])
+    G0 = T @ (TiB * ((w1 - w2) * dt[:, None])[:, :, None])
+    return Phi, G0, G1
+
+
+def spectral_noise_covariance(
+    lam: np.ndarray, V: np.ndarray, scale: np.ndarray, Qc: np.ndarray, dt: np.ndarray
+) -> np.ndarray:
+    """``Qd = int_0^dt e^{As} Qc e^{A's} ds`` in closed form from the spectral form of ``A``.
+
+    In the eigenbasis the integrand is elementwise ``W_ij e^{(l_i + l_j) s}``, whose integral is
+    ``W_ij (e^{(l_i + l_j) dt} - 1)/(l_i + l_j)``; every term is evaluated with ``expm1``, so
+    stiff models over long steps are as accurate as slow ones (no ``e^{-A dt}`` is formed).
+
+    Parameters
+    ----------
+    lam, V : ndarray, shapes (K, n), (K, n, n)
+    scale : ndarray, shape (n,)
+    Qc : ndarray, shape (n, n)
+        Continuous noise intensity, K^2/s.
+    dt : ndarray, shape (K,)
+
+    Returns
+    -------
+    Qd : ndarray, shape (K, n, n), symmetric
+
+    References
+    ----------
+    .. [1] C. F. Van Loan, "Computing integrals involving the matrix exponential",
+       IEEE Trans. Automatic Control 23(3), 1978 (the integral being computed).
+    """
+    dt = np.asarray(dt, dtype=float)
+    T = V / scale[None, :, None]
+    Ti = np.swapaxes(V, -1, -2) * scale[None, None, :]
+    W = Ti @ Qc @ np.swapaxes(Ti, -1, -2)
+    x = (lam[:, :, None] + lam[:, None, :]) * dt[:, None, None]
+    _, w1, _ = phi_weights(x)
+    Qd = T @ (W * w1 * dt[:, None, None]) @ np.swapaxes(T, -1, -2)
+    return 0.5 * (Qd + np.swapaxes(Qd, -1, -2))
+
+
+def transition_matrices_expm(
+    ss, uniq: np.ndarray, hold: str = "zoh"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One scipy block exponential per row of ``uniq = [dt, m...]`` (:func:`zoh` / :func:`foh`, no spectral path)."""
+    K, n, p = uniq.shape[0], ss.n_states, ss.B.shape[1]
+    Phi, G0, G1 = np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p))
+    for k in range(K):
+        A, B = ss.matrices(uniq[k, 1:])
+        if hold == "zoh":
+            Phi[k], G0[k] = zoh(A, B, float(uniq[k, 0]))
+        else:
+            Phi[k], G0[k], G1[k] = foh(A, B, float(uniq[k, 0]))
+    return Phi, G0, G1
 
 
 # ----------------------------------------------------------------------------- the simulation loop

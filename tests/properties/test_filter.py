@@ -23,7 +23,7 @@ from rczone.estimation.kalman import (
 )
 from rczone.kernels.arrays import Dynamics, FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import modal_matrices
-from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, no_sensitivities, outputs
+from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
 from rczone.simulation.discretize import symmetrizing_scale
 from rczone.simulation.intervals import interval_groups, unique_rows
 from tests.netfactory import random_network
@@ -168,3 +168,18 @@ def test_modal_filter_equals_the_numpy_twin(seed, n_cap, n_massless, n_outputs, 
     nll, n_obs = kalman_filter_modal(modal, scale, obs, prior, Series(u, y, which), hold == "foh")
     assert n_obs == ref.n_obs
     assert nll + 0.5 * n_obs * np.log(2 * np.pi) == pytest.approx(ref.nll, rel=RTOL, abs=RTOL)
+
+
+def test_modal_rule_declines_one_interval_and_frequent_changes():
+    """The rule of ``modal_pays`` (docstring there): modal for 3+ states whose matrices change at
+    most at a quarter of the steps, never for one interval, where the general filter's steady
+    state is cheaper; the cases are built so that each clause decides one of them."""
+    stretches = np.repeat(np.arange(24), 30)[:-1]  # nll_13state's layout: 23 changes in 719 steps
+    lti = np.zeros(999, dtype=np.int64)  # nll_4zone's: one interval
+    alternating = np.arange(100) % 2  # a change at every step
+    assert modal_pays(stretches, 13)
+    assert not modal_pays(stretches, 2)  # two states: the fused kernel's domain
+    assert not modal_pays(lti, 8)
+    assert not modal_pays(alternating, 8)
+    assert not modal_pays(np.repeat(np.arange(30), 3), 5)  # 29 changes in 90 steps: more than a quarter
+    assert modal_pays(np.repeat(np.arange(20), 5), 5)  # 19 changes in 100 steps

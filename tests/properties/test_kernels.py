@@ -20,18 +20,19 @@ from rczone.kernels.propagate import propagate_kernel
 from rczone.kernels.rankone import simulate_rank_one
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 from rczone.simulation import foh, simulate, zoh
-from rczone.simulation.discretize import (
+from rczone.simulation.discretize import rank_one_form, symmetrizing_scale
+from rczone.simulation.intervals import interval_groups
+from rczone.simulation.simulate import transition_matrices
+from tests.netfactory import random_network
+from tests.oracles import (
+    kalman_filter_reference,
     phi_weights,
-    rank_one_form,
+    propagate_reference,
     spectral_decomposition,
     spectral_noise_covariance,
     spectral_transition,
-    symmetrizing_scale,
+    transition_matrices_expm,
 )
-from rczone.simulation.intervals import interval_groups
-from rczone.simulation.simulate import transition_matrices, transition_matrices_expm
-from tests.netfactory import random_network
-from tests.oracles import kalman_filter_reference, propagate_reference
 
 RTOL = 1e-10
 SETTINGS = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])

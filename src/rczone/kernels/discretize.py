@@ -1,7 +1,8 @@
 """Compiled exact discretization of the stochastic bilinear model, per distinct interval.
 
-The compiled twin of :mod:`rczone.simulation.discretize` (which owns the formulas, their
-derivation and the plain implementations the tests compare these with). For each distinct
+The one implementation of the spectral formulas derived in :mod:`rczone.simulation.discretize`
+(whose :func:`~rczone.simulation.discretize.interval_discretization` calls :func:`interval_matrices`;
+the plain NumPy forms the tests compare these with are in ``tests/oracles.py``). For each distinct
 interval ``(dt, m)`` with ``A = A0 + sum m_f N_f``, ``B = B0 + sum m_f M_f`` and diagonal
 process-noise intensity ``Qc = diag(qc)``:
 
@@ -89,7 +90,9 @@ def rc2_discretize(
     ``A = [[a, a01], [a10, d]]`` with ``diag(s)^2 A`` symmetric (``s = sqrt(capacities)``), so
     ``S = diag(s) A diag(s)^{-1}`` is symmetric; its eigen-decomposition is one Jacobi
     rotation in closed form [2]_, without cancellation for nearly equal eigenvalues. Two
-    ``expm1`` give every matrix; ``e^{(l_0 + l_1) h} - 1`` is formed exactly from them.
+    ``exp`` and two ``expm1`` give every matrix (``e^x`` by ``exp``, not ``expm1(x) + 1``, whose
+    rounding is relative ``1e-16 / e^x`` for a fast mode); ``e^{(l_0 + l_1) h} - 1`` is formed
+    exactly from the ``expm1``.
     Scalars in, scalars out: the fused kernel calls this once per interval, and arrays passed
     to a numba function cost reference counting on every call.
 
@@ -125,8 +128,9 @@ def rc2_discretize(
     x1 = (d + tn * b) * h
     em0 = math.expm1(x0)
     em1 = math.expm1(x1)
-    e0 = em0 + 1.0
-    e1 = em1 + 1.0
+    # not em + 1: that loses a fast mode's e^x (relative accuracy 1e-16 / e^x, 1e-7 at e^x = 1e-9)
+    e0 = math.exp(x0)
+    e1 = math.exp(x1)
     w10 = phi1(x0, em0)
     w11 = phi1(x1, em1)
     if foh:

@@ -68,7 +68,7 @@ from rczone.kernels.arrays import (
 #: Default relative tolerance at which the predicted covariance counts as stationary.
 STEADY_RTOL = 1e-14
 
-#: The modal filter is used when at most this fraction of the intervals changes its matrices.
+#: The modal filter is used when the matrices change, at most at this fraction of the steps.
 MODAL_CHANGES = 0.25
 
 #: Floating-point freedoms of the filter: sums may be reassociated (vectorized) and products
@@ -650,11 +650,17 @@ def modal_pays(which: np.ndarray, n: int) -> bool:
     """Whether :func:`kalman_filter_modal` beats :func:`kalman_filter` (both ``-log L`` only).
 
     A change of coordinates costs about three ``n^3`` products, a direct time update one and
-    a half; the modal filter wins for three or more states when at most
-    :data:`MODAL_CHANGES` of the intervals change their matrices.
+    a half; the modal filter wins for three or more states when the intervals change their
+    matrices, but at most at :data:`MODAL_CHANGES` of the steps. Not when they never change (one
+    interval: LTI data, regular sampling): then the general filter's covariance becomes
+    stationary and its steady state costs ``O(n)`` per output and sample, less than the modal
+    filter's ``O(n^2)`` scalar updates. Measured by ``bench/filters.py``: the general filter takes
+    3.1-4.1x the modal one's time on ``nll_13state`` (13 states, 24 stretches of 30 samples, never
+    stationary within one), 0.58-0.82x on ``nll_4zone`` (8 states, 4 outputs, one interval,
+    stationary after 277 of 1,000 samples).
     """
     changes = 0
     for k in range(1, which.shape[0]):
         if which[k] != which[k - 1]:
             changes += 1
-    return n >= 3 and changes <= MODAL_CHANGES * which.shape[0]
+    return n >= 3 and 0 < changes <= MODAL_CHANGES * which.shape[0]

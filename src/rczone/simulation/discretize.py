@@ -9,15 +9,18 @@
 :func:`zoh`, :func:`foh` and :func:`van_loan` work for any state space through one block
 matrix exponential; :func:`process_noise_covariance` makes Van Loan's integral safe for
 stiff models over long steps. For RC networks the same matrices follow exactly from a
-symmetric eigen-decomposition (:func:`spectral_decomposition`, :func:`spectral_transition`,
-:func:`spectral_noise_covariance`; the identities are in the notes below), in closed form
-for two states, and :func:`rank_one_form` prepares the rank-one structure that the
-compiled simulation of :mod:`rczone.kernels.rankone` exploits. :func:`interval_discretization`
-applies them to every distinct sampling interval of a bilinear model (the simulation and
-the reference Kalman filter both use it). All functions are pure over arrays.
+symmetric eigen-decomposition (the identities are in the notes below), in closed form for two
+states; :func:`rank_one_form` prepares the rank-one structure that the compiled simulation of
+:mod:`rczone.kernels.rankone` exploits. All functions are pure over arrays.
 
-The compiled estimation engines use :mod:`rczone.kernels.discretize`, the compiled twin of
-these formulas (with their derivatives), which the tests compare with this module.
+:func:`interval_discretization` gives the matrices of every distinct sampling interval of a
+bilinear model (the simulation, the Kalman filter and the smoother use it). It is a thin caller
+of the compiled implementation, :func:`rczone.kernels.discretize.interval_matrices` (spectral
+formulas for RC networks, compiled block exponentials otherwise), which the estimation engines
+call directly with derivatives: the formulas exist once in production. Only complex matrices
+(complex-step differentiation) and a process noise that is not diagonal take the block
+exponentials of this module per interval. The plain NumPy spectral formulas are the tests'
+oracles (``tests/oracles.py``).
 
 References
 ----------
@@ -36,6 +39,8 @@ from typing import NamedTuple
 
 import numpy as np
 from scipy.linalg import expm, expm_frechet
+
+from rczone.kernels.arrays import Dynamics
 
 
 def zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
@@ -250,7 +255,7 @@ SYMMETRY_RTOL = 1e-12
 def symmetrizing_scale(A: np.ndarray, N: np.ndarray, capacities: np.ndarray) -> np.ndarray | None:
     """``sqrt(capacities)`` if it symmetrizes ``A + sum m_k N_k`` for every ``m``, else None.
 
-    The spectral discretization (:func:`spectral_decomposition`) is valid when
+    The spectral discretization (:func:`rczone.kernels.discretize.interval_matrices`) is valid when
     ``diag(c) A`` and every ``diag(c) N_k`` are symmetric (an RC network with supply air
     entering capacitive nodes). This is checked numerically, to a relative tolerance
     :data:`SYMMETRY_RTOL`, so that a state space of another form (for example the block
@@ -279,167 +284,6 @@ def symmetrizing_scale(A: np.ndarray, N: np.ndarray, capacities: np.ndarray) -> 
     if np.any(asym > SYMMETRY_RTOL * np.abs(CA).max(axis=(1, 2))):
         return None
     return np.sqrt(c)
-
-
-def spectral_decomposition(A: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Eigen-decomposition of ``S = diag(scale) A diag(scale)^{-1}`` for a stack of matrices.
-
-    ``S`` is symmetrized (``(S + S')/2``, which removes only rounding) and decomposed by a
-    closed-form Jacobi rotation for ``n <= 2`` and by LAPACK's symmetric solver otherwise.
-
-    Parameters
-    ----------
-    A : ndarray, shape (K, n, n)
-    scale : ndarray, shape (n,)
-        From :func:`symmetrizing_scale`.
-
-    Returns
-    -------
-    lam : ndarray, shape (K, n)
-        Eigenvalues of ``A``, 1/s.
-    V : ndarray, shape (K, n, n)
-        Orthogonal eigenvectors of ``S`` (columns).
-
-    References
-    ----------
-    .. [1] G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., 2013, Algorithm 8.5.1
-       (the symmetric 2-by-2 Schur decomposition).
-    """
-    S = scale[:, None] * A / scale[None, :]
-    S = 0.5 * (S + np.swapaxes(S, -1, -2))
-    n = S.shape[-1]
-    if n == 1:
-        return S[:, :, 0].copy(), np.ones_like(S)
-    if n == 2:
-        return _jacobi2(S[:, 0, 0], S[:, 0, 1], S[:, 1, 1])
-    return np.linalg.eigh(S)
-
-
-def _jacobi2(a: np.ndarray, b: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Closed-form eigen-decomposition of symmetric 2x2 matrices ``[[a, b], [b, d]]``.
-
-    The rotation ``J = [[c, s], [-s, c]]`` with ``t = s/c`` the smaller root of
-    ``t^2 + 2 tau t - 1 = 0``, ``tau = (d - a)/(2 b)``, gives ``J' S J = diag(a - t b, d + t b)``
-    without cancellation (Golub & Van Loan, Algorithm 8.5.1).
-    """
-    nz = b != 0.0
-    bb = np.where(nz, b, 1.0)
-    tau = (d - a) / (2.0 * bb)
-    # 1/(|tau| + hypot(1, tau)) stays finite for huge |tau|
-    t = np.where(nz, np.copysign(1.0, tau) / (np.abs(tau) + np.hypot(1.0, tau)), 0.0)
-    c = 1.0 / np.sqrt(1.0 + t * t)
-    s = t * c
-    lam = np.stack([a - t * b, d + t * b], axis=-1)
-    V = np.empty((*a.shape, 2, 2))
-    V[..., 0, 0], V[..., 0, 1], V[..., 1, 0], V[..., 1, 1] = c, s, -s, c
-    return lam, V
-
-
-def phi_weights(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``e^x``, ``(e^x - 1)/x`` and ``(e^x - 1 - x)/x^2`` evaluated without cancellation.
-
-    With ``x = lam dt`` these are ``Phi``'s eigenvalues and ``phi1/dt``, ``phi2/dt`` of the
-    hold integrals. ``exp`` and ``expm1`` keep the first two accurate to rounding for any ``x``. The
-    third uses its Taylor series ``sum_k x^k/(k+2)!`` (k <= 12, truncation below ``1e-19``)
-    for ``|x| < 0.2`` and ``(expm1(x) - x)/x^2`` (relative rounding ``< 2 eps/|x| <= 1e-15``)
-    otherwise.
-    """
-    x = np.asarray(x, dtype=float)
-    em1 = np.expm1(x)
-    zero = x == 0.0
-    w1 = np.where(zero, 1.0, em1 / np.where(zero, 1.0, x))
-    small = np.abs(x) < _SERIES_LIMIT
-    xs = np.where(small, 1.0, x)
-    series = np.full_like(x, _PHI2_SERIES[-1])
-    for c in _PHI2_SERIES[-2::-1]:
-        series = series * x + c
-    w2 = np.where(small, series, (em1 - xs) / (xs * xs))
-    return np.exp(x), w1, w2
-
-
-_SERIES_LIMIT = 0.2
-#: Taylor coefficients 1/(k+2)! of (e^x - 1 - x)/x^2, k = 0..12.
-_PHI2_SERIES = tuple(1.0 / float(np.prod(np.arange(1, k + 3))) for k in range(13))
-
-
-def spectral_transition(
-    lam: np.ndarray, V: np.ndarray, scale: np.ndarray, B: np.ndarray, dt: np.ndarray, hold: str = "zoh"
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Exact ZOH/FOH matrices of ``dx/dt = A x + B u`` from the spectral form of ``A``.
-
-    ``Phi = T E T^{-1}``, ``G = T diag(w) T^{-1} B`` with ``T = diag(scale)^{-1} V`` (see the
-    module notes); identical to :func:`zoh` / :func:`foh` up to rounding.
-
-    Parameters
-    ----------
-    lam, V : ndarray, shapes (K, n), (K, n, n)
-        From :func:`spectral_decomposition`.
-    scale : ndarray, shape (n,)
-    B : ndarray, shape (K, n, p)
-    dt : ndarray, shape (K,)
-        Sample intervals, s.
-    hold : {"zoh", "foh"}
-
-    Returns
-    -------
-    Phi : ndarray, shape (K, n, n)
-    G0, G1 : ndarray, shape (K, n, p)
-        ``G1`` is zero for ZOH.
-
-    References
-    ----------
-    .. [1] N. J. Higham, *Functions of Matrices*, SIAM, 2008, section 1.2 (functions of a
-       diagonalizable matrix) and section 10.7.4 (the phi functions of exponential
-       integrators).
-    """
-    dt = np.asarray(dt, dtype=float)
-    e, w1, w2 = phi_weights(lam * dt[:, None])
-    T = V / scale[None, :, None]
-    Ti = np.swapaxes(V, -1, -2) * scale[None, None, :]
-    Phi = (T * e[:, None, :]) @ Ti
-    TiB = Ti @ B
-    if hold == "zoh":
-        G0 = T @ (TiB * (w1 * dt[:, None])[:, :, None])
-        return Phi, G0, np.zeros_like(G0)
-    G1 = T @ (TiB * (w2 * dt[:, None])[:, :, None])
-    G0 = T @ (TiB * ((w1 - w2) * dt[:, None])[:, :, None])
-    return Phi, G0, G1
-
-
-def spectral_noise_covariance(
-    lam: np.ndarray, V: np.ndarray, scale: np.ndarray, Qc: np.ndarray, dt: np.ndarray
-) -> np.ndarray:
-    """``Qd = int_0^dt e^{As} Qc e^{A's} ds`` in closed form from the spectral form of ``A``.
-
-    In the eigenbasis the integrand is elementwise ``W_ij e^{(l_i + l_j) s}``, whose integral is
-    ``W_ij (e^{(l_i + l_j) dt} - 1)/(l_i + l_j)``; every term is evaluated with ``expm1``, so
-    stiff models over long steps are as accurate as slow ones (no ``e^{-A dt}`` is formed).
-
-    Parameters
-    ----------
-    lam, V : ndarray, shapes (K, n), (K, n, n)
-    scale : ndarray, shape (n,)
-    Qc : ndarray, shape (n, n)
-        Continuous noise intensity, K^2/s.
-    dt : ndarray, shape (K,)
-
-    Returns
-    -------
-    Qd : ndarray, shape (K, n, n), symmetric
-
-    References
-    ----------
-    .. [1] C. F. Van Loan, "Computing integrals involving the matrix exponential",
-       IEEE Trans. Automatic Control 23(3), 1978 (the integral being computed).
-    """
-    dt = np.asarray(dt, dtype=float)
-    T = V / scale[None, :, None]
-    Ti = np.swapaxes(V, -1, -2) * scale[None, None, :]
-    W = Ti @ Qc @ np.swapaxes(Ti, -1, -2)
-    x = (lam[:, :, None] + lam[:, None, :]) * dt[:, None, None]
-    _, w1, _ = phi_weights(x)
-    Qd = T @ (W * w1 * dt[:, None, None]) @ np.swapaxes(T, -1, -2)
-    return 0.5 * (Qd + np.swapaxes(Qd, -1, -2))
 
 
 @dataclass(frozen=True)
@@ -549,12 +393,14 @@ def interval_discretization(
     keys: np.ndarray,
     hold: str = "zoh",
     Qc: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+) -> Dynamics:
     """Exact discrete matrices of ``dx/dt = (A + sum m_f N_f) x + (B + sum m_f M_f) u`` per interval.
 
-    RC networks (:func:`symmetrizing_scale` succeeds) get every matrix from one symmetric
-    eigen-decomposition per interval (batched); any other state space one matrix exponential
-    per interval (:func:`zoh` / :func:`foh`, :func:`process_noise_covariance`).
+    Real matrices with a diagonal ``Qc`` (every RC model) are discretized by the compiled
+    :func:`rczone.kernels.discretize.interval_matrices`: RC networks (:func:`symmetrizing_scale`
+    succeeds) from one symmetric eigen-decomposition per interval, any other state space from
+    block matrix exponentials. Complex matrices (complex-step differentiation) or a full ``Qc``
+    take one :func:`zoh` / :func:`foh` and :func:`process_noise_covariance` per interval.
 
     Parameters
     ----------
@@ -564,33 +410,40 @@ def interval_discretization(
         ``(dt, m_1, ..., m_nf)`` of each interval (typically the distinct ones).
     hold : {"zoh", "foh"}
     Qc : ndarray, shape (n, n), optional
-        Continuous process-noise intensity; ``Qd`` is computed when given.
+        Continuous process-noise intensity; ``Qd`` is zero without it.
 
     Returns
     -------
-    Phi : ndarray, shape (K, n, n)
-    G0, G1 : ndarray, shape (K, n, p)
-        Input matrices applied to ``u[k]`` and ``u[k+1]`` (``G1`` is zero for ZOH).
-    Qd : ndarray, shape (K, n, n), or None
+    Dynamics
+        ``Phi`` (K, n, n); ``G0, G1`` (K, n, p), the input matrices applied to ``u[k]`` and
+        ``u[k+1]`` (``G1`` is zero for ZOH); ``Qd`` (K, n, n).
     """
-    scale = symmetrizing_scale(A, N, capacities)
-    if scale is not None:
-        Ak = A + np.tensordot(keys[:, 1:], N, axes=1)
-        Bk = B + np.tensordot(keys[:, 1:], M, axes=1)
-        lam, V = spectral_decomposition(Ak, scale)
-        Phi, G0, G1 = spectral_transition(lam, V, scale, Bk, keys[:, 0], hold)
-        Qd = (
-            None
-            if Qc is None
-            else spectral_noise_covariance(lam, V, scale, np.asarray(Qc, dtype=float), keys[:, 0])
+    qc = _diagonal_intensity(Qc, A.shape[0])
+    if qc is not None and not any(np.iscomplexobj(a) for a in (A, N, B, M)):
+        from rczone.kernels.discretize import interval_matrices
+
+        scale = symmetrizing_scale(A, N, capacities)
+
+        def f(a: np.ndarray) -> np.ndarray:  # writable as the packed problem's: one compiled specialization
+            return np.require(a, np.float64, "CW")
+
+        return interval_matrices(
+            f(A),
+            f(N),
+            f(B),
+            f(M),
+            f(keys),
+            qc,
+            np.empty(0) if scale is None else scale,
+            hold == "foh",
+            Qc is not None,
         )
-        return Phi, G0, G1, Qd
     n, p, K = A.shape[0], B.shape[1], keys.shape[0]
     dtype = np.result_type(A, N, B, M, float if Qc is None else Qc)
     Phi = np.empty((K, n, n), dtype)
     G0 = np.empty((K, n, p), dtype)
     G1 = np.zeros((K, n, p), dtype)
-    Qd = None if Qc is None else np.zeros((K, n, n), dtype)
+    Qd = np.zeros((K, n, n), dtype)
     for k in range(K):
         Ak = A + np.tensordot(keys[k, 1:], N, axes=1)
         Bk = B + np.tensordot(keys[k, 1:], M, axes=1)
@@ -599,6 +452,16 @@ def interval_discretization(
             Phi[k], G0[k] = zoh(Ak, Bk, dt)
         else:
             Phi[k], G0[k], G1[k] = foh(Ak, Bk, dt)
-        if Qd is not None and np.any(Qc):
+        if Qc is not None and np.any(Qc):
             Qd[k] = process_noise_covariance(Ak, Qc, dt)
-    return Phi, G0, G1, Qd
+    return Dynamics(Phi, G0, G1, Qd)
+
+
+def _diagonal_intensity(Qc: np.ndarray | None, n: int) -> np.ndarray | None:
+    """The diagonal of a real diagonal ``Qc`` (zeros without one); None when it is complex or full."""
+    if Qc is None:
+        return np.zeros(n)
+    Qc = np.asarray(Qc)
+    if np.iscomplexobj(Qc) or np.count_nonzero(Qc) != np.count_nonzero(np.diagonal(Qc)):
+        return None
+    return np.ascontiguousarray(np.diagonal(Qc), dtype=float)

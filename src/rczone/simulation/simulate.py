@@ -7,10 +7,10 @@ exponential. Discretizations are computed once per distinct ``(dt, m)`` pair, wh
 makes typical building data (m constant for long stretches, regular sampling) cheap.
 
 For RC networks (``diag(c) (A + m N)`` symmetric, checked at run time) the distinct
-discretizations are computed in one batch by the exact spectral formulas of
-:mod:`rczone.simulation.discretize` (closed form for ``n <= 2``, a symmetric
-eigen-decomposition otherwise) instead of one matrix exponential each; any other state
-space uses the matrix exponential. The sample loop runs compiled
+discretizations are computed by the exact spectral formulas
+(:func:`rczone.simulation.discretize.interval_discretization`: closed form for ``n <= 2``, a
+symmetric eigen-decomposition otherwise) instead of one matrix exponential each; any other
+state space uses the matrix exponential. The sample loop runs compiled
 (:mod:`rczone.kernels.propagate`); its plain twin is in the tests (``tests/oracles.py``).
 
 A symmetric 2-state model runs one compiled loop (:func:`rczone.kernels.rc2.simulate_rc2`:
@@ -137,18 +137,6 @@ def transition_matrices(
     uniq, _, which = unique_rows(interval_keys(t, m))
     Phi, G0, G1, _ = interval_discretization(ss.A, ss.N, ss.B, ss.M, ss.capacities, uniq, hold)
     return Phi, G0, G1, which
-
-
-def transition_matrices_expm(
-    ss: BilinearStateSpace, uniq: np.ndarray, hold: str = "zoh"
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Discretizations by one matrix exponential per row of ``uniq = [dt, m...]`` (no spectral path).
-
-    The reference the spectral and compiled paths are tested against. Returns
-    ``(Phi, G0, G1)`` with shapes ``(K, n, n), (K, n, p), (K, n, p)``.
-    """
-    no_scale = np.full(ss.n_states, np.nan)  # not a valid scale: forces the matrix exponential
-    return interval_discretization(ss.A, ss.N, ss.B, ss.M, no_scale, uniq, hold)[:3]
 
 
 def propagate(
