@@ -12,6 +12,7 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
     # noise = "measured"             # ML and MAP: process noise on the measured states, or "all"
     diagnose = true                  # identifiability verdicts per zone
     # free = ["Cr", "Rw"]            # default: the method's usual set for the model
+    # sampler = { draws = 1000, tune = 1000, chains = 4 }   # method "mcmc": its SamplerSettings
     # columns = "maps/bms.toml"      # default column map for data files
     # constants = { Q = 50.0 }       # inputs held constant when the data lack them
 
@@ -37,6 +38,11 @@ settings object of a fit, :class:`~rczone.workflow.settings.FitSettings` (the co
 the Python API's), and its data a :class:`~rczone.workflow.datasource.DataSource`: a task carries
 paths and seeds, never frames, so a worker reads its zone's data where it runs.
 
+The search keys apply to the methods that search and ``sampler`` to those that sample (``"mcmc"``),
+so one table can list both kinds of method; a ``sampler`` table of a zone replaces the top-level
+one, and keys it leaves out take the defaults of :class:`~rczone.estimation.sampling.SamplerSettings`
+(as ``rczone fit --draws/--tune/--chains`` do).
+
 Unknown keys, duplicate zone ids, unknown methods or models are errors naming the place in
 the file, with a suggestion where one is close. A manifest that would expand into more than
 :data:`MAX_TASKS` calibrations is refused before anything is built.
@@ -57,7 +63,9 @@ from pathlib import Path
 
 from rczone.errors import DataError, RczoneError, did_you_mean
 from rczone.estimation.methods import METHODS as REGISTERED_METHODS
+from rczone.estimation.methods import method_of
 from rczone.estimation.optimize import OPTIMIZERS as LOCAL_OPTIMIZERS
+from rczone.estimation.sampling import SamplerSettings
 from rczone.files.text import nfkc, read_toml, regular_file
 from rczone.workflow.datasource import BuiltinNight, DataSource, TrendLog, VirtualNight
 from rczone.workflow.settings import NOISE_PLACEMENTS, FitSettings
@@ -82,6 +90,7 @@ SETTINGS = (
     "free",
     "columns",
     "constants",
+    "sampler",
 )
 ZONE_KEYS = ("id", "data", "virtual", *SETTINGS)
 GENERATE_KEYS = ("prefix", "seasons", "modes", "seeds", *SETTINGS)
@@ -97,6 +106,7 @@ DEFAULTS: dict[str, object] = {
     "free": None,
     "columns": None,
     "constants": None,
+    "sampler": None,
 }
 
 
@@ -263,6 +273,7 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
         raise _err(where, f"constants must be a table of finite numbers, e.g. {{ Q = 50.0 }}, got {const!r}")
     if out["columns"] is not None:
         _text(out["columns"], "columns", where)
+    out["sampler"] = _sampler(out["sampler"], where)
     out["model"] = _model(out["model"], folder, where)
     if const:
         spec = str(out["model"])
@@ -272,6 +283,20 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
         if problem:
             raise _err(where, problem)
     return out
+
+
+def _sampler(table: object, where: str) -> SamplerSettings:
+    """The ``sampler`` table (draws, tune, chains) as :class:`SamplerSettings`; absent keys take its defaults."""
+    if table is None or isinstance(table, SamplerSettings):
+        return table or SamplerSettings()
+    example = "{ draws = 1000, tune = 1000, chains = 4 }"
+    if not isinstance(table, dict):
+        raise _err(where, f"sampler must be a table like {example}, got {table!r}")
+    _check_keys(table, SamplerSettings._fields, f"{where}.sampler")
+    try:
+        return SamplerSettings(**table).checked()
+    except RczoneError as exc:
+        raise _err(where, str(exc)) from None
 
 
 def _resolve(path: Path, what: str, where: str) -> Path:
@@ -370,28 +395,28 @@ def _virtual(spec: object, where: str) -> VirtualNight:
 
 
 def _tasks(zone: str, source: DataSource, s: Mapping[str, object], where: str) -> list[Task]:
-    """One task per method, each with the fit's settings (:class:`FitSettings`)."""
+    """One task per method, each with the fit's settings (:class:`FitSettings`).
+
+    The search keys go to the methods that search, ``sampler`` to the ones that sample.
+    """
+    tasks = []
     try:
-        return [
-            Task(
-                zone=zone,
-                model=str(s["model"]),
-                source=source,
-                settings=FitSettings(
-                    method=str(m),
-                    free=tuple(s["free"]) if s["free"] else None,
-                    optimizer=str(s["optimizer"]),
-                    n_starts=None if s["n_starts"] == "auto" else int(s["n_starts"]),
-                    seed=int(s["seed"]),
-                    noise=str(s["noise"]),
-                    constants={k: float(v) for k, v in sorted((s["constants"] or {}).items())},
-                    checks=False,  # the batch's own check is `diagnose`, once per zone
-                    profiles=False,
-                ),
-                diagnose=bool(s["diagnose"]),
+        for m in s["methods"]:
+            samples = method_of(str(m)).search == "sample"
+            settings = FitSettings(
+                method=str(m),
+                free=tuple(s["free"]) if s["free"] else None,
+                optimizer="auto" if samples else str(s["optimizer"]),
+                n_starts=None if samples or s["n_starts"] == "auto" else int(s["n_starts"]),
+                seed=int(s["seed"]),
+                noise=str(s["noise"]),
+                constants={k: float(v) for k, v in sorted((s["constants"] or {}).items())},
+                checks=False,  # the batch's own check is `diagnose`, once per zone
+                profiles=False,
+                sampler=s["sampler"] if samples else SamplerSettings(),
             )
-            for m in s["methods"]
-        ]
+            tasks.append(Task(zone, str(s["model"]), source, settings, bool(s["diagnose"])))
+        return tasks
     except RczoneError as exc:  # checked above already; a setting FitSettings refuses is still one line
         raise _err(where, str(exc)) from None
 

@@ -103,6 +103,10 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
             n_evals=int(r.n_evals),
             flags="; ".join(r.flags),
         )
+        if r.posterior is not None:  # a sampling method: how long it sampled, and whether it converged
+            p = r.posterior
+            row.update(draws=p.n_draws, tune=p.tune, chains=p.n_chains, divergences=p.divergences)
+            row.update(max_rhat=float(p.rhat.max()), min_ess_bulk=float(p.ess_bulk.min()))
         for n, e in r.parameters.items():
             row[n] = e.value
             row[f"{n}_se"] = e.std_error

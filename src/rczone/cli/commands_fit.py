@@ -67,14 +67,14 @@ def fit(
         str,
         typer.Option(
             help="Local method: auto (compiled Nelder-Mead for 2-state models, L-BFGS with exact gradients"
-            " otherwise), nelder-mead, powell or lbfgs."
+            " otherwise), nelder-mead, powell or lbfgs. Not with --method mcmc."
         ),
     ] = "auto",
     starts: Annotated[
         str,
         typer.Option(
             help="Local searches: auto (global search over the bounds, default), 1 (one local search from"
-            " the model's values) or N."
+            " the model's values) or N. Not with --method mcmc (one L-BFGS search places its chains)."
         ),
     ] = "auto",
     seed: Annotated[int, typer.Option(help="Seed of the global search.")] = 0,

@@ -51,6 +51,9 @@ from rczone.estimation.priors import LogPrior, log_prior
 from rczone.estimation.result import FitResult
 from rczone.results import Estimate
 
+#: Smallest and largest value of each sampler setting.
+SAMPLER_LIMITS = {"draws": (10, 1_000_000), "tune": (0, 1_000_000), "chains": (1, 64)}
+
 
 class SamplerSettings(NamedTuple):
     """How long to sample.
@@ -70,11 +73,17 @@ class SamplerSettings(NamedTuple):
     chains: int = 4
 
     def checked(self) -> SamplerSettings:
-        """The settings, or a :class:`~rczone.errors.ParameterError` naming the bad one."""
-        for name, low in (("draws", 10), ("tune", 0), ("chains", 1)):
+        """The settings, or a :class:`~rczone.errors.ParameterError` naming the bad one.
+
+        Each is an integer within :data:`SAMPLER_LIMITS` (a typo of a few zeros in a manifest
+        should not ask for days of sampling or the memory of a billion draws).
+        """
+        for name, (low, high) in SAMPLER_LIMITS.items():
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or v < low:
-                raise ParameterError(f"sampler setting {name} must be an integer >= {low}, got {v!r}")
+            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+                raise ParameterError(
+                    f"sampler setting {name} must be an integer from {low} to {high:,}, got {v!r}"
+                )
         return self
 
 

@@ -37,9 +37,10 @@ class FitSettings:
         ``"+NAME"`` adds ``NAME`` (a noise level ``sigma_w_Te``, an initial state ``x0_Te``, a
         parameter the model declares fixed) to the default set instead of replacing it.
     optimizer : str
-        ``"auto"`` or one of :data:`rczone.estimation.optimize.OPTIMIZERS`.
+        ``"auto"`` or one of :data:`rczone.estimation.optimize.OPTIMIZERS`; only ``"auto"`` for a
+        sampling method, which has no search to choose.
     n_starts : int or None
-        Local searches; None for the global search, 1 for one local search.
+        Local searches; None for the global search, 1 for one local search; None for a sampling method.
     seed : int
         Seed of the global search.
     noise : {"measured", "all"}
@@ -52,7 +53,8 @@ class FitSettings:
     profiles : bool
         With ``checks``: profile each R and C over a factor of 10 (single-output models).
     sampler : SamplerSettings
-        Draws, warm-up and chains of a sampling method (``"mcmc"``); the seed is :attr:`seed`.
+        Draws, warm-up and chains of a sampling method (``"mcmc"``); the seed is :attr:`seed`. The
+        defaults for any other method (settings a method would ignore are refused, not dropped).
     hold : {"zoh", "foh"}
         Inter-sample behaviour of the inputs: held (zero-order) or linear between samples
         (first-order hold; Franklin, Powell & Workman 1998, sec. 6.3.2). On coarse data the choice
@@ -109,6 +111,7 @@ class FitSettings:
         if not isinstance(self.sampler, SamplerSettings):
             raise ParameterError(f"sampler must be a SamplerSettings, got {type(self.sampler).__name__}")
         self.sampler.checked()
+        _check_search(self)
         if self.hold not in HOLDS:
             raise ParameterError(f"hold must be one of {', '.join(HOLDS)}, got {self.hold!r}")
         object.__setattr__(self, "bounds", {k: _pair(k, v) for k, v in dict(self.bounds or {}).items()})
@@ -155,6 +158,26 @@ class FitSettings:
                 f" (--free +{held[0]}, or free=['{ADD}{held[0]}']) or drop the bound"
             )
         return free
+
+
+def _check_search(s: FitSettings) -> None:
+    """Refuse search options the method would ignore: a sampler has no optimizer or starts, a search no draws."""
+    if method_of(s.method).search == "sample":
+        given = [
+            f"{k} {v!r}"
+            for k, v in (("optimizer", s.optimizer), ("starts", s.n_starts))
+            if v not in ("auto", None)
+        ]
+        if given:
+            raise ParameterError(
+                f"method {s.method!r} samples the posterior: {' and '.join(given)} would be ignored (its chains"
+                " start around one L-BFGS search); drop them, or choose the search with method 'ml'"
+            )
+    elif s.sampler != SamplerSettings():
+        raise ParameterError(
+            f"method {s.method!r} does not sample: draws, tune and chains would be ignored; drop them, or"
+            " sample with method 'mcmc'"
+        )
 
 
 def _pair(name: str, bounds: object) -> tuple[float, float]:

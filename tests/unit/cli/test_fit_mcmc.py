@@ -85,3 +85,67 @@ def test_bad_sampler_options_are_one_line_and_exit_2(zone, capsys, flag, value) 
     err = capsys.readouterr().err
     assert rc == 2
     assert flag.lstrip("-") in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    ("options", "needle"),
+    [
+        (["--optimizer", "lbfgs"], "optimizer 'lbfgs' would be ignored"),
+        (["--starts", "3"], "starts 3 would be ignored"),
+        (["--optimizer", "powell", "--starts", "1"], "optimizer 'powell' and starts 1 would be ignored"),
+    ],
+)
+def test_search_options_with_mcmc_are_refused_not_ignored(zone, capsys, options, needle) -> None:
+    """The sampler starts its chains from one L-BFGS search: --optimizer and --starts have no meaning."""
+    rc = main(
+        ["fit", str(zone / "zone.csv"), "--model", str(zone / "zone.toml"), "--method", "mcmc", *options]
+    )
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert rc == 2 and len(lines) == 1 and "Traceback" not in err, err
+    assert needle in lines[0] and "method 'mcmc' samples the posterior" in lines[0]
+
+
+def test_sampler_options_without_mcmc_are_refused_not_ignored(zone, capsys) -> None:
+    rc = main(
+        ["fit", str(zone / "zone.csv"), "--model", str(zone / "zone.toml"), "--method", "ml", "--draws", "50"]
+    )
+    err = capsys.readouterr().err
+    assert rc == 2 and "method 'ml' does not sample: draws, tune and chains would be ignored" in err
+    assert len([ln for ln in err.splitlines() if ln.strip()]) == 1
+
+
+def test_fit_many_samples_with_the_manifest_sampler_table(zone, tmp_path, capsys) -> None:
+    """fit-many hands the manifest's draws/tune/chains to the sampler (the SamplerSettings of fit)."""
+    manifest = tmp_path / "m.toml"
+    manifest.write_text(
+        f'model = "{(zone / "zone.toml").as_posix()}"\nmethods = ["mcmc"]\ndiagnose = false\n'
+        "sampler = { draws = 20, tune = 30, chains = 2 }\n"
+        f'[[zone]]\nid = "z"\ndata = "{(zone / "zone.csv").as_posix()}"\n'
+    )
+    rc = main(
+        [
+            "fit-many",
+            str(manifest),
+            "--out",
+            str(tmp_path / "out"),
+            "--workers",
+            "1",
+            "--backend",
+            "processes",
+        ]
+    )
+    capsys.readouterr()
+    row = pd.read_parquet(tmp_path / "out" / "results.parquet").iloc[0]
+    assert row["status"] == "ok", row["error"]
+    assert (row["draws"], row["tune"], row["chains"]) == (20, 30, 2)
+    # 40 draws cannot reach 100 effective draws per chain: flagged, as fit says (exit 3)
+    assert rc == 3 and not row["trustworthy"] and row["min_ess_bulk"] < 200
+
+
+def test_a_bad_sampler_table_in_fit_many_is_one_line_and_exit_2(zone, tmp_path, capsys) -> None:
+    manifest = tmp_path / "m.toml"
+    manifest.write_text('methods = ["mcmc"]\nsampler = { chain = 2 }\n[[zone]]\nid = "z"\ndata = "C"\n')
+    rc = main(["fit-many", str(manifest), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "unknown key 'chain'; did you mean 'chains'" in err and "Traceback" not in err
