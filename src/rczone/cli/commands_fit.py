@@ -66,8 +66,8 @@ def fit(
     optimizer: Annotated[
         str,
         typer.Option(
-            help="Local method: auto (compiled Nelder-Mead for 2-state models, L-BFGS with exact gradients"
-            " otherwise), nelder-mead, powell or lbfgs. Not with --method mcmc."
+            help="Local method: auto (Gauss-Newton on the residual Jacobian for --method ls, L-BFGS with"
+            " exact gradients otherwise), nelder-mead, powell or lbfgs. Not with --method mcmc."
         ),
     ] = "auto",
     starts: Annotated[

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rczone.errors import ParameterError
+from rczone.estimation import leastsq
 from rczone.estimation.costs import (
     MAP_CORRELATION_TIME,
     PRIOR_SPREAD,
@@ -169,7 +170,9 @@ def fit(
     optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
         The local method. ``"auto"``: L-BFGS with the exact gradient (one evaluation per step, a
         gradient costing a few likelihoods: :meth:`~rczone.estimation.costs.Objective.value_and_gradient`);
-        the direct searches need tens of times more evaluations.
+        the direct searches need tens of times more evaluations. For least squares on a problem
+        that packs into arrays, ``"auto"`` is Gauss-Newton on the residual Jacobian
+        (:mod:`rczone.estimation.leastsq`, recorded as ``"gauss-newton"``).
     n_starts : int, optional
         Local searches: default automatic (2 or more, see the search); ``1`` is one local search
         from the start values (no global phase); ``k`` runs exactly ``k``.
@@ -246,12 +249,15 @@ def fit(
 
         return sample_fit(objective, settings=sampler or SamplerSettings(), rng=rng)
     scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if meth.kernel == "ls" else 0.0
-    if optimizer == "auto":
-        optimizer = "lbfgs"  # every Objective has its exact gradient
-    outcomes, search = global_search(
-        objective, spec, method, rng, optimizer, n_starts, max_evals, scale=scale
-    )
-    best = search.optima[0].starts[0]
+    if optimizer == "auto" and leastsq.applies(objective):  # Gauss-Newton on the residual Jacobian
+        optimizer = leastsq.NAME
+        outcomes, search = leastsq.leastsq_search(objective, rng, n_starts, max_evals, scale)
+    else:
+        optimizer = "lbfgs" if optimizer == "auto" else optimizer  # every Objective has its exact gradient
+        outcomes, search = global_search(
+            objective, spec, method, rng, optimizer, n_starts, max_evals, scale=scale
+        )
+    best = min(search.optima[0].starts, key=lambda i: outcomes[i].cost)  # the lowest end of the best optimum
     win = outcomes[best]
     theta = win.end
     names = spec.names
