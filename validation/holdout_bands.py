@@ -12,6 +12,9 @@ scored on the held-out part (the filter warmed up on the calibration part, as ``
 * ``raw``: the model's noise levels;
 * ``in-sample``: per-horizon factors from the fit's own k-step errors on its calibration data
   (:func:`rczone.calibration.bands.calibrate_band`, rczone's default);
+* ``block-max B``: the fit's own errors on each of ``B`` blocks of the calibration part give a
+  factor per block, and the largest is used (a conformal bound on the next block's factor when
+  the blocks are exchangeable: it is exceeded with probability at most ``1 / (B + 1)``);
 * ``rolling B``: rolling-origin validation inside the calibration part (Tashman 2000): refit (one
   local search from the fit's estimates) on the samples before each of ``B`` origins spread over
   the second half, score the k-step errors of the next block with the refit's own band, and take
@@ -69,7 +72,7 @@ from tests.unit.selection.synthetic import TRUE_MODEL, TRUE_VALUES, inputs, simu
 #: Horizons scored, s (one step where the samples are coarser), then open loop.
 HORIZONS_S = (300.0, 900.0, 3600.0, 3 * 3600.0, 6 * 3600.0)
 #: Number of folds of each scheme.
-FOLDS = {"rolling": (2, 3, 4, 5, 6), "block-out": (4,), "jackknife": (4, 6)}
+FOLDS = {"block-max": (4,), "rolling": (2, 3, 4, 5, 6), "block-out": (4,), "jackknife": (4, 6)}
 
 
 def bacher_madsen(shared: Path) -> tuple[str, pd.DataFrame, float]:
@@ -172,10 +175,13 @@ def factors(pieces: list[dict], horizons: list) -> dict:
 
 
 def coverage(case: Case, scale: dict, extra: dict | None = None) -> dict:
-    """Per horizon, the held-out share inside ``+-2 sqrt((scale sd)^2 + extra^2)``."""
+    """Per horizon, the held-out share inside ``+-2 sqrt((scale sd)^2 + extra^2)`` (NaN: no factor)."""
     held = case.errors(case.values, case.full, case.first, case.full.n_samples)
     out = {}
     for k in case.horizons:
+        if not np.isfinite(scale[k]):  # too few errors to calibrate this horizon
+            out[k] = float("nan")
+            continue
         e, sd = held[k]
         total = np.hypot(scale[k] * sd, 0.0 if extra is None else extra[k])
         ok = np.isfinite(e)
@@ -197,6 +203,12 @@ def evaluate(case: Case) -> dict:
     row("raw", ones)
     in_sample = factors([case.errors(case.values, cal, 0, n)], hs)
     row("in-sample", in_sample)
+    for b in FOLDS["block-max"]:
+        cuts = np.round(np.linspace(0, n, b + 1)).astype(int)
+        per_block = [
+            factors([case.errors(case.values, cal, lo, hi)], hs) for lo, hi in itertools.pairwise(cuts)
+        ]
+        row(f"block-max {b}", {k: max(f[k] for f in per_block) for k in hs})
     for b in FOLDS["rolling"]:
         cuts = np.round(n * (0.5 + 0.5 * np.arange(b + 1) / b)).astype(int)
         pieces = [case.errors(case.refit(head(cal, lo)), cal, lo, hi) for lo, hi in itertools.pairwise(cuts)]
@@ -238,7 +250,8 @@ def markdown(results: dict) -> str:
         lines += [f"{name} ({r['model']}, {r['held_out_samples']} samples held out)", ""]
         lines += ["| calibration | " + " | ".join(titles) + " |", "|---" * (len(keys) + 1) + "|"]
         for scheme, v in r["schemes"].items():
-            lines.append(f"| {scheme} | " + " | ".join(f"{v['coverage'][k]:.0%}" for k in keys) + " |")
+            cells = (f"{c:.0%}" if np.isfinite(c) else "—" for c in (v["coverage"][k] for k in keys))
+            lines.append(f"| {scheme} | " + " | ".join(cells) + " |")
         lines.append("")
     return "\n".join(lines)
 
