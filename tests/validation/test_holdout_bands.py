@@ -18,6 +18,8 @@ from rczone.models import load_model
 from rczone.workflow.reader import read_model_frame
 from tests.shared_data import SHARED, require
 
+from .scripts import load_script
+
 DATA = SHARED / "data" / "bacher_madsen_prbs" / "inputPRBS1.csv"
 MAP = """
 [time]
@@ -81,9 +83,29 @@ def test_coverage_is_reported_per_horizon_and_the_calibration_widens_the_long_ba
     strict=True,
     reason="issue 22 target not reached: the held-out days' 1 h and 6 h errors are twice the calibration"
     " days' (docs/validation.md), so factors calibrated on the fit's own errors leave the coverage at"
-    " about 84 % and 68 %",
+    " about 84 % and 68 %; rolling-origin, blocked and jackknife calibrations inside the calibration days"
+    " do not reach it at every horizon either, swing with the folds, or over-widen other data"
+    " (validation/holdout_bands.py)",
 )
 def test_two_sigma_coverage_lies_within_90_to_98_percent_at_1_h_and_6_h(scored):
     calibrated, _, _ = scored
     for k in (12, 72):
         assert 0.9 <= calibrated[k]["coverage_2sigma"] <= 0.98
+
+
+def test_on_a_zone_with_known_truth_the_calibration_keeps_the_right_band():
+    """Data from the default fit's own structure (noise on the room node only): the raw band is right.
+
+    Truth by construction (``validation/holdout_bands.py``'s synthetic zone, an Euler-Maruyama
+    simulation independent of rczone's filter): the calibrated factors stay near 1 and the held-out
+    coverage of the calibrated band near the nominal 95 %, never above 98 %.
+    """
+    bands = load_script("holdout_bands")
+    case = bands.Case(*bands.synthetic(None))
+    n = case.cal.n_samples
+    factor = bands.factors([case.errors(case.values, case.cal, 0, n)], case.horizons)
+    assert all(0.85 < f < 1.2 for f in factor.values()), factor
+    raw = bands.coverage(case, dict.fromkeys(case.horizons, 1.0))
+    calibrated = bands.coverage(case, factor)
+    assert all(0.85 < c <= 0.98 for c in raw.values()), raw
+    assert all(c <= 0.98 for c in calibrated.values()) and min(calibrated[k] for k in case.steps) >= 0.9

@@ -49,7 +49,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -59,10 +59,8 @@ from rczone.calibration import Calibration, ModelLike, as_model, calibrate, comp
 from rczone.calibration.dataset import ignored_channels
 from rczone.errors import DataError, ParameterError, did_you_mean
 from rczone.estimation.fit import default_free
+from rczone.estimation.freeset import ADD, check_free_and_fixed, fixed_value, resolve_free
 from rczone.models import ZoneModel
-
-if TYPE_CHECKING:
-    from rczone.workflow.settings import FitSettings
 from rczone.network.stochastic import MEASUREMENT_NOISE, PROCESS_NOISE, kind_of, process_noise_name, target_of
 from rczone.results import Result
 from rczone.results.verdict import EXIT_UNTRUSTED
@@ -416,17 +414,23 @@ def parameter_names(network) -> set[str]:
     return {*network.free_parameter_names, *noise_parameter_names(network)}
 
 
-def candidate_settings(
+class CandidateParameters(NamedTuple):
+    """What one candidate's fit estimates and holds."""
+
+    free: tuple[str, ...]  #: its free parameters
+    fixed: dict  #: name -> value held (None: the model's)
+
+
+def candidate_parameters(
     models: Mapping[str, ZoneModel],
     noise: str = "all",
     free: Sequence[str] | None = None,
     fixed: Mapping[str, float | None] | None = None,
-) -> dict[str, FitSettings]:
-    """Each candidate's fit settings: ML, ``noise``, and the added and fixed parameters it has.
+) -> dict[str, CandidateParameters]:
+    """Each candidate's free and fixed parameters: its ML default set with ``noise``, the ``+NAME`` it has, less the fixed it has.
 
-    The entries are checked once, by :class:`~rczone.workflow.settings.FitSettings` (as for
-    ``rczone fit``), then each candidate keeps the names it has; a name no candidate has is an
-    error with the close names.
+    The rule is ``rczone fit``'s (:func:`rczone.estimation.freeset.resolve_free`), applied to each
+    candidate with the names it has; a name no candidate has is an error with the close names.
 
     Parameters
     ----------
@@ -441,12 +445,12 @@ def candidate_settings(
 
     Returns
     -------
-    dict of str to FitSettings
+    dict of str to CandidateParameters
     """
-    from rczone.workflow.settings import ADD, FitSettings
-
-    whole = FitSettings(method="ml", noise=noise, free=tuple(free or ()) or None, fixed=dict(fixed or {}))
-    replaced = [n for n in whole.free or () if not n.startswith(ADD)]
+    free = tuple(free or ())
+    fixed = {k: fixed_value(k, v) for k, v in dict(fixed or {}).items()}
+    check_free_and_fixed(free, fixed)
+    replaced = [n for n in free if not n.startswith(ADD)]
     if replaced:
         raise ParameterError(
             f"select adds parameters to each candidate's own free set: write {ADD}{replaced[0]}"
@@ -454,18 +458,15 @@ def candidate_settings(
         )
     names = {n: parameter_names(zm.network) for n, zm in models.items()}
     known = set().union(*names.values())
-    asked = [*(n[len(ADD) :] for n in whole.free or ()), *whole.fixed]
-    for name in asked:
+    for name in [*(n[len(ADD) :] for n in free), *fixed]:
         if name not in known:
             raise ParameterError(f"no candidate has a parameter {name!r}; " + did_you_mean(name, known))
-    return {
-        c: dataclasses.replace(
-            whole,
-            free=tuple(n for n in whole.free or () if n[len(ADD) :] in names[c]) or None,
-            fixed={k: v for k, v in whole.fixed.items() if k in names[c]},
-        )
-        for c in models
-    }
+    out = {}
+    for c, zm in models.items():
+        own = {k: v for k, v in fixed.items() if k in names[c]}
+        added = [n for n in free if n[len(ADD) :] in names[c]]
+        out[c] = CandidateParameters(resolve_free(zm.network, "ml", noise=noise, free=added, fixed=own), own)
+    return out
 
 
 def family_candidates(columns: Sequence[str], *, extended: bool = False) -> list[str]:
@@ -574,8 +575,8 @@ def select_models(
             )
         check_measured(by_name, frame_from(frame), constants, basis)
     frame = common_stretch(zms, frame_from(frame), constants)
-    own = candidate_settings(by_name, noise, free, fixed)
-    free = {n: own[n].free_for(zm.network) for n, zm in by_name.items()}
+    own = candidate_parameters(by_name, noise, free, fixed)
+    free = {n: own[n].free for n in by_name}
     bounds = dict(bounds or {})
     known = {p for names_ in free.values() for p in names_}
     for b in bounds:

@@ -12,13 +12,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from rczone.errors import ParameterError
+from rczone.estimation.freeset import check_free_and_fixed, fixed_value, resolve_free
 from rczone.estimation.methods import DEFAULT_METHOD, method_of
 from rczone.estimation.optimize import OPTIMIZERS
 from rczone.estimation.sampling import SamplerSettings
 from rczone.simulation.simulate import HOLDS
-
-#: Start of a ``free`` entry that adds a parameter to the default free set (``"+sigma_w_Te"``).
-ADD = "+"
 
 #: Process-noise placements of an ML or MAP fit (:func:`rczone.estimation.fit.default_free`).
 NOISE_PLACEMENTS = ("measured", "all")
@@ -115,49 +113,23 @@ class FitSettings:
         if self.hold not in HOLDS:
             raise ParameterError(f"hold must be one of {', '.join(HOLDS)}, got {self.hold!r}")
         object.__setattr__(self, "bounds", {k: _pair(k, v) for k, v in dict(self.bounds or {}).items()})
-        object.__setattr__(self, "fixed", {k: _value(k, v) for k, v in dict(self.fixed or {}).items()})
-        both = [n for n in self.fixed if n in (self.free or ()) or ADD + n in (self.free or ())]
-        if both:
-            raise ParameterError(f"parameter {both[0]!r} is both free and fixed; choose one")
+        object.__setattr__(self, "fixed", {k: fixed_value(k, v) for k, v in dict(self.fixed or {}).items()})
+        check_free_and_fixed(self.free, self.fixed)
         pinned = [n for n in self.bounds if n in self.fixed]
         if pinned:
             raise ParameterError(f"bounds given for {pinned[0]!r}, which is fixed; drop one of the two")
 
     def free_for(self, network) -> tuple[str, ...]:
-        """The free parameters of a fit of ``network``: ``free`` (or the default, with the ``+`` entries), less ``fixed``.
+        """The free parameters of a fit of ``network`` (:func:`rczone.estimation.freeset.resolve_free`).
 
         Parameters
         ----------
         network : RCNetwork
             The model's network.
-
-        Returns
-        -------
-        tuple of str
-
-        Raises
-        ------
-        ParameterError
-            For a name the network does not have (with the close names), or nothing left free.
         """
-        from rczone.estimation.fit import default_free
-        from rczone.estimation.parameters import check_name
-
-        given = [n for n in (self.free or ()) if not n.startswith(ADD)]
-        added = [n[len(ADD) :] for n in (self.free or ()) if n.startswith(ADD)]
-        for name in (*added, *self.fixed, *self.bounds):
-            check_name(network, name)
-        base = list(given) if given else list(default_free(network, self.method, noise=self.noise))
-        free = tuple(dict.fromkeys(n for n in (*base, *added) if n not in self.fixed))
-        if not free:
-            raise ParameterError("every parameter is fixed: leave at least one free")
-        held = [n for n in self.bounds if n not in free]
-        if held:
-            raise ParameterError(
-                f"bounds given for {held[0]!r}, which this fit does not estimate; free it too"
-                f" (--free +{held[0]}, or free=['{ADD}{held[0]}']) or drop the bound"
-            )
-        return free
+        return resolve_free(
+            network, self.method, noise=self.noise, free=self.free, fixed=self.fixed, bounds=self.bounds
+        )
 
 
 def _check_search(s: FitSettings) -> None:
@@ -191,18 +163,3 @@ def _pair(name: str, bounds: object) -> tuple[float, float]:
             f"bounds of {name!r}: lower {lo:g} must be < upper {hi:g}, both finite (they are never swapped)"
         )
     return lo, hi
-
-
-def _value(name: str, value: object) -> float | None:
-    """A fixed value: None (the model's) or a finite number."""
-    if value is None:
-        return None
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        v = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise ParameterError(f"fixed value of {name!r} must be a number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ParameterError(f"fixed value of {name!r} must be finite, got {value!r}")
-    return v
