@@ -3,7 +3,7 @@
 Usage::
 
     python validation/latent_force.py [--shared ../shared] [--out validation-output] [--only NAME]
-        [--kind auto|matern32|periodic] [--noise auto|measured|all]
+        [--kind auto|matern32|periodic] [--noise auto|measured|all] [--hold zoh|foh]
 
 Reads the real data sets from the shared folder (their licences do not allow shipping them; see
 each PROVENANCE.md) and, for each, fits by ML on the first 75 % a model *without* and the same
@@ -128,15 +128,21 @@ def with_disturbance(
 
 
 def _one(
-    net: RCNetwork, cal: Dataset, full: Dataset, split: int, start: dict | None = None, noise: str = "all"
+    net: RCNetwork,
+    cal: Dataset,
+    full: Dataset,
+    split: int,
+    start: dict | None = None,
+    noise: str = "all",
+    hold: str = "zoh",
 ) -> tuple[dict, object, tuple[str, ...]]:
     t0 = time.process_time()
     free = default_free(net, "ml", noise=noise)
-    res = fit(net, cal, free, method="ml", start=start)
+    res = fit(net, cal, free, method="ml", start=start, hold=hold)
     values = {**res.fixed, **res.estimates}
-    white = innovation_analysis(net, values, cal)
+    white = innovation_analysis(net, values, cal, hold)
     dt = float(np.median(np.diff(full.t)))
-    y_hat, _ = k_step_band(net, values, full, max(1, round(HORIZON_S / dt)))
+    y_hat, _ = k_step_band(net, values, full, max(1, round(HORIZON_S / dt)), hold)
     err = (full.y - y_hat)[split:, 0]  # the room air (the first output)
     out = {
         "loglik": res.llf,
@@ -176,6 +182,7 @@ def compare(
     node: str = "Ti",
     calibration_fraction: float = 0.75,
     noise: str = "auto",
+    hold: str = "zoh",
 ) -> dict:
     """Fit ``plain`` and :func:`with_disturbance` of it; the test, the whiteness and the 6-h error of each.
 
@@ -190,7 +197,7 @@ def compare(
     dt = float(np.median(np.diff(cal.t)))
     base = {}
     for placement in NOISES if noise == "auto" else (noise,):
-        a, res_a, free_a = _one(plain, cal, full, split, noise=placement)
+        a, res_a, free_a = _one(plain, cal, full, split, noise=placement, hold=hold)
         base[placement] = a
         if not at_bounds(a):
             break
@@ -201,7 +208,7 @@ def compare(
         # the search starts from the simpler model's estimates (as `select` does): the richer model's
         # likelihood is then at least the simpler one's up to the disturbance's start
         start = {n: v for n, v in res_a.estimates.items() if n in free_a}
-        b, res_b, free_b = _one(rich, cal, full, split, start=start, noise=noise)
+        b, res_b, free_b = _one(rich, cal, full, split, start=start, noise=noise, hold=hold)
         b["kind"] = k
         tried[k] = b
         if not at_bounds(b):
@@ -215,6 +222,7 @@ def compare(
         "samples_calibration": split,
         "samples_held_out": len(frame) - split,
         "noise": noise,
+        "hold": hold,
         "without": a,
         "with": b,
         "tried": {  # every fit the choices above made, the chosen ones included
@@ -288,7 +296,12 @@ def markdown(results: dict) -> str:
 
 
 def run(
-    shared: Path, only: list[str] | None = None, kind: str = "auto", node: str = "Ti", noise: str = "auto"
+    shared: Path,
+    only: list[str] | None = None,
+    kind: str = "auto",
+    node: str = "Ti",
+    noise: str = "auto",
+    hold: str = "zoh",
 ) -> dict:
     """Every data set found under ``shared`` (or the ``only`` ones): :func:`compare` of its model."""
     results = {}
@@ -299,7 +312,7 @@ def run(
             print(f"skipped {name}: {shared / 'data' / path} not found")
             continue
         plain, frame = load(shared)
-        res = compare(plain, frame, kind, node, noise=noise)
+        res = compare(plain, frame, kind, node, noise=noise, hold=hold)
         res["without"]["model"], res["with"]["model"] = plain.name, f"{plain.name}+Qd ({res['with']['kind']})"
         results[name] = res
         t = res["test"]
@@ -333,11 +346,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--only", action="append", choices=list(DATASETS), help="run only this data set (repeatable)"
     )
+    ap.add_argument(
+        "--hold", choices=("zoh", "foh"), default="zoh", help="inputs between samples (default zoh)"
+    )
     args = ap.parse_args(argv)
     if not (args.shared / "data").is_dir():
         print(f"skipped: data not found under {args.shared / 'data'}")
         return 0
-    results = run(args.shared, args.only, args.kind, args.node, args.noise)
+    results = run(args.shared, args.only, args.kind, args.node, args.noise, args.hold)
     write_json_atomic(args.out / "latent_force.json", results)
     print(markdown(results))
     return 0 if all(math.isfinite(r["test"]["statistic"]) for r in results.values()) else 1

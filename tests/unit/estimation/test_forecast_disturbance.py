@@ -1,4 +1,4 @@
-"""The k-step forecast of a model with a latent force: the force relaxes to its mean along its kernel.
+"""The k-step forecast of a model with a latent force: from its stationary start, the force relaxes to its mean along its kernel.
 
 Oracles: the matrix exponential of the continuous-time state space (scipy's ``expm``) applied to the
 filtered state, and the closed-form kernels (Rasmussen & Williams 2006, eq. 4.17; the damped
@@ -8,13 +8,18 @@ cosine): for a unit-variance force whose stationary covariance is the identity, 
 
 import numpy as np
 import pytest
-from scipy.linalg import expm
+from scipy.linalg import expm, solve_continuous_lyapunov
 
 from rczone.estimation import Dataset
 from rczone.estimation.costs import run_filter
 from rczone.estimation.forecast import k_step_band
 from rczone.network.disturbance import covariance_function
-from rczone.network.stochastic import initial_spread_names, process_noise_name, process_noise_names
+from rczone.network.stochastic import (
+    default_value,
+    initial_spread_names,
+    process_noise_name,
+    process_noise_names,
+)
 from tests.unit.network.test_disturbance import ELL, PERIOD, one_node, synthetic
 
 
@@ -34,11 +39,18 @@ def test_k_step_forecast_carries_the_filtered_force_forward_along_its_kernel(kin
     )
     states = net.state_space().state_names
     values = {**net.values(), **dict.fromkeys(process_noise_names(states), 0.0), "sigma_v": 0.02}
-    values.update({**dict.fromkeys(initial_spread_names(states), 1.0), process_noise_name("Ti"): 1e-4})
+    # the initial spreads a fit uses when none is given
+    values.update({n: default_value(n) for n in initial_spread_names(states)})
+    values[process_noise_name("Ti")] = 1e-4
     k, dt = 12, 600.0
     y_hat, _ = k_step_band(net, values, data, k)
-    x_filt = run_filter(net, values, data).x_filt
+    out = run_filter(net, values, data)
+    x_filt = out.x_filt
     ss = net.state_space()
+    # the force starts from its stationary law: mean zero, the Lyapunov covariance of its SDE
+    p_inf = solve_continuous_lyapunov(ss.A[1:, 1:], -np.diag(ss.diffusion[1:]))
+    np.testing.assert_allclose(out.P_pred[0][1:, 1:], p_inf, atol=1e-12)
+    assert not out.x_pred[0][1:].any()
     M = expm(ss.A * k * dt)
     np.testing.assert_allclose(y_hat[k:], x_filt[:-k] @ M.T @ ss.C.T, rtol=1e-9, atol=1e-9)
     assert np.isnan(y_hat[:k]).all()
