@@ -52,7 +52,7 @@ from rczone.estimation.forecast import k_step_band
 from rczone.estimation.innovations import innovation_analysis
 from rczone.files.atomic import write_json_atomic
 from rczone.models import load_model
-from rczone.network import Disturbance, Parameter, RCNetwork
+from rczone.network import LatentForce, Parameter, RCNetwork
 from rczone.network.stochastic import is_noise_name
 from rczone.selection.compare import chi_bar_sf
 from rczone.selection.nesting import nesting
@@ -123,7 +123,7 @@ def with_disturbance(
         net.supply_air,
         net.outputs,
         net.description,
-        disturbances=[Disturbance("Qd", kind, node, magnitude="sd", length_scale="ld", **extra)],
+        disturbances=[LatentForce("Qd", kind, node, magnitude="sd", length_scale="ld", **extra)],
     )
 
 

@@ -27,6 +27,7 @@ _EXPORTS = {
     "Resistor": "rczone.network",
     "HeatInput": "rczone.network",
     "SupplyAir": "rczone.network",
+    "LatentForce": "rczone.network",
     "Parameter": "rczone.network",
     # models
     "ZoneModel": "rczone.models",

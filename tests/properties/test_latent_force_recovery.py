@@ -15,7 +15,7 @@ from rczone.estimation import Dataset, fit
 from rczone.estimation.fit import default_free
 from rczone.estimation.kalman import stochastic_matrices
 from rczone.models import ZoneModel
-from rczone.network import Disturbance, HeatInput, Node, Parameter, RCNetwork, Resistor
+from rczone.network import HeatInput, LatentForce, Node, Parameter, RCNetwork, Resistor
 from rczone.selection.compare import select_models
 
 TRUTH = {"C": 4e6, "R": 5e-3, "sd": 150.0, "ld": 3 * 3600.0}
@@ -32,7 +32,7 @@ def room(with_disturbance: bool) -> RCNetwork:
             Parameter("sd", "magnitude", 60.0, bounds=(1.0, 2000.0)),
             Parameter("ld", "time", 7200.0, bounds=(600.0, 2 * 86400.0)),
         ]
-        extra["disturbances"] = [Disturbance("Qd", "matern32", "Ti", magnitude="sd", length_scale="ld")]
+        extra["disturbances"] = [LatentForce("Qd", "matern32", "Ti", magnitude="sd", length_scale="ld")]
     return RCNetwork(
         "room+Qd" if with_disturbance else "room",
         [Node("Ti", "C")],

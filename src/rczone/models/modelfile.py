@@ -83,7 +83,7 @@ from typing import Any
 from rczone.errors import ModelFileError, RczoneError, did_you_mean
 from rczone.models.zone import ModelInputs, ZoneModel, read_model_document
 from rczone.network import CP_AIR, HeatInput, Node, Parameter, Prior, RCNetwork, Resistor, SupplyAir
-from rczone.network.disturbance import ROLE_KINDS, Disturbance
+from rczone.network.disturbance import ROLE_KINDS, LatentForce
 from rczone.network.network import HEAT_INPUT_UNITS
 from rczone.network.parameters import expression_names
 
@@ -304,7 +304,7 @@ def model_from_document(
         raise ModelFileError(f"model file {source}: {exc}") from None
 
 
-def _disturbances(r: _Reader, items: object) -> list[Disturbance]:
+def _disturbances(r: _Reader, items: object) -> list[LatentForce]:
     """The ``[[disturbance]]`` tables (see the module notes)."""
     if isinstance(items, Mapping):
         items = [items]
@@ -328,7 +328,7 @@ def _disturbances(r: _Reader, items: object) -> list[Disturbance]:
         }
         try:
             out.append(
-                Disturbance(
+                LatentForce(
                     r.text(spec["name"], f"{where}.name"), r.text(spec["kind"], f"{where}.kind"), gains, **kw
                 )
             )
@@ -342,7 +342,7 @@ def _usage_kinds(
     resistors: list[Resistor],
     heat: list[HeatInput],
     air: list[SupplyAir],
-    dists: Sequence[Disturbance] = (),
+    dists: Sequence[LatentForce] = (),
 ) -> dict[str, set[str]]:
     """Kinds implied by where each parameter name is used."""
     used: dict[str, set[str]] = {}
@@ -376,7 +376,7 @@ def _parameters(
     resistors: list[Resistor],
     heat: list[HeatInput],
     air: list[SupplyAir],
-    dists: Sequence[Disturbance] = (),
+    dists: Sequence[LatentForce] = (),
 ) -> list[Parameter]:
     specs: dict[str, Mapping[str, Any]] = {}
     for p, spec in table.items():

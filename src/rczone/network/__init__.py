@@ -1,6 +1,6 @@
 """RC networks: declaration, parameters and the bilinear state space built from them."""
 
-from rczone.network.disturbance import Disturbance
+from rczone.network.disturbance import LatentForce
 from rczone.network.network import CP_AIR, HeatInput, Node, RCNetwork, Resistor, SupplyAir
 from rczone.network.parameters import Parameter
 from rczone.network.prior import Prior
@@ -9,8 +9,8 @@ from rczone.network.statespace import BilinearStateSpace, LinearStateSpace, Stat
 __all__ = [
     "CP_AIR",
     "BilinearStateSpace",
-    "Disturbance",
     "HeatInput",
+    "LatentForce",
     "LinearStateSpace",
     "Node",
     "Parameter",

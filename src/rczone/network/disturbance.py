@@ -179,7 +179,7 @@ def covariance_function(
 
 
 @dataclass(frozen=True)
-class Disturbance:
+class LatentForce:
     """An unmeasured heat input with a Gaussian-process prior (a latent force).
 
     Parameters

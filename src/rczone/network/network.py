@@ -38,7 +38,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rczone.errors import NetworkError, ParameterError, did_you_mean
-from rczone.network.disturbance import ROLE_KINDS, Disturbance, latent_sde
+from rczone.network.disturbance import ROLE_KINDS, LatentForce, latent_sde
 from rczone.network.parameters import (
     ESTIMATED_KINDS,
     Parameter,
@@ -238,7 +238,7 @@ class RCNetwork:
         Nodes that are measured; default: the first node.
     description : str
         What the network models, in words (for listings and reports).
-    disturbances : sequence of Disturbance
+    disturbances : sequence of LatentForce
         Unmeasured heat inputs with a Gaussian-process prior (:mod:`rczone.network.disturbance`);
         their latent states follow the nodes' states.
 
@@ -268,7 +268,7 @@ class RCNetwork:
     supply_air: tuple[SupplyAir, ...] = ()
     outputs: tuple[str, ...] = ()
     description: str = ""
-    disturbances: tuple[Disturbance, ...] = ()
+    disturbances: tuple[LatentForce, ...] = ()
 
     def __init__(
         self,
@@ -282,7 +282,7 @@ class RCNetwork:
         outputs: Iterable[str] | None = None,
         description: str = "",
         *,
-        disturbances: Iterable[Disturbance] = (),
+        disturbances: Iterable[LatentForce] = (),
     ) -> None:
         nodes = tuple(nodes)
         set_ = object.__setattr__
@@ -479,8 +479,8 @@ class RCNetwork:
         """Disturbances: unique names, known nodes, hyper-parameters of the right kind and sign."""
         node_names = [n.name for n in self.nodes]
         for d in self.disturbances:
-            if not isinstance(d, Disturbance):
-                raise NetworkError(f"disturbances must be Disturbance objects, got {type(d).__name__}")
+            if not isinstance(d, LatentForce):
+                raise NetworkError(f"disturbances must be LatentForce objects, got {type(d).__name__}")
             where = f"disturbance {d.name!r}"
             for s in d.state_names:
                 if s in taken or s in RESERVED_NAMES:

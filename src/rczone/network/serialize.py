@@ -11,7 +11,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from rczone.errors import NetworkError, ParameterError
-from rczone.network.disturbance import Disturbance
+from rczone.network.disturbance import LatentForce
 from rczone.network.network import HeatInput, Node, RCNetwork, Resistor, SupplyAir
 from rczone.network.parameters import Parameter
 from rczone.network.prior import Prior
@@ -55,7 +55,7 @@ def network_to_dict(net: RCNetwork) -> dict[str, Any]:
     }
 
 
-def disturbance_to_dict(d: Disturbance) -> dict[str, Any]:
+def disturbance_to_dict(d: LatentForce) -> dict[str, Any]:
     """A JSON-ready description of one disturbance (:mod:`rczone.network.disturbance`)."""
     out: dict[str, Any] = {
         "name": d.name,
@@ -72,7 +72,7 @@ def disturbance_to_dict(d: Disturbance) -> dict[str, Any]:
 _DISTURBANCE_KEYS = ("name", "kind", "gains", "magnitude", "length_scale", "period")
 
 
-def _disturbance(x: object, i: int) -> Disturbance:
+def _disturbance(x: object, i: int) -> LatentForce:
     where = f"disturbances[{i}]"
     x = _known(x, _DISTURBANCE_KEYS, where)
     gains = _table(x.get("gains"), f"{where}.gains")
@@ -81,7 +81,7 @@ def _disturbance(x: object, i: int) -> Disturbance:
         values[key] = _value(x.get(key), f"{where}.{key}")
         if values[key] is None and key != "period":
             raise NetworkError(f"network description: {where} has no {key!r}")
-    return Disturbance(
+    return LatentForce(
         _text(x, "name", where),
         _text(x, "kind", where),
         {str(k): _value(v, f"{where}.gains.{k}") for k, v in gains.items()},

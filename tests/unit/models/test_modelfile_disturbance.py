@@ -12,7 +12,7 @@ import pytest
 from rczone.errors import ModelFileError
 from rczone.models import ZoneModel, load_model, model_to_toml, read_model_file
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
-from rczone.network.disturbance import Disturbance
+from rczone.network.disturbance import LatentForce
 
 TEXT = """
 name = "room+gains"
@@ -81,8 +81,8 @@ def python_declaration() -> RCNetwork:
         ],
         [HeatInput("Ph", "Ti")],
         disturbances=[
-            Disturbance("Qg", "matern32", {"Ti": 0.7, "Te": "ge"}, magnitude="sg", length_scale="lg"),
-            Disturbance("Qday", "periodic", "Ti", magnitude="sp", length_scale="lp", period="Pday"),
+            LatentForce("Qg", "matern32", {"Ti": 0.7, "Te": "ge"}, magnitude="sg", length_scale="lg"),
+            LatentForce("Qday", "periodic", "Ti", magnitude="sp", length_scale="lp", period="Pday"),
         ],
     )
 

@@ -16,7 +16,7 @@ from rczone.estimation.data import Dataset
 from rczone.estimation.engines import general_cost
 from rczone.estimation.kalman import stochastic_matrices
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
-from rczone.network.disturbance import KINDS, Disturbance, covariance_function, latent_sde
+from rczone.network.disturbance import KINDS, LatentForce, covariance_function, latent_sde
 
 ELL, PERIOD = 3 * 3600.0, 86400.0
 LAGS = np.array([0.0, 600.0, 3600.0, 4 * 3600.0, 11 * 3600.0, 30 * 3600.0])
@@ -78,7 +78,7 @@ def one_node(kind="matern32", magnitude="sd", **extra):
             Parameter("Pd", "time", PERIOD, fixed=True),
         ],
         disturbances=[
-            Disturbance("Qd", kind, {"Ti": 0.4, "Tm": 0.6}, magnitude=magnitude, length_scale="ld", **period)
+            LatentForce("Qd", kind, {"Ti": 0.4, "Tm": 0.6}, magnitude=magnitude, length_scale="ld", **period)
         ],
         **extra,
     )
@@ -198,14 +198,14 @@ def test_zero_magnitude_gives_the_likelihood_of_the_model_without_the_disturbanc
 @pytest.mark.parametrize(
     ("make", "match"),
     [
-        (lambda: Disturbance("Qd", "matern12", "Ti", magnitude=1.0, length_scale=1.0), "matern32"),
-        (lambda: Disturbance("Qd", "periodic", "Ti", magnitude=1.0, length_scale=1.0), "needs a period"),
+        (lambda: LatentForce("Qd", "matern12", "Ti", magnitude=1.0, length_scale=1.0), "matern32"),
+        (lambda: LatentForce("Qd", "periodic", "Ti", magnitude=1.0, length_scale=1.0), "needs a period"),
         (
-            lambda: Disturbance("Qd", "matern32", "Ti", magnitude=1.0, length_scale=1.0, period=9.0),
+            lambda: LatentForce("Qd", "matern32", "Ti", magnitude=1.0, length_scale=1.0, period=9.0),
             "no period",
         ),
-        (lambda: Disturbance("Q d", "matern32", "Ti", magnitude=1.0, length_scale=1.0), "identifier"),
-        (lambda: Disturbance("Qd", "matern32", {}, magnitude=1.0, length_scale=1.0), "gains"),
+        (lambda: LatentForce("Q d", "matern32", "Ti", magnitude=1.0, length_scale=1.0), "identifier"),
+        (lambda: LatentForce("Qd", "matern32", {}, magnitude=1.0, length_scale=1.0), "gains"),
     ],
 )
 def test_bad_disturbance_declarations_are_refused(make, match):
@@ -229,15 +229,15 @@ def test_bad_disturbance_in_a_network_is_refused_with_the_reason():
         )
 
     with pytest.raises(NetworkError, match="undeclared node 'Tx'"):
-        with_(Disturbance("Qd", "matern32", "Tx", magnitude="sd", length_scale="ld"))
+        with_(LatentForce("Qd", "matern32", "Tx", magnitude="sd", length_scale="ld"))
     with pytest.raises(NetworkError, match="declared as a resistance, not a magnitude"):
-        with_(Disturbance("Qd", "matern32", "Ti", magnitude="R1", length_scale="ld"))
+        with_(LatentForce("Qd", "matern32", "Ti", magnitude="R1", length_scale="ld"))
     with pytest.raises(NetworkError, match="reuses a node"):
-        with_(Disturbance("Ti", "matern32", "Ti", magnitude="sd", length_scale="ld"))
+        with_(LatentForce("Ti", "matern32", "Ti", magnitude="sd", length_scale="ld"))
     with pytest.raises(ParameterError, match="magnitude must be >= 0"):
-        with_(Disturbance("Qd", "matern32", "Ti", magnitude=-3.0, length_scale="ld"))
+        with_(LatentForce("Qd", "matern32", "Ti", magnitude=-3.0, length_scale="ld"))
     with pytest.raises(ParameterError, match="must be > 0"):
-        with_(Disturbance("Qd", "matern32", "Ti", magnitude=3.0, length_scale=0.0))
+        with_(LatentForce("Qd", "matern32", "Ti", magnitude=3.0, length_scale=0.0))
     with pytest.raises(ParameterError, match="must be > 0"):
         Parameter("sd", "magnitude", 0.0)
     assert with_(d).replace_parameters([Parameter("sd", "magnitude", 5.0)]).disturbances == (d,)

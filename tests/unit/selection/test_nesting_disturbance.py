@@ -11,7 +11,7 @@ from rczone.estimation.data import Dataset
 from rczone.estimation.engines import general_cost
 from rczone.estimation.fit import default_free
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
-from rczone.network.disturbance import Disturbance
+from rczone.network.disturbance import LatentForce
 from rczone.selection.compare import chi_bar_sf
 from rczone.selection.nesting import nesting, realize
 
@@ -27,8 +27,8 @@ DAY = [
     Parameter("lp", "time", 4e5),
     Parameter("Pd", "time", 86400.0, fixed=True),
 ]
-QD = Disturbance("Qd", "matern32", "Ti", magnitude="sd", length_scale="ld")
-QP = Disturbance("Qp", "periodic", {"Ti": 0.5, "Te": 0.5}, magnitude="sp", length_scale="lp", period="Pd")
+QD = LatentForce("Qd", "matern32", "Ti", magnitude="sd", length_scale="ld")
+QP = LatentForce("Qp", "periodic", {"Ti": 0.5, "Te": 0.5}, magnitude="sp", length_scale="lp", period="Pd")
 
 
 def tite(name, params=(), disturbances=()):
