@@ -334,6 +334,11 @@ class Objective:
         return j + pen, g + dpen, c + cpen
 
     @property
+    def adjoint_gradient(self) -> bool:
+        """Whether :meth:`value_and_gradient` is the adjoint pass (a few values' cost, :mod:`rczone.kernels.adjoint`)."""
+        return self._adjoint
+
+    @property
     def gradient_engine(self) -> str:
         """The engine of :meth:`value_and_gradient`."""
         return gradient_engine(self.engine)
@@ -410,6 +415,17 @@ class Objective:
         if not math.isfinite(j):
             return math.inf, np.zeros(eta.size)
         return j, g * self.spec.jacobian(eta)
+
+    def innovations(self, eta: np.ndarray) -> np.ndarray:
+        """One-step-ahead prediction errors at ``eta`` (NaN where missing), from the adjoint kernel's filter.
+
+        Only where :attr:`adjoint_gradient` holds: a fit then computes its RMSE without compiling a
+        second filter (:func:`rczone.estimation.fit.rmse_of` is the general way).
+        """
+        if not self._adjoint:
+            raise ParameterError("innovations come from the adjoint kernel of a 2-state likelihood only")
+        gradient_fused(np.asarray(self.spec.to_theta(eta), dtype=np.float64), self._packed)
+        return self._packed.scratch.copy()
 
     def curvature(self, eta: np.ndarray) -> np.ndarray:
         """Diagonal curvature estimate of the cost in ``eta`` (Fisher information or Gauss-Newton).

@@ -188,8 +188,8 @@ def _start(
         f(ss.B, dtype=float),
         f(ss.M, dtype=float),
         *(f(d, dtype=float) for d in directions),
-        f(first.m0, dtype=float),
-        f(first.u0, dtype=float),
+        np.array(first.m0, dtype=float),  # writable copies, as the compiled engine passes: one specialization
+        np.array(first.u0, dtype=float),
         f(first_y),
         states,
         f(given, dtype=bool),

@@ -39,7 +39,7 @@ from rczone.estimation.parameters import make_spec
 from rczone.estimation.resolution import noise_floor
 from rczone.estimation.result import FitResult
 from rczone.estimation.search import global_search
-from rczone.estimation.uncertainty import covariance, hessian
+from rczone.estimation.uncertainty import covariance, hessian, hessian_from_gradient
 from rczone.network import RCNetwork
 from rczone.network.stochastic import (
     KINDS,
@@ -268,7 +268,11 @@ def fit(
     positive_definite = True
     near = spec.near_bound(theta)
     if uncertainty:
-        H = hessian(objective, spec.to_eta(theta))
+        H = (
+            hessian_from_gradient(objective.value_and_gradient, spec.to_eta(theta))
+            if objective.adjoint_gradient
+            else hessian(objective, spec.to_eta(theta))
+        )
         scale = 1.0
         if meth.kernel == "ls":
             dt = np.diff(data.t)
@@ -332,7 +336,11 @@ def fit(
         n_evals=search.n_sampled + sum(o.n_evals for o in outcomes),
         starts=tuple(outcomes),
         best_start=best,
-        rmse_K=rmse_of(network, values, data, method, hold),
+        rmse_K=(
+            float(np.sqrt(np.nanmean(objective.innovations(spec.to_eta(theta)) ** 2)))
+            if objective.adjoint_gradient
+            else rmse_of(network, values, data, method, hold)
+        ),
         rmse_kind=meth.rmse_kind,
         llf=log_likelihood(network, values, data, meth, hold, win.cost),
         nobs=int(np.isfinite(data.y).sum()),

@@ -171,7 +171,8 @@ def minimize_from(
     d = spec.n_free
     max_evals = max_evals or 2000 * d
     eta0 = spec.to_eta(theta0)
-    f0 = cost(eta0)
+    value = _value_of(cost, optimizer)
+    f0 = value(eta0)
     if not math.isfinite(f0):
         raise ParameterError(f"the cost is not finite at the start {dict(zip(spec.names, theta0))}")
     # a cost of order one makes the absolute and relative tolerances meaningful
@@ -206,7 +207,18 @@ def minimize_from(
         eta = spec.from_z(res.x)
         converged, message = bool(res.success), str(res.message)
     theta = spec.to_theta(eta)
-    return StartOutcome(theta0, theta, float(cost(eta)), converged, counted.n + 2, message)
+    return StartOutcome(theta0, theta, float(value(eta)), converged, counted.n + 2, message)
+
+
+def _value_of(cost: Callable[[np.ndarray], float], optimizer: str) -> Callable[[np.ndarray], float]:
+    """The cost as an L-BFGS search with an adjoint gradient evaluates it: from that one kernel.
+
+    The search itself evaluates nothing else, so a first fit compiles one kernel; the values agree
+    with the value kernel's to its steady-state tolerance (:mod:`rczone.kernels.adjoint`).
+    """
+    if optimizer == "lbfgs" and getattr(cost, "adjoint_gradient", False):
+        return lambda eta: cost.value_and_gradient(eta)[0]
+    return cost
 
 
 def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_evals: int) -> tuple:
@@ -219,7 +231,9 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
     30 %: condition numbers of 1e5 and hundreds of iterations). So each phase optimizes
     ``xi = eta * sqrt(c)`` with ``c`` the diagonal curvature of
     :meth:`~rczone.estimation.costs.Objective.curvature` (Fisher information or Gauss-Newton;
-    diagonal scaling keeps the box bounds boxes), and a phase that runs out of its budget
+    diagonal scaling keeps the box bounds boxes; where the gradient is the adjoint pass, the diagonal
+    of the Hessian from differences of gradients,
+    :func:`~rczone.estimation.uncertainty.curvature_from_gradient`), and a phase that runs out of its budget
     (``20 + 2 d`` evaluations, at most :data:`LBFGS_RESCALES` times) restarts with the curvature
     where it ended [1]_. A plain
     callable cost gets a central-difference gradient and no scaling.
@@ -233,6 +247,13 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
     """
     exact = getattr(cost, "value_and_gradient", None)
     curvature = getattr(cost, "curvature", None)
+    if getattr(cost, "adjoint_gradient", False):
+        # differences of the adjoint gradient (d + 1 of them): no forward-sensitivity kernel to compile
+        from rczone.estimation.uncertainty import curvature_from_gradient
+
+        def curvature(eta: np.ndarray) -> np.ndarray:
+            return curvature_from_gradient(exact, eta)
+
     d = spec.n_free
     eta = np.asarray(eta0, dtype=float)
     phases = (*(20 + 2 * d,) * LBFGS_RESCALES, None) if curvature is not None else (None,)

@@ -1,7 +1,8 @@
 """Uncertainty of estimates: Hessian, standard errors, correlations, profile likelihood.
 
 The Hessian of the cost is taken in ``eta`` (where the cost is closest to quadratic) by
-central finite differences, and mapped to physical units by the delta method:
+central finite differences (of the exact gradient where it costs a few values, the adjoint of
+:mod:`rczone.kernels.adjoint`; of the value otherwise), and mapped to physical units by the delta method:
 ``cov_theta = J cov_eta J`` with ``J = diag(d theta / d eta)``.
 
 * For ``J_ML`` and ``J_MAP`` (negative log-likelihood / log-posterior):
@@ -17,6 +18,8 @@ References
    (profile likelihood) and 4.7 (delta method).
 .. [2] P. E. Gill, W. Murray, M. H. Wright, *Practical Optimization*, 1981, section
    8.6 (finite-difference step sizes for second derivatives).
+.. [3] J. Nocedal, S. J. Wright, *Numerical Optimization*, 2nd ed., Springer 2006, section 8.1
+   (approximating the Hessian by differences of exact gradients).
 """
 
 from __future__ import annotations
@@ -35,6 +38,10 @@ from rczone.estimation.parameters import ParameterSpec
 
 #: Relative step of the finite-difference Hessian, about eps^(1/4).
 HESSIAN_STEP = 1e-4
+#: Relative step of the Hessian from central differences of exact gradients, about eps^(1/3).
+GRADIENT_HESSIAN_STEP = 1e-5
+#: Relative step of the diagonal curvature from forward differences of exact gradients, about sqrt(eps).
+CURVATURE_STEP = 1e-6
 
 
 def hessian(f: Callable[[np.ndarray], float], x: np.ndarray, step: float = HESSIAN_STEP) -> np.ndarray:
@@ -68,6 +75,90 @@ def hessian(f: Callable[[np.ndarray], float], x: np.ndarray, step: float = HESSI
             )
             H[i, j] = H[j, i] = v
     return H
+
+
+def hessian_from_gradient(
+    value_and_gradient: Callable[[np.ndarray], tuple[float, np.ndarray]],
+    x: np.ndarray,
+    step: float = GRADIENT_HESSIAN_STEP,
+) -> np.ndarray:
+    """Hessian from central differences of an exact gradient, symmetrized.
+
+    Column ``i`` is ``(g(x + h_i e_i) - g(x - h_i e_i)) / (2 h_i)`` with ``h_i = step * max(1, |x_i|)``:
+    ``2 d`` gradients instead of the ``2 d^2`` values of :func:`hessian`, and one order of
+    differentiation fewer, so rounding is ``O(eps |g| / h)`` and the step can be smaller [3]_. Where
+    one side is invalid (a non-finite value) the one-sided difference with ``g(x)`` is taken.
+
+    Parameters
+    ----------
+    value_and_gradient : callable
+        ``x -> (value, gradient)``, e.g. :meth:`~rczone.estimation.costs.Objective.value_and_gradient`.
+    x : ndarray, shape (d,)
+        Where (eta of the optimum).
+    step : float
+        Relative step, about ``eps^(1/3)``.
+
+    Returns
+    -------
+    ndarray, shape (d, d), symmetric
+    """
+    x = np.asarray(x, dtype=float)
+    d = x.size
+    H = np.empty((d, d))
+    g0 = None
+    for i in range(d):
+        h = step * max(1.0, abs(x[i]))
+        xp, xm = x.copy(), x.copy()
+        xp[i] += h
+        xm[i] -= h
+        (fp, gp), (fm, gm) = value_and_gradient(xp), value_and_gradient(xm)
+        if math.isfinite(fp) and math.isfinite(fm):
+            H[:, i] = (gp - gm) / (xp[i] - xm[i])
+            continue
+        if g0 is None:
+            g0 = value_and_gradient(x)[1]
+        H[:, i] = (gp - g0) / (xp[i] - x[i]) if math.isfinite(fp) else (g0 - gm) / (x[i] - xm[i])
+    return 0.5 * (H + H.T)
+
+
+def curvature_from_gradient(
+    value_and_gradient: Callable[[np.ndarray], tuple[float, np.ndarray]],
+    x: np.ndarray,
+    step: float = CURVATURE_STEP,
+) -> np.ndarray:
+    """Diagonal of the Hessian from forward differences of an exact gradient (``d + 1`` gradients).
+
+    ``(g_i(x + h_i e_i) - g_i(x)) / h_i`` with ``h_i = step * max(1, |x_i|)`` (backward where the
+    forward point is invalid) [3]_: a variable scaling for a gradient search
+    (:func:`rczone.estimation.optimize.minimize_from`), which needs the orders of magnitude only.
+    Entries may be negative or non-finite away from a minimum.
+
+    Parameters
+    ----------
+    value_and_gradient : callable
+        ``x -> (value, gradient)``.
+    x : ndarray, shape (d,)
+    step : float
+        Relative step, about ``sqrt(eps)``.
+
+    Returns
+    -------
+    ndarray, shape (d,)
+    """
+    x = np.asarray(x, dtype=float)
+    f0, g0 = value_and_gradient(x)
+    c = np.full(x.size, np.nan)
+    if not math.isfinite(f0):
+        return c
+    for i in range(x.size):
+        for sign in (1.0, -1.0):
+            xs = x.copy()
+            xs[i] += sign * step * max(1.0, abs(x[i]))
+            fs, gs = value_and_gradient(xs)
+            if math.isfinite(fs):
+                c[i] = (gs[i] - g0[i]) / (xs[i] - x[i])
+                break
+    return c
 
 
 @dataclass(frozen=True, eq=False)

@@ -79,3 +79,46 @@ def test_adjoint_gradient_of_the_two_state_likelihood_equals_forward_sensitiviti
         np.testing.assert_allclose(g, g_fwd, rtol=0, atol=1e-9 * np.linalg.norm(g_fwd))
         ref = five_point(obj, eta, 1e-3)
         np.testing.assert_allclose(g, ref, rtol=0, atol=1e-6 * np.linalg.norm(ref))
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_adjoint_discretization_is_the_spectral_branch_of_interval_derivatives(hold: str) -> None:
+    """The adjoint's own loop over the distinct intervals (no matrix-exponential branch to compile)
+    gives exactly what the general interval_derivatives gives for an RC model."""
+    from rczone.kernels.adjoint import rc2_interval_derivatives
+    from rczone.kernels.discretize import interval_derivatives
+    from rczone.kernels.problem import LS, assembled
+
+    free = ["Cr", "Cw", "Rw", "Rwin", "sigma_v", "sigma_w_Ti", "sigma_w_Tw"]
+    spec = make_spec(NET2, free, start={"sigma_w_Tw": 1e-4})
+    obj = Objective(NET2, data2(), spec, "ml", hold)
+    prob = obj.compiled
+    theta = np.asarray(spec.start, dtype=float)
+    mod, der, ok = assembled(theta, prob, theta.shape[0])
+    assert ok and prob.data.keys.shape[0] > 1
+    args = (mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, prob.data.keys, mod.qc, der.dqc)
+    scale = np.sqrt(mod.cap)
+    ours = rc2_interval_derivatives(*args, scale, hold == "foh", prob.kind != LS)
+    general = interval_derivatives(*args, scale, hold == "foh", prob.kind != LS)
+    for a, b in zip((*ours[0], *ours[1]), (*general[0], *general[1])):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize(("method", "hold"), [("ml", "zoh"), ("map", "foh")])
+def test_fit_rmse_from_the_adjoint_filter_equals_the_general_filters(method: str, hold: str) -> None:
+    """A 2-state likelihood fit takes its one-step RMSE from the adjoint kernel's forward pass: the same
+    errors as the general compiled filter over the discrete matrices (missing samples, estimated x0)."""
+    from rczone.estimation import Dataset, fit
+    from rczone.estimation.fit import rmse_of
+
+    data = data2(noise=0.05, rng=np.random.default_rng(3))
+    y = data.y.copy()
+    y[[0, 17, 18, 90]] = np.nan
+    data = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+    free = ["Cr", "Cw", "Rw", "Rwin", "sigma_v", "sigma_w_Ti", "x0_Tw"]
+    res = fit(
+        NET2, data, free, method=method, hold=hold, n_starts=1, start={"x0_Tw": 21.0}, uncertainty=False
+    )
+    assert res.engine == "rc2-fused"
+    general = rmse_of(NET2, {**res.estimates, **res.fixed}, data, method, hold)
+    assert res.rmse_K == pytest.approx(general, rel=1e-10)
