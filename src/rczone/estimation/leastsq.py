@@ -61,7 +61,7 @@ from rczone.kernels.levmar import BUDGET, COST, GRADIENT, INVALID, STEP, Toleran
 #: The name of the local method in results and reasons.
 NAME = "gauss-newton"
 #: Evaluations (one residual and Jacobian pass each) of one stage of a search from a sampled point.
-STAGE = 20
+STAGE = 5
 #: Most stages of a search from a sampled point that stays below the best optimum found so far.
 MAX_STAGES = 4
 #: Relative tolerances on the cost decrease, the step and the gradient (MINPACK's and SciPy's
