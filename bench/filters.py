@@ -11,8 +11,9 @@ likelihood is computed (a) by :func:`rczone.kernels.kalman.kalman_filter` after
 :func:`rczone.kernels.discretize.interval_matrices`, and (b) by
 :func:`rczone.kernels.kalman.kalman_filter_modal` after
 :func:`rczone.kernels.discretize.modal_matrices`. The script prints the median time of each
-(after a warm-up call, so compilation is excluded), their ratio and their agreement; the
-machine's load average is printed beside them.
+(after a warm-up call, so compilation is excluded), their ratio, their agreement and whether
+the rule of :func:`rczone.kernels.kalman.modal_pays` picks the faster one; the machine's load
+average is printed beside them.
 """
 
 from __future__ import annotations
@@ -34,7 +35,13 @@ import problems  # noqa: E402
 from rczone.estimation import Dataset, Objective, make_spec  # noqa: E402
 from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series  # noqa: E402
 from rczone.kernels.discretize import interval_matrices, modal_matrices  # noqa: E402
-from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, no_sensitivities, outputs  # noqa: E402
+from rczone.kernels.kalman import (  # noqa: E402
+    kalman_filter,
+    kalman_filter_modal,
+    modal_pays,
+    no_sensitivities,
+    outputs,
+)
 from rczone.kernels.problem import assembled  # noqa: E402
 from rczone.models import get_model  # noqa: E402
 from rczone.simulation import simulate, steady_state  # noqa: E402
@@ -123,15 +130,21 @@ def main(argv: list[str] | None = None) -> int:
         general, modal = both_filters(obj._packed, np.asarray(theta, dtype=float))
         g, m = general(), modal()
         tg, tm = median_time(general, args.repeats), median_time(modal, args.repeats)
+        which, n = obj._packed.data.which, obj._packed.form.L.shape[1]
+        rule = "modal" if modal_pays(which, n) else "general"
+        faster = "modal" if tm < tg else "general"
         results[name] = {
             "general_median_s": tg,
             "modal_median_s": tm,
             "general_over_modal": tg / tm,
             "relative_difference": abs(g - m) / abs(g),
+            "modal_pays_chooses": rule,
+            "faster": faster,
         }
         print(
             f"{name}: general {tg * 1e3:.3f} ms, modal {tm * 1e3:.3f} ms, general/modal {tg / tm:.2f},"
-            f" -log L differ by {abs(g - m) / abs(g):.1e} relative"
+            f" -log L differ by {abs(g - m) / abs(g):.1e} relative; modal_pays chooses {rule}"
+            f" ({'the faster' if rule == faster else 'NOT the faster'})"
         )
     print("load average", os.getloadavg())
     if args.out is not None:

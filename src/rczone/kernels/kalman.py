@@ -7,12 +7,19 @@ decomposition [1]_ with the outputs of a sample processed one at a time (sequent
 processing, exact for diagonal ``R`` [2]_): each observed output is a scalar update, a missing
 output (NaN) is skipped on its own, and no matrix is inverted.
 
-Its plain-NumPy twin (``tests/oracles.py``, ``kalman_filter_reference``) is written
-from the same two step functions (``update_step``: one scalar measurement update;
-``predict_step``: the time update), which the sample loop here carries out in place (marked
-by comments): a numba call with array arguments costs reference counting on every array,
-which for a few states is several times the arithmetic of the step itself. The tests compare
-the two filters, and both with a brute-force multivariate-normal density.
+The steps that cost ``O(n^2)`` to ``O(n^3)`` per sample are short functions: :func:`predict_covariance`
+(``P = Phi P Phi' + Qd`` and its derivatives), :func:`stationary` (the steady-state test),
+:func:`keep_prediction` (what the trace keeps). They are compiled with ``inline="always"``: numba
+inlines them into the sample loop at its own intermediate representation, so no call remains.
+Each array argument still becomes a new variable there, with a reference count taken and
+dropped at every call, which numba does not prune across the loops of a step. For the steps
+that cost ``O(n)`` per output (the innovation, the scalar update of the gain and covariance, the
+state's correction) and for the mean's prediction, run ``ny`` times or on every sample of a
+steady state, those counts cost more than the arithmetic (written as functions they made
+``nll_4zone`` 2.0x and ``nll_13state`` 1.15x slower, bit-identical values; ``bench`` notes in
+``docs/architecture.md``), so they are written in place in the loop, marked by comments.
+The plain-NumPy twin (``tests/oracles.py``, ``kalman_filter_reference``) is written from the same
+steps; the tests compare the two filters, and both with a brute-force multivariate-normal density.
 
 Forward sensitivities [3]_: for ``q`` parameter directions the derivatives of everything the
 filter carries (``dx``, ``dP``) are propagated alongside by the product rule, given the
@@ -49,6 +56,7 @@ References
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -106,6 +114,138 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> Filt
     )
 
 
+class Moved(NamedTuple):
+    """Which parameter directions move what (the terms of the others are skipped)."""
+
+    dynamics: np.ndarray  #: (q,) bool: the direction moves ``Phi``, ``G0`` or ``G1``
+    C: bool  #: a direction moves ``C``
+    D: bool  #: a direction moves ``D``
+
+
+@njit(cache=True, error_model="numpy")
+def _moved(ddyn: DynamicsDerivatives, dC: np.ndarray, dD: np.ndarray) -> Moved:
+    """The :class:`Moved` of a run from the derivatives of the dynamics and of the output matrices."""
+    dPhi, dG0, dG1 = ddyn.dPhi, ddyn.dG0, ddyn.dG1
+    K, q, n, p = dG0.shape
+    dyn = np.zeros(q, dtype=np.bool_)
+    for d in range(q):
+        for w in range(K):
+            for i in range(n):
+                for j in range(n):
+                    dyn[d] = dyn[d] or dPhi[w, d, i, j] != 0.0
+                for j in range(p):
+                    dyn[d] = dyn[d] or dG0[w, d, i, j] != 0.0 or dG1[w, d, i, j] != 0.0
+    has_dc = False
+    has_dd = False
+    for j in range(dC.shape[0]):
+        for d in range(q):
+            for i in range(n):
+                has_dc = has_dc or dC[j, d, i] != 0.0
+            for i in range(p):
+                has_dd = has_dd or dD[j, d, i] != 0.0
+    return Moved(dyn, has_dc, has_dd)
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def keep_prediction(
+    k: int, x: np.ndarray, P: np.ndarray, obs: Observation, trace: FilterTrace, pc: np.ndarray
+) -> None:
+    """Store the predicted state, its covariance and ``S = C P C' + R`` in the trace arrays that have row ``k``."""
+    n = x.shape[0]
+    C, r = obs.C, obs.r
+    if trace.xp.shape[0] > k:
+        for i in range(n):
+            trace.xp[k, i] = x[i]
+    if trace.Pp.shape[0] > k:
+        for i in range(n):
+            for j in range(n):
+                trace.Pp[k, i, j] = P[i, j]
+    if trace.S.shape[0] > k:
+        ny = C.shape[0]
+        for a in range(ny):
+            for i in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += P[i, j] * C[a, j]
+                pc[i] = acc
+            for b in range(ny):
+                acc = r[a] if a == b else 0.0
+                for i in range(n):
+                    acc += C[b, i] * pc[i]
+                trace.S[k, a, b] = acc
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def predict_covariance(
+    w: int, P: np.ndarray, dP: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, dPhi: np.ndarray, dQd: np.ndarray,
+    moved: np.ndarray, T: np.ndarray, X: np.ndarray, Y: np.ndarray,
+) -> None:  # fmt: skip
+    """``P = Phi P Phi' + Qd``; ``dP = dPhi P Phi' + Phi P dPhi' + Phi dP Phi' + dQd`` (exactly symmetric)."""
+    n = P.shape[0]
+    for i in range(n):
+        for j in range(n):
+            T[i, j] = 0.0
+        for a in range(n):
+            f = Phi[w, i, a]
+            for j in range(n):
+                T[i, j] += f * P[a, j]
+    for d in range(dP.shape[0]):
+        if moved[d]:
+            for i in range(n):
+                for j in range(n):
+                    acc = 0.0
+                    for a in range(n):
+                        acc += T[i, a] * dPhi[w, d, j, a]
+                    X[i, j] = acc
+        for i in range(n):
+            for j in range(n):
+                Y[i, j] = 0.0
+            for a in range(n):
+                f = Phi[w, i, a]
+                for j in range(n):
+                    Y[i, j] += f * dP[d, a, j]
+        for i in range(n):
+            for j in range(i, n):
+                acc = dQd[w, d, i, j]
+                for a in range(n):
+                    acc += Y[i, a] * Phi[w, j, a]
+                if moved[d]:
+                    acc += X[i, j] + X[j, i]
+                dP[d, i, j] = acc
+                dP[d, j, i] = acc
+    for i in range(n):
+        for j in range(i, n):
+            acc = Qd[w, i, j]
+            for a in range(n):
+                acc += T[i, a] * Phi[w, j, a]
+            P[i, j] = acc
+            P[j, i] = acc
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def stationary(P: np.ndarray, dP: np.ndarray, P_prev: np.ndarray, dP_prev: np.ndarray, rtol: float) -> bool:
+    """Whether ``P`` and each ``dP[d]`` repeat their previous values to ``rtol`` (largest difference / largest entry)."""
+    n = P.shape[0]
+    big = 0.0
+    diff = 0.0
+    for i in range(n):
+        for j in range(n):
+            big = max(big, abs(P[i, j]))
+            diff = max(diff, abs(P[i, j] - P_prev[i, j]))
+    if not diff <= rtol * big:
+        return False
+    for d in range(dP.shape[0]):
+        big = 0.0
+        diff = 0.0
+        for i in range(n):
+            for j in range(n):
+                big = max(big, abs(dP[d, i, j]))
+                diff = max(diff, abs(dP[d, i, j] - dP_prev[d, i, j]))
+        if not diff <= rtol * big:
+            return False
+    return True
+
+
 @njit(cache=True, error_model="numpy", fastmath=FAST)
 def kalman_filter(
     dyn: Dynamics,
@@ -150,13 +290,14 @@ def kalman_filter(
 
     Notes
     -----
-    ``update_step`` for output ``o`` with ``c = C[o]``: ``e = y - d'u - c'x``, ``s = c'Pc + r``,
+    ``update_step`` for output ``o`` with ``c = C[o]`` (in the loop): ``e = y - d'u - c'x``, ``s = c'Pc + r``,
     ``k = Pc / s``, ``x += k e``, ``P -= k (Pc)'`` (kept exactly symmetric); along each
     direction ``j``: ``de = -dd_j'u - dc_j'x - c'dx_j``, ``ds = c'dP_j c + 2 dc_j'Pc + dr_j``,
     ``dk = (dPc - k ds)/s``, ``dx_j += dk e + k de``, ``dP_j -= dk (Pc)' + k (dPc)'``; the
     gradient gains the derivative of ``0.5 (log s + e^2/s)``.
 
-    ``predict_step`` with the matrices of interval ``w``: ``x = Phi x + drive``,
+    ``predict_step`` with the matrices of interval ``w`` (the mean in the loop,
+    :func:`predict_covariance`): ``x = Phi x + drive``,
     ``P = Phi P Phi' + Qd``; ``dx_j = dPhi_j x + Phi dx_j + ddrive_j``,
     ``dP_j = dPhi_j P Phi' + Phi P dPhi_j' + Phi dP_j Phi' + dQd_j`` (the ``dPhi`` terms skipped
     for directions that leave the dynamics unchanged).
@@ -165,54 +306,35 @@ def kalman_filter(
     dPhi, dG0, dG1, dQd = ddyn
     C, D, r = obs.C, obs.D, obs.r
     dC, dD, dr = obs.dC, obs.dD, obs.dr
-    x0, P0, dx0, dP0 = prior
     u, y, which = series
     foh, open_loop, steady_rtol = opts
-    e_out, de_out, xp_out, xf_out = trace.e, trace.de, trace.xp, trace.xf
-    Pp_out, S_out, Pf_out = trace.Pp, trace.S, trace.Pf
     N, ny = y.shape
-    n = x0.shape[0]
+    n = prior.x0.shape[0]
+    q = prior.dx0.shape[0]
+    moved, has_dc, has_dd = _moved(ddyn, dC, dD)
     p = u.shape[1]
-    q = dx0.shape[0]
-    K = Phi.shape[0]
-    # which directions move the dynamics, the output matrices
-    dyn = np.zeros(q, dtype=np.bool_)
-    for d in range(q):
-        for w in range(K):
-            for i in range(n):
-                for j in range(n):
-                    dyn[d] = dyn[d] or dPhi[w, d, i, j] != 0.0
-                for j in range(p):
-                    dyn[d] = dyn[d] or dG0[w, d, i, j] != 0.0 or dG1[w, d, i, j] != 0.0
-    has_dc = False
-    has_dd = False
-    for j in range(ny):
-        for d in range(q):
-            for i in range(n):
-                has_dc = has_dc or dC[j, d, i] != 0.0
-            for i in range(p):
-                has_dd = has_dd or dD[j, d, i] != 0.0
-    x = x0.copy()
-    P = P0.copy()
-    dx = dx0.copy()
-    dP = dP0.copy()
+    x = prior.x0.copy()
+    P = prior.P0.copy()
+    dx = prior.dx0.copy()
+    dP = prior.dP0.copy()
     grad = np.zeros(q)
     fim = np.zeros(q)
-    # scratch
+    # work arrays of the steps, local variables (held in a tuple they cost ~10 % on nll_4zone)
     pc = np.empty(n)
     dpc = np.empty((q, n))
     de = np.empty(q)
+    xn = np.empty(n)
     drive = np.empty(n)
     T = np.empty((n, n))
     X = np.empty((n, n))
     Y = np.empty((n, n))
-    xn = np.empty(n)
-    # gains of each output (kept for the steady state) and the covariances the steady state needs
+    # each output's gain, innovation variance and their derivatives, kept for the steady state
     kg = np.zeros((ny, n))
     dkg = np.zeros((ny, q, n))
     sg = np.ones(ny)
     lg = np.zeros(ny)
     dsg = np.zeros((ny, q))
+    # the covariances the steady state compares with (the last prediction) and returns to (the last filtered)
     P_prev = np.empty((n, n))
     dP_prev = np.empty((q, n, n))
     P_filt = np.empty((n, n))
@@ -222,13 +344,11 @@ def kalman_filter(
     steady_mask = -1
     prev_key = -1
     prev_mask = -1
-    keep_e = e_out.shape[0] == N
-    keep_de = de_out.shape[0] == N
-    keep_xp = xp_out.shape[0] == N
-    keep_xf = xf_out.shape[0] == N
-    keep_P = Pp_out.shape[0] == N
-    keep_S = S_out.shape[0] == N
-    keep_Pf = Pf_out.shape[0] == N and not open_loop
+    keep_xf = trace.xf.shape[0] == N
+    keep_pred = trace.xp.shape[0] == N or trace.Pp.shape[0] == N or trace.S.shape[0] == N
+    keep_e = trace.e.shape[0] == N
+    keep_de = trace.de.shape[0] == N
+    keep_Pf = trace.Pf.shape[0] == N and not open_loop
     nll = 0.0
     n_obs = 0
     for k in range(N):
@@ -236,25 +356,8 @@ def kalman_filter(
         for j in range(ny):
             if y[k, j] == y[k, j]:
                 mask |= 1 << j
-        if keep_xp:
-            for i in range(n):
-                xp_out[k, i] = x[i]
-        if keep_P:
-            for i in range(n):
-                for j in range(n):
-                    Pp_out[k, i, j] = P[i, j]
-        if keep_S:
-            for a in range(ny):
-                for i in range(n):
-                    acc = 0.0
-                    for j in range(n):
-                        acc += P[i, j] * C[a, j]
-                    pc[i] = acc
-                for b in range(ny):
-                    acc = r[a] if a == b else 0.0
-                    for i in range(n):
-                        acc += C[b, i] * pc[i]
-                    S_out[k, a, b] = acc
+        if keep_pred:
+            keep_prediction(k, x, P, obs, trace, pc)
         if keep_e:
             for j in range(ny):
                 if mask & (1 << j):
@@ -263,7 +366,7 @@ def kalman_filter(
                         acc -= D[j, i] * u[k, i]
                     for i in range(n):
                         acc -= C[j, i] * x[i]
-                    e_out[k, j] = acc
+                    trace.e[k, j] = acc
         if open_loop:
             if keep_de:
                 for j in range(ny):
@@ -274,7 +377,7 @@ def kalman_filter(
                                 acc -= dC[j, d, i] * x[i] + C[j, i] * dx[d, i]
                             for i in range(p):
                                 acc -= dD[j, d, i] * u[k, i]
-                            de_out[k, j, d] = acc
+                            trace.de[k, j, d] = acc
         else:
             if steady and mask != steady_mask:
                 steady = False
@@ -368,12 +471,12 @@ def kalman_filter(
                             dP_filt[d, i, j] = dP[d, i, j]
         if keep_xf:
             for i in range(n):
-                xf_out[k, i] = x[i]
+                trace.xf[k, i] = x[i]
         if keep_Pf:
-            # P_filt: the filtered covariance, also while the steady state holds P at its prediction
+            # the filtered covariance, also while the steady state holds P at its prediction
             for i in range(n):
                 for j in range(n):
-                    Pf_out[k, i, j] = P_filt[i, j]
+                    trace.Pf[k, i, j] = P_filt[i, j]
         if k == N - 1:
             break
         w = which[k]
@@ -391,7 +494,7 @@ def kalman_filter(
                 acc = 0.0
                 for j in range(n):
                     acc += Phi[w, i, j] * dx[d, j]
-                if dyn[d]:
+                if moved[d]:
                     for j in range(n):
                         acc += dPhi[w, d, i, j] * x[j]
                     for j in range(p):
@@ -423,65 +526,10 @@ def kalman_filter(
             prev_key = w
             prev_mask = mask
             continue
-        # ---- predict_step: the covariance, T = Phi P (also for the derivative terms)
-        for i in range(n):
-            for j in range(n):
-                T[i, j] = 0.0
-            for a in range(n):
-                f = Phi[w, i, a]
-                for j in range(n):
-                    T[i, j] += f * P[a, j]
-        for d in range(q):
-            # X = Phi P dPhi' (its transpose is dPhi P Phi'), Y = Phi dP
-            if dyn[d]:
-                for i in range(n):
-                    for j in range(n):
-                        acc = 0.0
-                        for a in range(n):
-                            acc += T[i, a] * dPhi[w, d, j, a]
-                        X[i, j] = acc
-            for i in range(n):
-                for j in range(n):
-                    Y[i, j] = 0.0
-                for a in range(n):
-                    f = Phi[w, i, a]
-                    for j in range(n):
-                        Y[i, j] += f * dP[d, a, j]
-            for i in range(n):
-                for j in range(i, n):
-                    acc = dQd[w, d, i, j]
-                    for a in range(n):
-                        acc += Y[i, a] * Phi[w, j, a]
-                    if dyn[d]:
-                        acc += X[i, j] + X[j, i]
-                    dP[d, i, j] = acc
-                    dP[d, j, i] = acc
-        for i in range(n):
-            for j in range(i, n):
-                acc = Qd[w, i, j]
-                for a in range(n):
-                    acc += T[i, a] * Phi[w, j, a]
-                P[i, j] = acc
-                P[j, i] = acc
+        predict_covariance(w, P, dP, Phi, Qd, dPhi, dQd, moved, T, X, Y)
         # the steady state: the same interval and observed outputs as before, and P repeats
         if steady_rtol > 0.0 and w == prev_key and mask == prev_mask:
-            steady = True
-            big = 0.0
-            diff = 0.0
-            for i in range(n):
-                for j in range(n):
-                    big = max(big, abs(P[i, j]))
-                    diff = max(diff, abs(P[i, j] - P_prev[i, j]))
-            steady = diff <= steady_rtol * big
-            for d in range(q):
-                if steady:
-                    big = 0.0
-                    diff = 0.0
-                    for i in range(n):
-                        for j in range(n):
-                            big = max(big, abs(dP[d, i, j]))
-                            diff = max(diff, abs(dP[d, i, j] - dP_prev[d, i, j]))
-                    steady = diff <= steady_rtol * big
+            steady = stationary(P, dP, P_prev, dP_prev, steady_rtol)
             if steady:
                 steady_key = w
                 steady_mask = mask
