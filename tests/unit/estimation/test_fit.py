@@ -58,8 +58,12 @@ def test_multistart_keeps_every_start_and_reports_the_winner() -> None:
     rows = res.starts_table()
     assert sum(r["winner"] for r in rows) == 1 and "end_Cr" in rows[0]
     assert res.estimates["Cr"] == pytest.approx(1e6, rel=1e-4)
-    # every start reaches the one optimum of this convex problem: converged by agreement
-    assert res.search.n_best == 4 and res.converged and res.trustworthy
+    # this problem is convex: a start either reaches its one optimum or was given up unconverged
+    # after a stage of Gauss-Newton passes still above it (estimation.leastsq.staged); two agree
+    best = res.objective_value
+    for s in res.starts:
+        assert s.cost <= best + 1e-12 or not s.converged
+    assert res.search.n_best >= 2 and res.converged and res.trustworthy
 
 
 def test_fit_does_not_mutate_the_network() -> None:
