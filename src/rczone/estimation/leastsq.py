@@ -61,7 +61,7 @@ from rczone.kernels.levmar import BUDGET, COST, GRADIENT, INVALID, STEP, Toleran
 #: The name of the local method in results and reasons.
 NAME = "gauss-newton"
 #: Evaluations (one residual and Jacobian pass each) of one stage of a search from a sampled point.
-STAGE = 5
+STAGE = 10
 #: Most stages of a search from a sampled point that stays below the best optimum found so far.
 MAX_STAGES = 4
 #: Relative tolerances on the cost decrease, the step and the gradient (MINPACK's and SciPy's
@@ -181,15 +181,13 @@ def leastsq_search(
     adaptive = n_starts is None
     outcomes: list[StartOutcome] = []
 
-    def tol_of(c: float) -> float:
-        return cost_tolerance("ls", c, scale)
-
     lower_left = False
     for k, s in enumerate(starts):
         finite = [o.cost for o in outcomes if math.isfinite(o.cost)]
         try:
             if finite:
-                outcomes.append(staged(objective, s, min(finite), tol_of(min(finite)), max_evals))
+                tol = cost_tolerance("ls", min(finite), scale)
+                outcomes.append(staged(objective, s, min(finite), tol, max_evals))
             else:
                 outcomes.append(gauss_newton(objective, s, max_evals))
         except ParameterError:
@@ -201,39 +199,43 @@ def leastsq_search(
             lower_left = bool(optima and any(c < optima[0].cost for c in start_costs[k + 1 :]))
             if optima and _settled(spec, outcomes, optima, lower_left):
                 break
-    optima, tol = merge_optima(outcomes, "ls", scale)
+    optima, _ = merge_optima(outcomes, "ls", scale)
     if not optima:
         raise ParameterError("every local search ended at a point where the cost is not finite")
-    n_runs = len(outcomes)
+    confirmed_by = None
     if optima[0].count >= 2:
-        return outcomes, _summary(
-            spec, outcomes, optima, tol, n_sampled, n_starts, lower_left, None,
-            f"the best optimum was reached from {optima[0].count} of {n_runs} starts",
-        )  # fmt: skip
-    # confirm by a restart near it; where that finds lower, from there again (a few rounds at most)
+        reason = f"the best optimum was reached from {optima[0].count} of {len(outcomes)} starts"
+    else:
+        confirmed_by, reason = _confirm(objective, outcomes, rng, max_evals, scale)
+    return outcomes, _summary(spec, outcomes, scale, n_sampled, n_starts, lower_left, confirmed_by, reason)
+
+
+def _confirm(
+    objective: Objective,
+    outcomes: list[StartOutcome],
+    rng: np.random.Generator,
+    max_evals: int | None,
+    scale: float,
+) -> tuple[str | None, str]:
+    """Confirm an optimum reached by one start by a restart near it (appended to ``outcomes``).
+
+    Where the restart finds lower, the next round restarts near that (a few rounds at most).
+    Returns the confirming method (None when the rounds kept finding lower) and the reason.
+    """
+    n_runs = len(outcomes)
     for _ in range(POLISH_ROUNDS):
-        best = optima[0]
-        check = gauss_newton(objective, displaced(spec, best.theta, rng), max_evals)
+        best = merge_optima(outcomes, "ls", scale)[0][0]
+        check = gauss_newton(objective, displaced(objective.spec, best.theta, rng), max_evals)
         outcomes.append(check)
-        optima, tol = merge_optima(outcomes, "ls", scale)
-        if check.cost >= best.cost - tol_of(best.cost):
-            reason = f"the best optimum was reached from 1 of {n_runs} starts and a restart of {NAME} near it"
-            return outcomes, _summary(
-                spec,
-                outcomes,
-                optima,
-                tol,
-                n_sampled,
-                n_starts,
-                lower_left,
-                NAME,
-                reason + " found nothing better",
+        if check.cost >= best.cost - cost_tolerance("ls", best.cost, scale):
+            return NAME, (
+                f"the best optimum was reached from 1 of {n_runs} starts and a restart of {NAME} near it found"
+                " nothing better"
             )
-    reason = (
+    return None, (
         f"the best optimum was reached from only 1 of {n_runs} starts and restarts of {NAME} near it kept"
         f" finding lower costs ({POLISH_ROUNDS} rounds): the search has not settled"
     )
-    return outcomes, _summary(spec, outcomes, optima, tol, n_sampled, n_starts, False, None, reason)
 
 
 def spread_starts(
@@ -283,8 +285,7 @@ def _settled(spec: ParameterSpec, outcomes: list[StartOutcome], optima: tuple, l
 def _summary(
     spec: ParameterSpec,
     outcomes: list[StartOutcome],
-    optima: tuple,
-    tol: float,
+    scale: float,
     n_sampled: int,
     n_starts: int | None,
     lower_left: bool,
@@ -292,6 +293,7 @@ def _summary(
     reason: str,
 ) -> SearchSummary:
     """The :class:`~rczone.estimation.search.SearchSummary`; converged unless ``reason`` is a failure or a check below fails."""
+    optima, tol = merge_optima(outcomes, "ls", scale)
     best = optima[0]
     converged = best.count >= 2 or confirmed_by is not None
     if converged and not any(outcomes[i].converged for i in best.starts):
