@@ -1,8 +1,9 @@
 """The compiled Kalman filters against their NumPy twin: the general one, the modal one, the fused 2-state kernel.
 
 References: ``tests/oracles.py`` (plain NumPy, same step
-functions, no steady-state shortcut) fed with the NumPy discretization of
-:mod:`rczone.simulation.discretize`; the brute-force joint Gaussian density is the oracle of
+functions, no steady-state shortcut) fed with the discretization of
+:mod:`rczone.simulation.discretize` (whose spectral formulas are checked against scipy's ``expm``
+and their NumPy form in ``tests/properties/test_kernels.py``); the brute-force joint Gaussian density is the oracle of
 the twin itself (``test_estimation_kalman_mvn.py``). Models are random RC networks (random
 topology, massless nodes, several outputs, one or two supply-air flows); data have
 irregular steps, flows that change and repeat, and outputs missing one at a time.

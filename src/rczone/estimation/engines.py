@@ -17,8 +17,14 @@ declared rules (:func:`choose_engine`), never by trying one and catching its fai
     its exact parameter derivatives are built in Python (:meth:`RCNetwork.state_space`,
     :meth:`RCNetwork.state_space_derivatives`), then the compiled discretization and filter run
     on them (:func:`general_cost`).
+Within the ``"compiled"`` and ``"general"`` engines the likelihood's filter is chosen by a declared
+rule too (:func:`rczone.kernels.kalman.modal_pays`, from the number of states and how often the
+intervals change their matrices): the modal filter for values where it pays, the general filter
+otherwise and for every gradient. The engine is recorded as :attr:`Objective.engine
+<rczone.estimation.costs.Objective.engine>` and in every fit result (``FitResult.engine``, the
+``engine`` of its ``to_dict()``); the filter follows from the engine and the data.
 The tests compare every engine with a plain NumPy computation of the same cost
-(``tests/oracles.py``: the NumPy discretization, the NumPy twin of the filter, a Python loop for
+(``tests/oracles.py``: the NumPy spectral discretization, the NumPy twin of the filter, a Python loop for
 the simulation).
 
 All engines use the same model: the initial state of :func:`initial_state`, the noise of
@@ -255,7 +261,7 @@ def simulate_output(
 def filter_arrays(
     network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh"
 ) -> FilterProblem:
-    """The filter problem of ``values`` on ``data`` (NumPy discretization), for :mod:`rczone.estimation.kalman`."""
+    """The filter problem of ``values`` on ``data`` (:func:`rczone.estimation.kalman.stochastic_matrices`), for :mod:`rczone.estimation.kalman`."""
     ss = network.state_space(network_theta(network, values))
     sw, sx, sv = noise_values(ss, values)
     x0 = initial_state(ss, values, data)

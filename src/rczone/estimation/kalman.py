@@ -85,7 +85,7 @@ class FilterProblem(NamedTuple):
 def stochastic_matrices(
     ss: BilinearStateSpace, t: np.ndarray, m: np.ndarray, Qc: np.ndarray, hold: str = "zoh"
 ) -> SampledDynamics:
-    """Exact per-interval discretization of the stochastic model (plain NumPy).
+    """Exact per-interval discretization of the stochastic model (:func:`~rczone.simulation.discretize.interval_discretization`).
 
     Parameters
     ----------
