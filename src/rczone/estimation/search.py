@@ -22,7 +22,10 @@ converged. The search here is a two-phase stochastic method [1]_:
    a few rounds at most). A gradient search (``"lbfgs"``, the default of
    :func:`~rczone.estimation.fit.fit`) is checked by itself from a point displaced by
    :data:`DISPLACEMENT` of the box (:func:`displaced`): a second start near the optimum, which a
-   stalled search does not come back from, and no derivative-free sweep.
+   stalled search does not come back from, and no derivative-free sweep. That restart runs in
+   stages (:func:`budgeted_search`) and is the adaptive search's second start: where the model's
+   own start converged, two agreeing starts (with the rules above) end the search early, before
+   any sampled start.
 
 Nelder-Mead searches are restarted at their end point while that still lowers the cost. Searches
 from sampled points run in stages (:func:`budgeted_search`): :data:`GRADIENT_STAGE` evaluations for
@@ -422,6 +425,12 @@ def global_search(
             if k == 0 and len(starts) > 1:
                 continue
             raise
+        if k == 0 and adaptive and optimizer == "lbfgs" and outcomes[-1].converged:
+            # early agreement: the second start is a restart near the first optimum (DISPLACEMENT), the
+            # confirmation a single start would get anyway; the sampled starts follow only where the
+            # rules below are not yet met (a sampled point below it, more searches for more parameters)
+            starts.insert(1, displaced(spec, outcomes[-1].end, rng))
+            start_costs.insert(1, math.nan)
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, method, scale)
             # stop once the best optimum was reached twice, unless a sampled point not yet used as a
@@ -452,8 +461,14 @@ def global_search(
         converged = False
         for _ in range(POLISH_ROUNDS):
             best = optima[0]
-            at = displaced(spec, best.theta, rng) if second == optimizer else best.theta
-            check = minimize_from(cost, spec, at, second, max_evals)
+            if second == optimizer:
+                # a restart near it, in stages: it goes on only while it is below the best optimum (it
+                # found lower), so a restart that lands in a poor region costs one stage, not thousands
+                check = budgeted_search(
+                    cost, spec, displaced(spec, best.theta, rng), second, max_evals, tol_of, outcomes
+                )
+            else:
+                check = minimize_from(cost, spec, best.theta, second, max_evals)
             outcomes.append(check)
             if check.cost >= best.cost - tol_of(best.cost):
                 converged, confirmed_by = True, second

@@ -104,3 +104,22 @@ def test_a_gradient_search_is_confirmed_by_a_restart_near_its_optimum_not_a_dire
     assert moved[1] < 0
     outs, s = global_search(two_basins, spec, "ml", np.random.default_rng(0), optimizer="lbfgs")
     assert min(o.cost for o in outs) == pytest.approx(0.0, abs=1e-8) and s.converged  # the deep basin
+
+
+def test_an_adaptive_gradient_search_stops_when_its_start_and_a_restart_near_it_agree() -> None:
+    """Early agreement: one basin, the model's start converges, the restart DISPLACEMENT away comes back;
+    two agreeing starts end the search before any sampled start (every sampled point costs more)."""
+    from rczone.estimation.search import DISPLACEMENT
+
+    spec = _spec()
+
+    def one_basin(eta: np.ndarray) -> float:
+        return float((eta[1] - math.log(0.02)) ** 2 + 0.01 * (eta[0] - math.log(1e6)) ** 2)
+
+    outs, s = global_search(one_basin, spec, "ml", np.random.default_rng(0), optimizer="lbfgs")
+    assert s.n_local == len(outs) == 2 and s.n_best == 2 and s.converged
+    assert s.reason == "the best optimum was reached from 2 of 2 starts"
+    np.testing.assert_allclose(outs[0].start, spec.start)
+    moved = np.abs(spec.to_eta(outs[1].start) - spec.to_eta(outs[0].end))
+    np.testing.assert_allclose(moved, DISPLACEMENT * (spec.eta_upper - spec.eta_lower), rtol=1e-6)
+    np.testing.assert_allclose(outs[1].end, [1e6, 0.02], rtol=1e-4)  # the minimum, known by construction
