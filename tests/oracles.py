@@ -403,3 +403,23 @@ def k_step_prediction_error(
             x = problem.Phi[problem.which[i]] @ x + drive[i]
         err[j] = problem.y[j] - (problem.C @ x + problem.D @ problem.u[j])
     return err
+
+
+def k_step_prediction_sd(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, k: int = 1, hold: str = "zoh"
+) -> np.ndarray:
+    """The standard deviation of ``y_hat[j | j - k]``: ``P_j-k|j-k`` stepped by hand, ``C P C' + R``.
+
+    The loop form of the variance :func:`rczone.estimation.forecast.k_step_band` computes (with the
+    process noise of each interval, Madsen 2007, section 10.3); NaN for the first ``k``.
+    """
+    problem = filter_arrays(network, values, data, hold)
+    out = kalman_filter_arrays(problem)
+    sd = np.full(problem.y.shape, np.nan)
+    for j in range(k, data.n_samples):
+        P = out.P_filt[j - k]
+        for i in range(j - k, j):
+            F = problem.Phi[problem.which[i]]
+            P = F @ P @ F.T + problem.Qd[problem.which[i]]
+        sd[j] = np.sqrt(np.diag(problem.C @ P @ problem.C.T + problem.R))
+    return sd

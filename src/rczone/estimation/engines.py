@@ -48,7 +48,12 @@ from rczone.estimation.kalman import (
     stochastic_matrices,
 )
 from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series
-from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
+from rczone.kernels.discretize import (
+    interval_derivatives,
+    interval_matrices,
+    modal_matrices,
+    rc_interval_matrices,
+)
 from rczone.kernels.kalman import (
     STEADY_RTOL,
     kalman_filter,
@@ -391,8 +396,9 @@ def general_cost(
                     "an innovation variance is not positive: the noise model is invalid"
                 )
             return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
+        kernel = interval_matrices if scale is None else rc_interval_matrices  # see interval_discretization
         scale = np.empty(0) if scale is None else scale
-        mats = interval_matrices(A, N, B, M, keys, qc, scale, foh, not ls)
+        mats = kernel(A, N, B, M, keys, qc, scale, foh, not ls)
         dmats = no_sensitivities(keys.shape[0], n, p)
     # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization
     y = np.require(data.y, np.float64, "CW")

@@ -35,6 +35,7 @@ from rczone.estimation.costs import filter_arrays
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
 from rczone.estimation.openloop import open_loop_band
+from rczone.kernels.forecast import Origins, Propagation, Readout, k_step_moments
 from rczone.network import RCNetwork
 
 #: Central-difference step of the parameter sensitivities, in standard errors.
@@ -101,22 +102,17 @@ def k_step_bands(
         return bands
     drive = input_drive(args.G0, args.G1, which, u)
     origin = np.arange(N) if origins is None else np.asarray(origins, dtype=int)
-    origin = origin[(origin >= 0) & (origin < N - reach[0])]
-    x = out.x_filt[origin].copy()
-    P = out.P_filt[origin]
-    for i in range(reach[-1]):
-        live = origin + i + 1 < N  # origins whose next step is still inside the data
-        origin, x, P = origin[live], x[live], P[live]
-        w = which[origin + i]
-        F = Phi[w]  # stacked matrix products (matmul), not a three-operand einsum: 10-20x faster
-        x = (F @ x[:, :, None])[:, :, 0] + drive[origin + i]
-        P = F @ P @ F.transpose(0, 2, 1) + Qd[w]
-        if i + 1 in reach:
-            target = origin + i + 1
-            band = bands[i + 1]
-            band.y_hat[target] = x @ C.T + u[target] @ args.D.T
-            var = np.einsum("ij,kjl,il->ki", C, P, C, optimize=True) + np.diag(R)
-            band.sd[target] = np.sqrt(var)
+    origin = origin[(origin >= 0) & (origin < N - reach[0])].astype(np.int64)
+    slot = np.full(reach[-1] + 1, -1, dtype=np.int64)
+    slot[reach] = np.arange(len(reach))
+    c = np.ascontiguousarray  # one array layout, one compiled specialization
+    y_hat, var = k_step_moments(
+        Propagation(c(Phi, float), c(Qd, float), c(which, np.int64), c(drive, float)),
+        Readout(c(C, float), c(u @ args.D.T, float), c(np.diag(R), float)),
+        Origins(c(out.x_filt, float), c(out.P_filt, float), origin, slot),
+    )
+    for j, k in enumerate(reach):
+        bands[k] = Band(y_hat[j], np.sqrt(var[j]))
     return bands
 
 

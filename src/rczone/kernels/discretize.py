@@ -970,6 +970,68 @@ def _key_matrices(
 
 
 @njit(cache=True, error_model="numpy")
+def _rc_interval(
+    A: np.ndarray,
+    B: np.ndarray,
+    scale: np.ndarray,
+    qc: np.ndarray,
+    h: float,
+    foh: bool,
+    Phi: np.ndarray,
+    G0: np.ndarray,
+    G1: np.ndarray,
+    Qd: np.ndarray,
+) -> None:
+    """One interval of an RC network: the closed 2-state form or the spectral formulas."""
+    p = B.shape[1]
+    if scale.shape[0] == 2:
+        m = rc2_discretize(
+            A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1], h,
+            qc[0], qc[1], foh,
+        )  # fmt: skip
+        Phi[0, 0], Phi[0, 1], Phi[1, 0], Phi[1, 1] = m.phi00, m.phi01, m.phi10, m.phi11
+        Qd[0, 0], Qd[0, 1], Qd[1, 0], Qd[1, 1] = m.qd00, m.qd01, m.qd01, m.qd11
+        for j in range(p):
+            G0[0, j] = m.h0_00 * B[0, j] + m.h0_01 * B[1, j]
+            G0[1, j] = m.h0_10 * B[0, j] + m.h0_11 * B[1, j]
+            G1[0, j] = m.h1_00 * B[0, j] + m.h1_01 * B[1, j]
+            G1[1, j] = m.h1_10 * B[0, j] + m.h1_11 * B[1, j]
+    else:
+        spectral_discretize(A, B, scale, qc, h, foh, Phi, G0, G1, Qd)
+
+
+@njit(cache=True, error_model="numpy")
+def rc_interval_matrices(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    keys: np.ndarray,
+    qc: np.ndarray,
+    scale: np.ndarray,
+    foh: bool,
+    noise: bool,
+) -> Dynamics:
+    """:func:`interval_matrices` of an RC network (``scale`` symmetrizes every ``A``), by spectral formulas only.
+
+    The same matrices; a caller that knows its model is an RC network calls this one, which does
+    not compile the matrix-exponential route (a first run's compile time, issue 19).
+    """
+    n = A0.shape[0]
+    p = B0.shape[1]
+    K = keys.shape[0]
+    Phi = np.empty((K, n, n))
+    G0 = np.empty((K, n, p))
+    G1 = np.zeros((K, n, p))
+    Qd = np.zeros((K, n, n))
+    q = qc if noise else np.zeros(n)
+    for k in range(K):
+        A, B = _key_matrices(A0, N, B0, M, keys[k])
+        _rc_interval(A, B, scale, q, keys[k, 0], foh, Phi[k], G0[k], G1[k], Qd[k])
+    return Dynamics(Phi, G0, G1, Qd)
+
+
+@njit(cache=True, error_model="numpy")
 def interval_matrices(
     A0: np.ndarray,
     N: np.ndarray,
@@ -991,12 +1053,14 @@ def interval_matrices(
     qc : ndarray, shape (n,)
     scale : ndarray, shape (n,) or (0,)
         ``sqrt(capacities)`` when it symmetrizes every ``A`` (an RC network: spectral
-        formulas); empty for matrix exponentials.
+        formulas, :func:`rc_interval_matrices`); empty for matrix exponentials.
     foh : bool
     noise : bool
         Compute ``Qd`` (zero otherwise, e.g. for open-loop least squares).
     """
     n = A0.shape[0]
+    if scale.shape[0] == n:
+        return rc_interval_matrices(A0, N, B0, M, keys, qc, scale, foh, noise)
     p = B0.shape[1]
     K = keys.shape[0]
     Phi = np.empty((K, n, n))
@@ -1004,29 +1068,12 @@ def interval_matrices(
     G1 = np.zeros((K, n, p))
     Qd = np.zeros((K, n, n))
     none = np.empty((0, n, n))
-    zero = np.zeros(n)
     for k in range(K):
         A, B = _key_matrices(A0, N, B0, M, keys[k])
-        h = keys[k, 0]
-        if scale.shape[0] == 2:
-            m = rc2_discretize(
-                A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1], h,
-                qc[0], qc[1], foh,
-            )  # fmt: skip
-            Phi[k, 0, 0], Phi[k, 0, 1], Phi[k, 1, 0], Phi[k, 1, 1] = m.phi00, m.phi01, m.phi10, m.phi11
-            Qd[k, 0, 0], Qd[k, 0, 1], Qd[k, 1, 0], Qd[k, 1, 1] = m.qd00, m.qd01, m.qd01, m.qd11
-            for j in range(p):
-                G0[k, 0, j] = m.h0_00 * B[0, j] + m.h0_01 * B[1, j]
-                G0[k, 1, j] = m.h0_10 * B[0, j] + m.h0_11 * B[1, j]
-                G1[k, 0, j] = m.h1_00 * B[0, j] + m.h1_01 * B[1, j]
-                G1[k, 1, j] = m.h1_10 * B[0, j] + m.h1_11 * B[1, j]
-        elif scale.shape[0] == n:
-            spectral_discretize(A, B, scale, qc if noise else zero, h, foh, Phi[k], G0[k], G1[k], Qd[k])
-        else:
-            expm_discretize(
-                A, B, qc, h, foh, noise, none, np.empty((0, n, p)), np.empty((0, n)),
-                Phi[k], G0[k], G1[k], Qd[k], none, np.empty((0, n, p)), np.empty((0, n, p)), none,
-            )  # fmt: skip
+        expm_discretize(
+            A, B, qc, keys[k, 0], foh, noise, none, np.empty((0, n, p)), np.empty((0, n)),
+            Phi[k], G0[k], G1[k], Qd[k], none, np.empty((0, n, p)), np.empty((0, n, p)), none,
+        )  # fmt: skip
     return Dynamics(Phi, G0, G1, Qd)
 
 

@@ -420,14 +420,16 @@ def interval_discretization(
     """
     qc = _diagonal_intensity(Qc, A.shape[0])
     if qc is not None and not any(np.iscomplexobj(a) for a in (A, N, B, M)):
-        from rczone.kernels.discretize import interval_matrices
+        from rczone.kernels.discretize import interval_matrices, rc_interval_matrices
 
         scale = symmetrizing_scale(A, N, capacities)
 
         def f(a: np.ndarray) -> np.ndarray:  # writable as the packed problem's: one compiled specialization
             return np.require(a, np.float64, "CW")
 
-        return interval_matrices(
+        # an RC network's route does not compile the matrix exponentials (a first run's time)
+        kernel = interval_matrices if scale is None else rc_interval_matrices
+        return kernel(
             f(A),
             f(N),
             f(B),

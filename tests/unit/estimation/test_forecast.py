@@ -9,10 +9,10 @@ from rczone.errors import ParameterError
 from rczone.estimation import Dataset
 from rczone.estimation.costs import filter_arrays, run_filter, simulate_output
 from rczone.estimation.forecast import k_step_band, noise_band, parameter_sd
-from tests.oracles import k_step_prediction_error
+from tests.oracles import k_step_prediction_error, k_step_prediction_sd
 from tests.unit.selection.synthetic import simulate_sde
 
-from .nets import NET1
+from .nets import NET1, NET2, data2
 
 THETA = {"Cr": 1e6, "R": 0.01}
 NOISE = {"sigma_v": 0.03, "sigma_w_Ti": 2e-3, "sigma_x0_Ti": 0.1}
@@ -43,6 +43,19 @@ def test_k_step_prediction_equals_the_loop_implementation(k):
     y_hat, _ = k_step_band(NET1, values, data, k)
     ref = k_step_prediction_error(NET1, values, data, k=k)
     np.testing.assert_allclose(data.y - y_hat, ref, rtol=1e-9, atol=1e-10, equal_nan=True)
+
+
+@pytest.mark.parametrize("k", [1, 4, 9])
+def test_k_step_band_of_a_flow_varying_model_equals_the_loop_implementation(k):
+    """Two states, the supply air's flow switching (two sets of matrices): mean and sd against loops."""
+    data = data2(90, noise=0.02, rng=np.random.default_rng(4))
+    noise = {"sigma_v": 0.02, "sigma_w_Ti": 3e-3, "sigma_w_Tw": 1e-3, "sigma_x0_Ti": 0.1, "sigma_x0_Tw": 0.5}
+    values = {**NET2.values(), **noise}
+    y_hat, sd = k_step_band(NET2, values, data, k)
+    ref = k_step_prediction_error(NET2, values, data, k=k)
+    np.testing.assert_allclose(data.y - y_hat, ref, rtol=1e-9, atol=1e-10, equal_nan=True)
+    np.testing.assert_allclose(sd, k_step_prediction_sd(NET2, values, data, k=k), rtol=1e-9, equal_nan=True)
+    assert np.isnan(sd[:k]).all() and np.isfinite(sd[k:]).all()
 
 
 def test_k_step_bands_cover_the_truth_and_widen_towards_open_loop():
