@@ -20,7 +20,8 @@ parameters, no sampled point left unused below it, few optima unseen, no R or C 
 Searches from sampled points run in stages of :data:`STAGE` evaluations and stop when, after a
 stage, they are still above the best optimum. An optimum reached by one start only is confirmed
 by the same search from a point displaced by :data:`rczone.estimation.search.DISPLACEMENT` of the
-box.
+box; where the search from the model's values converged, that restart is the second start (run in
+full), so two agreeing starts can end the search before any sampled start.
 
 It applies to problems that pack into arrays (:func:`rczone.estimation.compiled.compiled_problem`);
 the others (a free gain such as a solar aperture, massless nodes, ties that are sums) keep the
@@ -182,10 +183,11 @@ def leastsq_search(
     outcomes: list[StartOutcome] = []
 
     lower_left = False
+    restart = -1  # the early-agreement restart runs in full, as the confirmation it replaces
     for k, s in enumerate(starts):
         finite = [o.cost for o in outcomes if math.isfinite(o.cost)]
         try:
-            if finite:
+            if finite and k != restart:
                 tol = cost_tolerance("ls", min(finite), scale)
                 outcomes.append(staged(objective, s, min(finite), tol, max_evals))
             else:
@@ -194,6 +196,12 @@ def leastsq_search(
             if k == 0 and len(starts) > 1:  # the model's own values may be invalid for these data
                 continue
             raise
+        if k == 0 and adaptive and outcomes[-1].converged:
+            # early agreement, as global_search's gradient search: the second start is the restart near
+            # the first optimum a single start would get as its confirmation anyway
+            starts.insert(1, displaced(spec, outcomes[-1].end, rng))
+            start_costs.insert(1, math.nan)
+            restart = 1
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, "ls", scale)
             lower_left = bool(optima and any(c < optima[0].cost for c in start_costs[k + 1 :]))

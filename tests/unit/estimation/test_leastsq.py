@@ -58,8 +58,10 @@ def test_the_default_reaches_the_optimum_of_eight_lbfgs_starts_with_fewer_evalua
     assert gn.objective_value <= lb.objective_value * (1 + 1e-6)
     for name in FREE:
         assert gn.parameters[name].value == pytest.approx(lb.parameters[name].value, rel=1e-3), name
-    default = fit(NET2, data, FREE, method="ls", start=START, hold=hold, uncertainty=False, optimizer="lbfgs")
-    assert gn.n_evals - gn.search.n_sampled < (default.n_evals - default.search.n_sampled) / 2
+    # fewer than half the local evaluations of the eight L-BFGS searches it agrees with (the adaptive
+    # L-BFGS default stops early when its restart near the first optimum agrees, so its count
+    # depends on where that restart lands: not a fixed reference)
+    assert gn.n_evals - gn.search.n_sampled < (lb.n_evals - lb.search.n_sampled) / 2
 
 
 def test_one_search_ends_where_scipy_least_squares_ends_with_finite_differences() -> None:
