@@ -97,7 +97,7 @@ def acf(x: np.ndarray, n_lags: int) -> np.ndarray:
     xo, _ = _centered(x)
     if not 0 < n_lags < xo.size:
         raise ParameterError(f"n_lags must be between 1 and {xo.size - 1}, got {n_lags}")
-    c = np.array([xo[k:] @ xo[: xo.size - k] for k in range(n_lags + 1)])
+    c = _lagged_products(xo, xo, n_lags)
     if c[0] == 0:
         raise ParameterError("the residuals are constant; their autocorrelation is undefined")
     return c / c[0]
@@ -117,8 +117,14 @@ def ccf(x: np.ndarray, u: np.ndarray, n_lags: int) -> np.ndarray | None:
     su, sx = math.sqrt(float(uo @ uo)), math.sqrt(float(xo @ xo))
     if su <= 1e-12 * max(1.0, float(np.abs(u[ok]).max())) * math.sqrt(ok.sum()) or sx == 0:
         return None
-    n = xo.size
-    return np.array([xo[k:] @ uo[: n - k] for k in range(n_lags + 1)]) / (sx * su)
+    return _lagged_products(xo, uo, n_lags) / (sx * su)
+
+
+def _lagged_products(x: np.ndarray, u: np.ndarray, n_lags: int) -> np.ndarray:
+    """``sum_j x[j + l] u[j]`` for ``l = 0..n_lags``: one matrix product over lagged windows of ``x``."""
+    n = x.size
+    windows = np.lib.stride_tricks.sliding_window_view(np.concatenate([x, np.zeros(n_lags)]), n)
+    return windows[: n_lags + 1] @ u
 
 
 def ljung_box_q(r: np.ndarray, n: int) -> float:
