@@ -7,7 +7,7 @@ step produced (filtered state and covariance, innovation, its variance, ``P c``)
 steps backward with the adjoints ``x_bar = dJ/dx`` and ``P_bar = dJ/dP``, accumulating the
 adjoints of the discrete matrices of each distinct interval (``Phi, G0, G1, Qd``), of the
 measurement variance and of the prior. The gradient in the parameters is then their contraction
-with the derivatives of those few matrices (:func:`rc2_interval_derivatives`, the spectral
+with the derivatives of those few matrices (:func:`rczone.kernels.discretize.rc_interval_derivatives`, the spectral
 formulas of :func:`rczone.kernels.discretize.spectral_derivatives` once per distinct interval) and of the prior, so it costs about three likelihoods for any
 number of parameters.
 
@@ -43,8 +43,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import Dynamics, DynamicsDerivatives
-from rczone.kernels.discretize import _key_matrices, spectral_derivatives
+from rczone.kernels.discretize import rc_interval_derivatives
 from rczone.kernels.problem import LS, MAP, assembled, with_prior
 
 
@@ -232,80 +231,6 @@ def nll_rc2_adjoint(
     return nll, n_obs
 
 
-@njit(cache=True, error_model="numpy", inline="always")
-def rc2_interval_derivatives(
-    A0: np.ndarray,
-    N: np.ndarray,
-    B0: np.ndarray,
-    M: np.ndarray,
-    dA0: np.ndarray,
-    dN: np.ndarray,
-    dB0: np.ndarray,
-    dM: np.ndarray,
-    keys: np.ndarray,
-    qc: np.ndarray,
-    dqc: np.ndarray,
-    scale: np.ndarray,
-    foh: bool,
-    noise: bool,
-) -> tuple[Dynamics, DynamicsDerivatives]:
-    """The discrete matrices of each distinct interval of an RC model and their derivatives, spectral formulas only.
-
-    The same arithmetic as :func:`rczone.kernels.discretize.interval_derivatives` with ``scale``
-    given (identical results), without its matrix-exponential branch: a fused
-    2-state problem is an RC network (``diag(scale) A diag(scale)^-1`` symmetric), so a first
-    likelihood fit does not compile the Fréchet derivatives it never runs. Inlined into its one
-    caller: no separate machine code of its own (numba generates it again in every caller).
-
-    Parameters
-    ----------
-    A0, N, B0, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
-        ``A = A0 + sum_f m_f N_f``, ``B = B0 + sum_f m_f M_f``.
-    dA0, dN, dB0, dM : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p)
-        Their derivatives along ``q`` directions.
-    keys : ndarray, shape (K, 1 + nf)
-        ``(dt, m_1, ..., m_nf)`` of each distinct interval.
-    qc, dqc : ndarray, shapes (n,), (q, n)
-        Process-noise intensities and their derivatives.
-    scale : ndarray, shape (n,)
-        ``sqrt(capacities)``.
-    foh : bool
-        First-order hold.
-    noise : bool
-        Compute ``Qd`` and its derivatives.
-
-    Returns
-    -------
-    Dynamics
-    DynamicsDerivatives
-    """
-    n = A0.shape[0]
-    p = B0.shape[1]
-    K = keys.shape[0]
-    q = dA0.shape[0]
-    mats = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.empty((K, n, n)))
-    dmats = DynamicsDerivatives(
-        np.empty((K, q, n, n)), np.empty((K, q, n, p)), np.zeros((K, q, n, p)), np.empty((K, q, n, n))
-    )
-    for k in range(K):
-        A, B = _key_matrices(A0, N, B0, M, keys[k])
-        # the directions of this interval's A and B: the derivatives of _key_matrices' sums
-        dA = np.empty_like(dA0)
-        dB = np.empty_like(dB0)
-        for d in range(q):
-            dAd, dBd = _key_matrices(dA0[d], dN[d], dB0[d], dM[d], keys[k])
-            for i in range(n):  # element by element: no shape checks to compile
-                for j in range(n):
-                    dA[d, i, j] = dAd[i, j]
-                for j in range(p):
-                    dB[d, i, j] = dBd[i, j]
-        spectral_derivatives(
-            A, B, scale, qc, keys[k, 0], foh, noise, dA, dB, dqc, mats.Phi[k], mats.G0[k], mats.G1[k],
-            mats.Qd[k], dmats.dPhi[k], dmats.dG0[k], dmats.dG1[k], dmats.dQd[k],
-        )  # fmt: skip
-    return mats, dmats
-
-
 @njit(cache=True, error_model="numpy")
 def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     """``J_ML`` or ``J_MAP`` of a packed 2-state, 1-output problem and its gradient in ``theta``, by the adjoint pass.
@@ -323,7 +248,7 @@ def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     foh = prob.consts.foh
     p = mod.B0.shape[1]
     K = keys.shape[0]
-    mats, dmats = rc2_interval_derivatives(
+    mats, dmats = rc_interval_derivatives(
         mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
         np.sqrt(mod.cap), foh, prob.kind != LS,
     )  # fmt: skip

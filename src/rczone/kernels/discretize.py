@@ -1077,6 +1077,80 @@ def interval_matrices(
     return Dynamics(Phi, G0, G1, Qd)
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def rc_interval_derivatives(
+    A0: np.ndarray,
+    N: np.ndarray,
+    B0: np.ndarray,
+    M: np.ndarray,
+    dA0: np.ndarray,
+    dN: np.ndarray,
+    dB0: np.ndarray,
+    dM: np.ndarray,
+    keys: np.ndarray,
+    qc: np.ndarray,
+    dqc: np.ndarray,
+    scale: np.ndarray,
+    foh: bool,
+    noise: bool,
+) -> tuple[Dynamics, DynamicsDerivatives]:
+    """:func:`interval_derivatives` of an RC network, by the spectral formulas only.
+
+    An RC network's ``diag(scale) A diag(scale)^-1`` is symmetric; a caller that knows its model is
+    one (the fused 2-state adjoint, :mod:`rczone.kernels.adjoint`) calls this and does not compile
+    the matrix exponentials' Fréchet derivatives it never runs (a first fit's compile time).
+    :func:`interval_derivatives` calls it for such models too. Inlined into its callers: no
+    separate machine code of its own.
+
+    Parameters
+    ----------
+    A0, N, B0, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
+        ``A = A0 + sum_f m_f N_f``, ``B = B0 + sum_f m_f M_f``.
+    dA0, dN, dB0, dM : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p)
+        Their derivatives along ``q`` directions.
+    keys : ndarray, shape (K, 1 + nf)
+        ``(dt, m_1, ..., m_nf)`` of each distinct interval.
+    qc, dqc : ndarray, shapes (n,), (q, n)
+        Process-noise intensities and their derivatives.
+    scale : ndarray, shape (n,)
+        ``sqrt(capacities)``.
+    foh : bool
+        First-order hold.
+    noise : bool
+        Compute ``Qd`` and its derivatives.
+
+    Returns
+    -------
+    Dynamics
+    DynamicsDerivatives
+    """
+    n = A0.shape[0]
+    p = B0.shape[1]
+    K = keys.shape[0]
+    q = dA0.shape[0]
+    mats = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.empty((K, n, n)))
+    dmats = DynamicsDerivatives(
+        np.empty((K, q, n, n)), np.empty((K, q, n, p)), np.zeros((K, q, n, p)), np.empty((K, q, n, n))
+    )
+    for k in range(K):
+        A, B = _key_matrices(A0, N, B0, M, keys[k])
+        # the directions of this interval's A and B: the derivatives of _key_matrices' sums
+        dA = np.empty_like(dA0)
+        dB = np.empty_like(dB0)
+        for d in range(q):
+            dAd, dBd = _key_matrices(dA0[d], dN[d], dB0[d], dM[d], keys[k])
+            for i in range(n):  # element by element: no shape checks to compile
+                for j in range(n):
+                    dA[d, i, j] = dAd[i, j]
+                for j in range(p):
+                    dB[d, i, j] = dBd[i, j]
+        spectral_derivatives(
+            A, B, scale, qc, keys[k, 0], foh, noise, dA, dB, dqc, mats.Phi[k], mats.G0[k], mats.G1[k],
+            mats.Qd[k], dmats.dPhi[k], dmats.dG0[k], dmats.dG1[k], dmats.dQd[k],
+        )  # fmt: skip
+    return mats, dmats
+
+
 @njit(cache=True, error_model="numpy")
 def interval_derivatives(
     A0: np.ndarray,
@@ -1101,7 +1175,7 @@ def interval_derivatives(
     dA0, dN, dB0, dM, dqc : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p), (q, n)
     scale : ndarray, shape (n,) or (0,)
         ``sqrt(capacities)`` when it symmetrizes every ``A`` (an RC network:
-        :func:`spectral_derivatives`); empty for matrix exponentials (:func:`expm_discretize`).
+        :func:`rc_interval_derivatives`); empty for matrix exponentials (:func:`expm_discretize`).
 
     Returns
     -------
@@ -1111,6 +1185,8 @@ def interval_derivatives(
         Their derivatives along the ``q`` directions.
     """
     n = A0.shape[0]
+    if scale.shape[0] == n:
+        return rc_interval_derivatives(A0, N, B0, M, dA0, dN, dB0, dM, keys, qc, dqc, scale, foh, noise)
     p = B0.shape[1]
     K = keys.shape[0]
     q = dA0.shape[0]
@@ -1135,14 +1211,8 @@ def interval_derivatives(
                             dA[d, i, j] += mf * dN[d, f, i, j]
                         for j in range(p):
                             dB[d, i, j] += mf * dM[d, f, i, j]
-        if scale.shape[0] == n:
-            spectral_derivatives(
-                A, B, scale, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k],
-                dG0[k], dG1[k], dQd[k],
-            )  # fmt: skip
-        else:
-            expm_discretize(
-                A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k],
-                dG1[k], dQd[k],
-            )  # fmt: skip
+        expm_discretize(
+            A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k],
+            dG1[k], dQd[k],
+        )  # fmt: skip
     return Dynamics(Phi, G0, G1, Qd), DynamicsDerivatives(dPhi, dG0, dG1, dQd)
