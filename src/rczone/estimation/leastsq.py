@@ -52,10 +52,10 @@ from rczone.estimation.search import (
     SearchSummary,
     cost_tolerance,
     displaced,
-    few_unseen,
     merge_optima,
-    min_local_searches,
+    restart_second,
     sample_points,
+    settled,
 )
 from rczone.kernels.levmar import BUDGET, COST, GRADIENT, INVALID, STEP, Tolerances, levenberg_marquardt
 
@@ -199,8 +199,7 @@ def leastsq_search(
         if k == 0 and adaptive and outcomes[-1].converged:
             # early agreement, as global_search's gradient search: the second start is the restart near
             # the first optimum a single start would get as its confirmation anyway
-            starts.insert(1, displaced(spec, outcomes[-1].end, rng))
-            start_costs.insert(1, math.nan)
+            restart_second(starts, start_costs, spec, outcomes[-1].end, rng)
             restart = 1
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, "ls", scale)
@@ -273,21 +272,10 @@ def spread_starts(
 
 
 def _settled(spec: ParameterSpec, outcomes: list[StartOutcome], optima: tuple, lower_left: bool) -> bool:
-    """The adaptive stop rule of :func:`rczone.estimation.search.global_search`.
-
-    Optima are counted for :func:`~rczone.estimation.search.few_unseen` only where a search
-    converged: a search from a sampled point stopped above the best optimum found no minimum.
-    """
-    physical = np.array([k in ("resistance", "capacitance", "gain") for k in spec.kinds], dtype=bool)
-    at_bound = bool(np.any(spec.near_bound(optima[0].theta) & physical))
+    """:func:`rczone.estimation.search.settled`, with optima counted as found only where a search
+    converged: a search from a sampled point stopped above the best optimum found no minimum."""
     found = sum(any(outcomes[i].converged for i in o.starts) for o in optima)
-    return (
-        optima[0].count >= 2
-        and len(outcomes) >= min_local_searches(spec.n_free)
-        and not lower_left
-        and few_unseen(len(outcomes), found)
-        and not at_bound
-    )
+    return settled(spec, len(outcomes), optima, lower_left, found)
 
 
 def _summary(

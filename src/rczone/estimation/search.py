@@ -215,6 +215,36 @@ def _physical_at_bound(spec: ParameterSpec, theta: np.ndarray) -> bool:
     return bool(np.any(spec.near_bound(theta) & physical))
 
 
+def settled(spec: ParameterSpec, n_runs: int, optima: tuple, lower_left: bool, n_found: int) -> bool:
+    """The adaptive stop rule: the best optimum reached from two starts, enough searches for the number
+    of parameters, no sampled point left unused below it, few optima unseen (:func:`few_unseen` of
+    ``n_found`` optima in ``n_runs`` searches) and no R, C or gain at a bound."""
+    return bool(
+        optima
+        and optima[0].count >= 2
+        and n_runs >= min_local_searches(spec.n_free)
+        and not lower_left
+        and few_unseen(n_runs, n_found)
+        and not _physical_at_bound(spec, optima[0].theta)
+    )
+
+
+def restart_second(
+    starts: list[np.ndarray],
+    start_costs: list[float],
+    spec: ParameterSpec,
+    end: np.ndarray,
+    rng: np.random.Generator,
+) -> None:
+    """Early agreement: make the restart near the first search's end (:func:`displaced`) the second start.
+
+    It is the confirmation a single start would get anyway; the sampled starts follow only where
+    :func:`settled` is not yet met (a sampled point below it, more searches for more parameters).
+    """
+    starts.insert(1, displaced(spec, end, rng))
+    start_costs.insert(1, math.nan)
+
+
 def displaced(spec: ParameterSpec, theta: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     """``theta`` moved by :data:`DISPLACEMENT` of each parameter's range in eta, in random directions, inside the box.
 
@@ -426,25 +456,14 @@ def global_search(
                 continue
             raise
         if k == 0 and adaptive and optimizer == "lbfgs" and outcomes[-1].converged:
-            # early agreement: the second start is a restart near the first optimum (DISPLACEMENT), the
-            # confirmation a single start would get anyway; the sampled starts follow only where the
-            # rules below are not yet met (a sampled point below it, more searches for more parameters)
-            starts.insert(1, displaced(spec, outcomes[-1].end, rng))
-            start_costs.insert(1, math.nan)
+            restart_second(starts, start_costs, spec, outcomes[-1].end, rng)
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, method, scale)
             # stop once the best optimum was reached twice, unless a sampled point not yet used as a
             # start lies below it: that point is in a better basin than any found so far
             pending = start_costs[k + 1 :]
             lower_left = bool(optima and any(c < optima[0].cost for c in pending))
-            if (
-                optima
-                and optima[0].count >= 2
-                and len(outcomes) >= min_local_searches(d)
-                and not lower_left
-                and few_unseen(len(outcomes), len(optima))
-                and not _physical_at_bound(spec, optima[0].theta)
-            ):
+            if settled(spec, len(outcomes), optima, lower_left, len(optima)):
                 break
     optima, tol = merge_optima(outcomes, method, scale)
     if not optima:

@@ -1032,6 +1032,25 @@ def rc_interval_matrices(
 
 
 @njit(cache=True, error_model="numpy")
+def _key_directions(
+    dA0: np.ndarray, dN: np.ndarray, dB0: np.ndarray, dM: np.ndarray, key: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The derivatives of :func:`_key_matrices`' sums along each direction, shapes (q, n, n), (q, n, p)."""
+    dA = dA0.copy()
+    dB = dB0.copy()
+    for f in range(dN.shape[1]):
+        mf = key[1 + f]
+        if mf != 0.0:
+            for d in range(dA.shape[0]):
+                for i in range(dA.shape[1]):
+                    for j in range(dA.shape[2]):
+                        dA[d, i, j] += mf * dN[d, f, i, j]
+                    for j in range(dB.shape[2]):
+                        dB[d, i, j] += mf * dM[d, f, i, j]
+    return dA, dB
+
+
+@njit(cache=True, error_model="numpy")
 def interval_matrices(
     A0: np.ndarray,
     N: np.ndarray,
@@ -1134,16 +1153,7 @@ def rc_interval_derivatives(
     )
     for k in range(K):
         A, B = _key_matrices(A0, N, B0, M, keys[k])
-        # the directions of this interval's A and B: the derivatives of _key_matrices' sums
-        dA = np.empty_like(dA0)
-        dB = np.empty_like(dB0)
-        for d in range(q):
-            dAd, dBd = _key_matrices(dA0[d], dN[d], dB0[d], dM[d], keys[k])
-            for i in range(n):  # element by element: no shape checks to compile
-                for j in range(n):
-                    dA[d, i, j] = dAd[i, j]
-                for j in range(p):
-                    dB[d, i, j] = dBd[i, j]
+        dA, dB = _key_directions(dA0, dN, dB0, dM, keys[k])
         spectral_derivatives(
             A, B, scale, qc, keys[k, 0], foh, noise, dA, dB, dqc, mats.Phi[k], mats.G0[k], mats.G1[k],
             mats.Qd[k], dmats.dPhi[k], dmats.dG0[k], dmats.dG1[k], dmats.dQd[k],
@@ -1200,17 +1210,7 @@ def interval_derivatives(
     dQd = np.empty((K, q, n, n))
     for k in range(K):
         A, B = _key_matrices(A0, N, B0, M, keys[k])
-        dA = dA0.copy()
-        dB = dB0.copy()
-        for f in range(N.shape[0]):
-            mf = keys[k, 1 + f]
-            if mf != 0.0:
-                for d in range(q):
-                    for i in range(n):
-                        for j in range(n):
-                            dA[d, i, j] += mf * dN[d, f, i, j]
-                        for j in range(p):
-                            dB[d, i, j] += mf * dM[d, f, i, j]
+        dA, dB = _key_directions(dA0, dN, dB0, dM, keys[k])
         expm_discretize(
             A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k],
             dG1[k], dQd[k],
