@@ -21,12 +21,12 @@ demo: $(STAMP)
 	$(BIN)/rczone demo --out demo-output
 
 lint: $(STAMP)
-	$(BIN)/ruff check src tests bench
-	$(BIN)/ruff format --check src tests bench
+	$(BIN)/ruff check src tests bench validation
+	$(BIN)/ruff format --check src tests bench validation
 
 format: $(STAMP)
-	$(BIN)/ruff format src tests bench
-	$(BIN)/ruff check --fix src tests bench
+	$(BIN)/ruff format src tests bench validation
+	$(BIN)/ruff check --fix src tests bench validation
 
 bench: $(STAMP)
 	$(BIN)/python bench/first_run.py
