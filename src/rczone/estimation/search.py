@@ -444,9 +444,13 @@ def global_search(
         return cost_tolerance(method, c, scale)
 
     lower_left = False
+    restarted = False
     for k, s in enumerate(starts):
         try:
-            if outcomes and k > 0:
+            # the model's own start and the restart near its end run in full: a restart that leaves
+            # a stalled search's end point may need many steps to reach the minimum beyond it, and
+            # in stages it would be given up while still above that end point
+            if outcomes and k > 0 and not (k == 1 and restarted):
                 outcomes.append(budgeted_search(cost, spec, s, optimizer, max_evals, tol_of, outcomes))
             else:
                 outcomes.append(local_search(cost, spec, s, optimizer, max_evals, tol_of))
@@ -457,6 +461,7 @@ def global_search(
             raise
         if k == 0 and adaptive and optimizer == "lbfgs" and outcomes[-1].converged:
             restart_second(starts, start_costs, spec, outcomes[-1].end, rng)
+            restarted = True
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, method, scale)
             # stop once the best optimum was reached twice, unless a sampled point not yet used as a
@@ -481,15 +486,15 @@ def global_search(
         for _ in range(POLISH_ROUNDS):
             best = optima[0]
             if second == optimizer:
-                # a restart near it, in stages: it goes on only while it is below the best optimum (it
-                # found lower), so a restart that lands in a poor region costs one stage, not thousands
-                check = budgeted_search(
-                    cost, spec, displaced(spec, best.theta, rng), second, max_evals, tol_of, outcomes
-                )
+                # a restart near it, in full: from near a stalled search's end point it goes on to the
+                # minimum beyond (in stages it was given up while still above that point, which then
+                # counted as confirmed)
+                check = local_search(cost, spec, displaced(spec, best.theta, rng), second, max_evals, tol_of)
             else:
                 check = minimize_from(cost, spec, best.theta, second, max_evals)
             outcomes.append(check)
-            if check.cost >= best.cost - tol_of(best.cost):
+            came_back = abs(check.cost - best.cost) <= tol_of(best.cost)
+            if check.cost >= best.cost - tol_of(best.cost) and (check.converged or came_back):
                 converged, confirmed_by = True, second
                 break
             outcomes.append(local_search(cost, spec, check.end, optimizer, max_evals, tol_of))
