@@ -56,6 +56,7 @@ def bilinear(seed: int) -> tuple[RCNetwork, Dataset]:
     u = 20 + 3 * rng.standard_normal((N, len(net.input_names)))
     y = simulate(net.state_space(), t, u, m).y + 0.05 * rng.standard_normal((N, 2))
     y[rng.integers(1, N, 6), rng.integers(0, 2, 6)] = np.nan
+    y[0, 1] = y[7, 0] = y[7, 1] = np.nan  # the first sample partly, one sample wholly unobserved
     return net, Dataset(t, u, m, y, net.input_names, net.flow_names, net.outputs)
 
 
@@ -177,3 +178,16 @@ def test_reverse_gradient_of_the_four_zone_problem() -> None:
     assert spec.n_free == 22
     obj = Objective(net, data, spec, "ml")
     agree(obj, spec.to_eta(spec.start) + np.random.default_rng(24).uniform(-0.3, 0.3, spec.n_free))
+
+
+def test_reverse_gradient_of_an_invalid_model_is_infinite_as_its_value() -> None:
+    """No noise anywhere: the first innovation variance is zero, so the value and the gradient's value are inf."""
+    net, data = bilinear(1)
+    free = ["sigma_v_" + net.outputs[0]]
+    fixed = {"sigma_v_" + net.outputs[1]: 0.0, **{f"sigma_x0_{s}": 0.0 for s in net.state_names}}
+    spec = make_spec(net, free, start={free[0]: 0.1}, fixed=fixed)
+    obj = Objective(net, data, spec, "ml")
+    eta = spec.to_eta(spec.start)
+    assert obj(eta) == np.inf
+    j, g = obj.value_and_gradient(eta)
+    assert j == np.inf and np.all(g == 0.0)
