@@ -387,6 +387,20 @@ def figures(rounds: int, skip_slow: bool) -> dict[str, dict]:
         }
         met = "met" if t4 <= TARGETS["limit_fit_4zone_s"] else "NOT met"
         print(f"{'limit_fit_4zone_s':28s} {fmt(t4):>10s} {'':>10s} {'':>9s} {met} (target 4 s)")
+        # after the fit (whose one run includes loading the kernels): what one of its evaluations costs
+        spec4 = make_spec(net4, problems.FOUR_ZONE_FREE, start=start4, fixed=fixed4)
+        obj4 = Objective(net4, data4, spec4, "ml")
+        eta4 = spec4.to_eta(spec4.start)
+        t_grad, t_val = interleaved(lambda: obj4.value_and_gradient(eta4), lambda: obj4(eta4), rounds, 20)
+        t_fwd = timed(lambda: obj4.theta_value_and_gradient(spec4.start), 5)
+        row(
+            "limit_4zone_value_and_gradient",
+            t_grad,
+            t_val,
+            "four zones (22 free): value + exact gradient (reverse pass) / one value, both rczone's Objective;"
+            " forward_sensitivities_s = the forward-sensitivity pass (the Fisher curvature's)",
+            forward_sensitivities_s=t_fwd,
+        )
     return out
 
 

@@ -26,8 +26,9 @@ Engines
 How a cost is computed (fused 2-state kernel, one compiled call, Python assembly with the
 compiled filter, or plain NumPy) is decided by the declared rules of
 :mod:`rczone.estimation.engines`; :attr:`Objective.engine` names the one used. Gradients
-(:meth:`Objective.value_and_gradient`) are exact: forward sensitivities through the
-discretization and the filter (or the simulation, for ``J_LS``).
+(:meth:`Objective.value_and_gradient`) are exact: a backward (adjoint) pass of the filter
+for the compiled likelihoods, forward sensitivities through the discretization and the filter
+(or the simulation, for ``J_LS``) otherwise.
 
 References
 ----------
@@ -66,7 +67,7 @@ from rczone.estimation.methods import METHODS as _REGISTERED
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec, make_spec
 from rczone.estimation.priors import LogPrior, log_prior
-from rczone.kernels.adjoint import gradient_fused
+from rczone.kernels.adjoint import gradient_fused, gradient_general
 from rczone.kernels.arrays import Problem
 from rczone.kernels.problem import cost_and_gradient, value_kernel
 from rczone.network import RCNetwork
@@ -304,6 +305,8 @@ class Objective:
         object.__setattr__(self, "_value", None if self._packed is None else value_kernel(self._packed))
         # the adjoint gradient of the 2-state likelihood (rczone.kernels.adjoint); least squares keeps the forward one
         object.__setattr__(self, "_adjoint", engine == "rc2-fused" and method_of(self.method).kernel != "ls")
+        # the reverse pass of the general filter for the other compiled likelihoods (rczone.kernels.reverse)
+        object.__setattr__(self, "_reverse", engine == "compiled" and method_of(self.method).kernel != "ls")
 
     @property
     def compiled(self) -> Problem | None:
@@ -335,7 +338,13 @@ class Objective:
 
     @property
     def adjoint_gradient(self) -> bool:
-        """Whether :meth:`value_and_gradient` is the adjoint pass (a few values' cost, :mod:`rczone.kernels.adjoint`)."""
+        """Whether the fused 2-state adjoint kernel serves a likelihood fit (:func:`rczone.kernels.adjoint.gradient_fused`).
+
+        Its values, gradients and innovations then come from that one kernel, and a fit's curvature
+        from differences of its gradients. The ``"compiled"`` engine's likelihoods also take their
+        gradients from a backward pass (:func:`rczone.kernels.adjoint.gradient_general`) but keep
+        the forward sensitivities for the Fisher curvature, one evaluation instead of ``d + 1``.
+        """
         return self._adjoint
 
     @property
@@ -398,17 +407,18 @@ class Objective:
     def value_and_gradient(self, eta: np.ndarray) -> tuple[float, np.ndarray]:
         """Cost at optimizer values ``eta`` and its exact gradient with respect to ``eta``.
 
-        The gradient comes from forward sensitivities (see :mod:`rczone.kernels.kalman`), or for
-        the likelihood of a 2-state model (engine ``"rc2-fused"``) from one backward pass
-        (:mod:`rczone.kernels.adjoint`, about three likelihoods whatever the number of
-        parameters), so it costs a few evaluations, not ``2 d + 1``. ``(inf, zeros)`` where the
-        model is invalid.
+        A likelihood (ML, MAP) of the ``"rc2-fused"`` and ``"compiled"`` engines takes its gradient
+        from one backward pass (:mod:`rczone.kernels.adjoint`: the unrolled 2-state pass, or the
+        reverse pass of the general filter, :mod:`rczone.kernels.reverse`), about three
+        likelihoods whatever the number of parameters; least squares and the ``"general"``
+        engine from forward sensitivities (see :mod:`rczone.kernels.kalman`), one evaluation
+        either way, not ``2 d + 1``. ``(inf, zeros)`` where the model is invalid.
         """
         eta = np.asarray(eta, dtype=float)
         theta = self.spec.to_theta(eta)
-        if self._adjoint:
+        if self._adjoint or self._reverse:
             theta = np.asarray(theta, dtype=np.float64)
-            j, g = gradient_fused(theta, self._packed)
+            j, g = (gradient_fused if self._adjoint else gradient_general)(theta, self._packed)
             j, g, _ = self._with_declared_prior(theta, j, g, np.zeros(theta.size))
         else:
             j, g, _ = self.theta_value_and_gradient(theta)

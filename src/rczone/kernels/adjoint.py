@@ -1,4 +1,4 @@
-"""The gradient of the 2-state likelihood by one backward (adjoint) pass: a few evaluations, whatever the parameters.
+"""The gradient of a packed likelihood by one backward (adjoint) pass: a few evaluations, whatever the parameters.
 
 Forward sensitivities (:func:`rczone.kernels.kalman.kalman_filter`) carry ``dx`` and ``dP`` along
 every parameter direction through every sample: the gradient of ``q`` parameters costs about
@@ -26,6 +26,11 @@ to ``Phi_bar``, ``a u_k'`` to ``G0_bar``, ``a u_k+1'`` to ``G1_bar`` and ``A`` t
 The recursion runs to the end (no steady state): the value differs from that of the fused
 value kernel (:func:`rczone.kernels.rc2.nll_rc2`) by at most its steady-state tolerance.
 
+:func:`gradient_general` does the same for any packed likelihood (any number of states and
+outputs, missing outputs, several flows, ZOH or FOH, MAP) with the reverse pass of the general
+filter, :func:`rczone.kernels.reverse.nll_reverse`, steady state included; both entry points
+contract the adjoints with the discretization's derivatives by :func:`rczone.kernels.reverse.contract`.
+
 References
 ----------
 .. [1] A. Griewank, A. Walther, *Evaluating Derivatives: Principles and Techniques of
@@ -38,26 +43,14 @@ References
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
+from rczone.kernels.arrays import Assembled, AssembledDerivatives, FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import rc_interval_derivatives
 from rczone.kernels.problem import LS, MAP, assembled, with_prior
-
-
-class Adjoints(NamedTuple):
-    """The adjoints (derivatives of ``-log L``) of the filter's inputs, zeroed by the caller."""
-
-    Phi: np.ndarray  #: (K, 2, 2)
-    G0: np.ndarray  #: (K, 2, p)
-    G1: np.ndarray  #: (K, 2, p)
-    Qd: np.ndarray  #: (K, 2, 2)
-    x0: np.ndarray  #: (2,)
-    P0: np.ndarray  #: (2, 2)
-    r: np.ndarray  #: (1,)
-
+from rczone.kernels.reverse import Adjoints, contract, nll_reverse, zero_adjoints
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -231,6 +224,29 @@ def nll_rc2_adjoint(
     return nll, n_obs
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _discretized(mod: Assembled, der: AssembledDerivatives, keys: np.ndarray, foh: bool):
+    """The discrete matrices of each distinct interval and their derivatives, by the spectral formulas only."""
+    return rc_interval_derivatives(
+        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
+        np.sqrt(mod.cap), foh, True,
+    )  # fmt: skip
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _total(
+    nll: float, n_obs: int, theta: np.ndarray, prob, bars: Adjoints, dmats, der: AssembledDerivatives, grad
+) -> tuple[float, np.ndarray]:
+    """``J_ML`` (or ``J_MAP``) from ``nll`` and ``grad`` from the adjoints; ``(inf, zeros)`` for an invalid model."""
+    if n_obs < 0:
+        return math.inf, grad
+    contract(bars, dmats, der, prob.consts.foh, grad)
+    j = nll + 0.5 * n_obs * _LOG_2PI
+    if prob.kind == MAP:
+        j = with_prior(j, theta, prob.penalty, grad, np.zeros(theta.shape[0]), True)
+    return j, grad
+
+
 @njit(cache=True, error_model="numpy")
 def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     """``J_ML`` or ``J_MAP`` of a packed 2-state, 1-output problem and its gradient in ``theta``, by the adjoint pass.
@@ -239,53 +255,48 @@ def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     takes :func:`rczone.kernels.problem.value_and_gradient`). The one-step-ahead prediction errors
     are left in ``prob.scratch``.
     """
-    d = theta.shape[0]
-    grad = np.zeros(d)
-    mod, der, ok = assembled(theta, prob, d)
+    grad = np.zeros(theta.shape[0])
+    mod, der, ok = assembled(theta, prob, theta.shape[0])
     if not ok or prob.kind == LS:
         return math.inf, grad
     u, y, keys, which = prob.data.u, prob.data.y, prob.data.keys, prob.data.which
     foh = prob.consts.foh
-    p = mod.B0.shape[1]
-    K = keys.shape[0]
-    mats, dmats = rc_interval_derivatives(
-        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
-        np.sqrt(mod.cap), foh, prob.kind != LS,
-    )  # fmt: skip
+    mats, dmats = _discretized(mod, der, keys, foh)
     Phi, G0, G1, Qd = mats
-    dPhi, dG0, dG1, dQd = dmats
-    bars = Adjoints(
-        np.zeros((K, 2, 2)),
-        np.zeros((K, 2, p)),
-        np.zeros((K, 2, p)),
-        np.zeros((K, 2, 2)),
-        np.zeros(2),
-        np.zeros((2, 2)),
-        np.zeros(1),
-    )
+    bars = zero_adjoints(keys.shape[0], 2, mod.B0.shape[1], 1)
     nll, n_obs = nll_rc2_adjoint(
         Phi, G0, G1, Qd, which, mod.C[0], mod.r[0], mod.x0, mod.P0, u, y[:, 0], foh, bars, prob.scratch
     )
-    if n_obs < 0:
+    return _total(nll, n_obs, theta, prob, bars, dmats, der, grad)
+
+
+@njit(cache=True, error_model="numpy")
+def gradient_general(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
+    """``J_ML`` or ``J_MAP`` of a packed problem (any number of states and outputs) and its gradient in ``theta``.
+
+    By the reverse pass of the general filter (:func:`rczone.kernels.reverse.nll_reverse`), whose
+    matrix adjoints are contracted with the derivatives of each distinct interval's discrete
+    matrices (:func:`rczone.kernels.discretize.rc_interval_derivatives`) and of the noise and
+    prior (:func:`rczone.kernels.problem.assembled`): about three likelihoods' work plus the
+    discretization derivatives, whatever the number of parameters. The value is that of
+    :func:`rczone.kernels.problem.value_general` (the same filter steps and steady state; within
+    its steady-state tolerance where that takes the modal filter). ``(inf, zeros)`` where the model
+    is invalid; least squares is not handled here (:func:`rczone.kernels.problem.value_and_gradient`).
+    """
+    grad = np.zeros(theta.shape[0])
+    mod, der, ok = assembled(theta, prob, theta.shape[0])
+    if not ok or prob.kind == LS:
         return math.inf, grad
-    Phi_bar, G0_bar, G1_bar, Qd_bar = bars.Phi, bars.G0, bars.G1, bars.Qd
-    x0_bar, P0_bar, r_bar = bars.x0, bars.P0, bars.r
-    for i in range(d):
-        acc = r_bar[0] * der.dr[0, i]
-        for a in range(2):
-            acc += x0_bar[a] * der.dx0[i, a]
-            for b in range(2):
-                acc += P0_bar[a, b] * der.dP0[i, a, b]
-        for w in range(K):
-            for a in range(2):
-                for b in range(2):
-                    acc += Phi_bar[w, a, b] * dPhi[w, i, a, b] + Qd_bar[w, a, b] * dQd[w, i, a, b]
-                for j in range(p):
-                    acc += G0_bar[w, a, j] * dG0[w, i, a, j]
-                    if foh:
-                        acc += G1_bar[w, a, j] * dG1[w, i, a, j]
-        grad[i] = acc
-    j = nll + 0.5 * n_obs * _LOG_2PI
-    if prob.kind == MAP:
-        j = with_prior(j, theta, prob.penalty, grad, np.zeros(d), True)
-    return j, grad
+    foh, _, steady_rtol, _ = prob.consts
+    n = mod.A0.shape[0]
+    p = mod.B0.shape[1]
+    ny = mod.C.shape[0]
+    mats, dmats = _discretized(mod, der, prob.data.keys, foh)
+    bars = zero_adjoints(prob.data.keys.shape[0], n, p, ny)
+    obs = Observation(
+        mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
+    )
+    prior = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
+    series = Series(prob.data.u, prob.data.y, prob.data.which)
+    nll, n_obs, _ = nll_reverse(mats, obs, prior, series, FilterOptions(foh, False, steady_rtol), bars)
+    return _total(nll, n_obs, theta, prob, bars, dmats, der, grad)
