@@ -124,6 +124,52 @@ class StartOutcome:
     message: str
 
 
+class Remembered:
+    """A cost whose value-and-gradient calls remember their last few points (exact repeats are free).
+
+    A gradient search asks for the same point more than once: its start value, the curvature scaling
+    at that start (:func:`~rczone.estimation.uncertainty.curvature_from_gradient` begins there), the
+    end point again for the outcome's cost and for the next phase's scaling, a budgeted search's next
+    stage at the previous one's end. The cost is a pure function of ``eta``, so a repeated point
+    returns the stored value and gradient (bit for bit what the cost would return); only points
+    equal in every bit are repeats. Attributes other than the value and gradient are the cost's.
+
+    Parameters
+    ----------
+    cost : Objective or callable
+        The cost, with ``value_and_gradient(eta)``.
+    size : int
+        Points remembered (the most recent).
+    """
+
+    def __init__(self, cost: Callable[[np.ndarray], float], size: int = 4) -> None:
+        self.cost, self.size = cost, size
+        self._seen: dict[bytes, tuple[float, np.ndarray]] = {}
+
+    def __getattr__(self, name: str):
+        return getattr(self.cost, name)
+
+    def __call__(self, eta: np.ndarray) -> float:
+        return self.cost(eta)
+
+    def value_and_gradient(self, eta: np.ndarray) -> tuple[float, np.ndarray]:
+        key = np.asarray(eta, dtype=float).tobytes()
+        hit = self._seen.get(key)
+        if hit is None:
+            hit = self.cost.value_and_gradient(eta)
+            if len(self._seen) >= self.size:
+                self._seen.pop(next(iter(self._seen)))  # the oldest
+            self._seen[key] = hit
+        return hit[0], hit[1].copy()
+
+
+def remembered(cost: Callable[[np.ndarray], float]) -> Callable[[np.ndarray], float]:
+    """``cost`` as a :class:`Remembered` where it has an exact gradient (else unchanged)."""
+    if isinstance(cost, Remembered) or getattr(cost, "value_and_gradient", None) is None:
+        return cost
+    return Remembered(cost)
+
+
 class _Counted:
     """Wrap a cost to count evaluations and scale it (no state outside the instance)."""
 
@@ -171,6 +217,8 @@ def minimize_from(
     d = spec.n_free
     max_evals = max_evals or 2000 * d
     eta0 = spec.to_eta(theta0)
+    if optimizer == "lbfgs":
+        cost = remembered(cost)
     value = _value_of(cost, optimizer)
     f0 = value(eta0)
     if not math.isfinite(f0):

@@ -56,7 +56,7 @@ import numpy as np
 
 from rczone.errors import ParameterError
 from rczone.estimation.methods import method_of
-from rczone.estimation.optimize import StartOutcome, minimize_from
+from rczone.estimation.optimize import StartOutcome, minimize_from, remembered
 from rczone.estimation.parameters import ParameterSpec
 
 #: Costs of two end points closer than ``abs_tol + rel_tol * |cost| + SCALE_TOL * scale`` are the
@@ -415,6 +415,8 @@ def global_search(
     if n_starts is not None and (not isinstance(n_starts, int) or n_starts < 1):
         raise ParameterError(f"n_starts must be a positive integer (or None for automatic), got {n_starts!r}")
     d = spec.n_free
+    if optimizer == "lbfgs":  # a stage or search resumed at an end point asks for it again
+        cost = remembered(cost)
     outcomes: list[StartOutcome] = []
     n_sampled = 0
     if n_starts == 1:
