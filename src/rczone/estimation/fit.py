@@ -268,11 +268,12 @@ def fit(
     positive_definite = True
     near = spec.near_bound(theta)
     if uncertainty:
-        H = (
-            hessian_from_gradient(objective.value_and_gradient, spec.to_eta(theta))
-            if objective.adjoint_gradient
-            else hessian(objective, spec.to_eta(theta))
-        )
+        if win.hessian is not None:  # the search computed it at this end (search.global_search)
+            H = win.hessian
+        elif objective.adjoint_gradient:
+            H = hessian_from_gradient(objective.value_and_gradient, spec.to_eta(theta))
+        else:
+            H = hessian(objective, spec.to_eta(theta))
         scale = 1.0
         if meth.kernel == "ls":
             dt = np.diff(data.t)

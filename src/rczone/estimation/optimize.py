@@ -114,6 +114,10 @@ class StartOutcome:
     n_evals : int
         Cost evaluations (gradient evaluations included).
     message : str
+    hessian : ndarray or None
+        Hessian of the cost in eta at ``end``, where the search computed it (a global search's
+        first gradient search: it scales the restart that confirms it,
+        :func:`rczone.estimation.search.global_search`); None otherwise.
     """
 
     start: np.ndarray
@@ -122,6 +126,7 @@ class StartOutcome:
     converged: bool
     n_evals: int
     message: str
+    hessian: np.ndarray | None = None
 
 
 class Remembered:
@@ -189,6 +194,8 @@ def minimize_from(
     optimizer: str = "nelder-mead",
     max_evals: int | None = None,
     tol: float = 1e-7,
+    *,
+    curvature: np.ndarray | None = None,
 ) -> StartOutcome:
     """Minimize ``cost(eta)`` from physical values ``theta0``.
 
@@ -206,6 +213,9 @@ def minimize_from(
         Tolerance on the parameters in eta (or z) units: about the relative precision of
         the estimates (1e-7 is far below any standard error and saves half the evaluations
         of a tighter setting).
+    curvature : ndarray, optional
+        ``"lbfgs"``: the diagonal curvature (in eta) that scales the first phase, known already
+        (the Hessian's diagonal at a nearby optimum); default computed at the start.
 
     Returns
     -------
@@ -226,7 +236,7 @@ def minimize_from(
     # a cost of order one makes the absolute and relative tolerances meaningful
     counted = _Counted(cost, max(abs(f0), 1e-300))
     if optimizer == "lbfgs":
-        eta, converged, message = _lbfgs(cost, spec, eta0, counted, max_evals)
+        eta, converged, message = _lbfgs(cost, spec, eta0, counted, max_evals, curvature)
     else:
 
         def fz(z: np.ndarray) -> float:
@@ -269,7 +279,9 @@ def _value_of(cost: Callable[[np.ndarray], float], optimizer: str) -> Callable[[
     return cost
 
 
-def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_evals: int) -> tuple:
+def _lbfgs(
+    cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_evals: int, first: np.ndarray | None
+) -> tuple:
     """L-BFGS-B on ``eta`` in phases, each on variables scaled by the cost's curvature at its start.
 
     With :meth:`~rczone.estimation.costs.Objective.value_and_gradient` the exact gradient
@@ -283,7 +295,7 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
     of the Hessian from differences of gradients,
     :func:`~rczone.estimation.uncertainty.curvature_from_gradient`), and a phase that runs out of its budget
     (``20 + 2 d`` evaluations, at most :data:`LBFGS_RESCALES` times) restarts with the curvature
-    where it ended [1]_. A plain
+    where it ended [1]_. ``first``, where given, is the first phase's curvature. A plain
     callable cost gets a central-difference gradient and no scaling.
 
     Returns ``(eta, converged, message)``.
@@ -305,8 +317,11 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
     d = spec.n_free
     eta = np.asarray(eta0, dtype=float)
     phases = (*(20 + 2 * d,) * LBFGS_RESCALES, None) if curvature is not None else (None,)
-    for budget in phases:
-        scale = np.ones(d) if curvature is None else _variable_scale(curvature(eta))
+    for k, budget in enumerate(phases):
+        if curvature is None:
+            scale = np.ones(d)
+        else:
+            scale = _variable_scale(first if k == 0 and first is not None else curvature(eta))
 
         def fun(x: np.ndarray, scale: np.ndarray = scale) -> tuple[float, np.ndarray]:
             e = x / scale

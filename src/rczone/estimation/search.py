@@ -50,7 +50,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -293,14 +293,17 @@ def local_search(
     optimizer: str,
     max_evals: int | None,
     tol_of: Callable[[float], float],
+    *,
+    curvature: np.ndarray | None = None,
 ) -> StartOutcome:
     """One local search; Nelder-Mead is restarted from its end point while that lowers the cost.
 
     A Nelder-Mead simplex can collapse before it reaches a minimum, the more so the more parameters
     there are; restarting with a fresh simplex at the claimed minimum is the standard remedy [3]_.
-    The outcome keeps the first start and sums the evaluations.
+    The outcome keeps the first start and sums the evaluations. ``curvature`` scales a gradient
+    search's first phase (:func:`~rczone.estimation.optimize.minimize_from`).
     """
-    out = minimize_from(cost, spec, start, optimizer, max_evals)
+    out = minimize_from(cost, spec, start, optimizer, max_evals, curvature=curvature)
     if optimizer != "nelder-mead":
         return out
     n = out.n_evals
@@ -323,13 +326,15 @@ def budgeted_search(
     max_evals: int | None,
     tol_of: Callable[[float], float],
     done: list[StartOutcome],
+    *,
+    curvature: np.ndarray | None = None,
 ) -> StartOutcome:
     """A local search from a sampled point, in stages of the evaluations the easiest finished search took.
 
     Most points of a box of bounds spanning decades in every parameter lie in poor regions; a search
     from there that has not settled after as much work as the first search needed, and is still
     above the best optimum found, is stopped (its outcome says so). One that is below continues, so a
-    better basin is never given up.
+    better basin is never given up. ``curvature`` scales the first stage's gradient search.
     """
     if optimizer == "lbfgs":
         stage = GRADIENT_STAGE
@@ -342,7 +347,7 @@ def budgeted_search(
         if any(math.isfinite(o.cost) for o in done)
         else math.inf
     )
-    out = local_search(cost, spec, start, optimizer, stage, tol_of)
+    out = local_search(cost, spec, start, optimizer, stage, tol_of, curvature=curvature)
     n = out.n_evals
     for _ in range(MAX_STAGES - 1):
         if out.converged or not out.cost < best - tol_of(best):
@@ -446,10 +451,16 @@ def global_search(
         return cost_tolerance(method, c, scale)
 
     lower_left = False
+    guide = None  # the Hessian at the first search's end: it scales the restart that confirms it
     for k, s in enumerate(starts):
         try:
             if outcomes and k > 0:
-                outcomes.append(budgeted_search(cost, spec, s, optimizer, max_evals, tol_of, outcomes))
+                curvature = np.diag(guide) if k == 1 and guide is not None else None
+                outcomes.append(
+                    budgeted_search(
+                        cost, spec, s, optimizer, max_evals, tol_of, outcomes, curvature=curvature
+                    )
+                )
             else:
                 outcomes.append(local_search(cost, spec, s, optimizer, max_evals, tol_of))
         except ParameterError:
@@ -459,6 +470,13 @@ def global_search(
             raise
         if k == 0 and adaptive and optimizer == "lbfgs" and outcomes[-1].converged:
             restart_second(starts, start_costs, spec, outcomes[-1].end, rng)
+            if getattr(cost, "adjoint_gradient", False):
+                from rczone.estimation.uncertainty import hessian_from_gradient
+
+                # needed for the standard errors if this end wins; its diagonal is the exact
+                # curvature the restart would otherwise estimate at its start (d + 1 gradients)
+                guide = hessian_from_gradient(cost.value_and_gradient, spec.to_eta(outcomes[-1].end))
+                outcomes[-1] = replace(outcomes[-1], hessian=guide)
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, method, scale)
             # stop once the best optimum was reached twice, unless a sampled point not yet used as a
