@@ -9,15 +9,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from rczone.files.atomic import write_json_in
 from rczone.network.stochastic import is_reserved
-from rczone.report import Report
-from rczone.report.html import ReportFigure as Figure
 from rczone.results.protocol import Result, json_number
+
+if TYPE_CHECKING:  # matplotlib loads only where a report is written, not in every worker process
+    from rczone.report.html import ReportFigure as Figure
 
 VERDICTS = ("identifiable", "weak", "not identifiable")
 
@@ -70,6 +72,8 @@ def summarize(df: pd.DataFrame) -> dict:
 
 
 def _histograms(df: pd.DataFrame, params: list[str]) -> Figure:
+    from rczone.report.html import ReportFigure as Figure
+
     fig = Figure(figsize=(4.0 * max(1, len(params)), 3.2), layout="constrained")
     axes = fig.subplots(1, max(1, len(params)), squeeze=False)[0]
     ok = df[df["status"] == "ok"]
@@ -94,6 +98,8 @@ def _histograms(df: pd.DataFrame, params: list[str]) -> Figure:
 
 def write_summary(df: pd.DataFrame, folder: str | Path, title: str = "rczone batch") -> dict:
     """Write ``summary.json`` and ``report.html`` (+ PNG) into ``folder``; return the summary."""
+    from rczone.report import Report
+
     folder = Path(folder)
     s = summarize(df)
     write_json_in(folder, "summary.json", s)

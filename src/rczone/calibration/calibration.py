@@ -236,6 +236,8 @@ def calibrate(
     sampler: SamplerSettings | None = None,
     hold: str = "zoh",
     fixed: Mapping[str, float | None] | None = None,
+    *,
+    analyses: bool = True,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` and check the fitted model open loop.
 
@@ -275,6 +277,13 @@ def calibrate(
     fixed : mapping, optional
         Values of parameters that are not free (a noise level, an initial state, an R or C),
         physical units; None keeps the model's value.
+    analyses : bool
+        Make the analyses a reader of the fit looks at: the whiteness of the innovations and of the
+        open-loop error (:attr:`Calibration.innovations`, :attr:`Calibration.open_loop_residuals`),
+        the band's calibration and the ARX baselines saved with the fitted model, and the
+        plausibility of the estimates. False (batch calibration, which stores the estimates and the
+        open-loop errors only) skips them: the fit, its standard errors and the open-loop check
+        are the same, the calibration's analyses are None.
     """
     zm = as_model(model)
     net = zm.network
@@ -314,7 +323,7 @@ def calibrate(
     kind = method_of(method)
     noise = {k: v for k, v in values.items() if is_noise_name(k)} if kind.stochastic else {}
     initial = {k: v for k, v in values.items() if kind_of(k) == INITIAL_STATE}
-    band = calibrate_band(net, values, data, res.hold) if kind.stochastic else None
+    band = calibrate_band(net, values, data, res.hold) if kind.stochastic and analyses else None
     fitted = zm.with_values(
         theta,
         noise,
@@ -332,7 +341,7 @@ def calibrate(
         stretch=stretch,
         covariance=parameter_covariance(res),
         band_scale=band.to_dict() if band is not None else None,
-        baselines=baseline_models(data),
+        baselines=baseline_models(data) if analyses else None,
         **({"posterior_draws": posterior_draws(res)} if res.posterior is not None else {}),
         hold=hold,
         **({"ignored_channels": list(ignored)} if ignored else {}),
@@ -342,12 +351,13 @@ def calibrate(
         initial = estimated_start(fitted, values, data, has_noise=True).values
     ol = open_loop_error(net, {**theta, **initial}, data, hold)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
-    inn = olr = None
-    if np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
+    inn = olr = plaus = None
+    if analyses and np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:
         olr = open_loop_analysis(ol.error, data)
         if kind.stochastic:
             inn = innovation_analysis(net, values, data, res.hold)
-    plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
+    if analyses:
+        plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
     return Calibration(
         res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr, plausibility=plaus
     )

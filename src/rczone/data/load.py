@@ -142,6 +142,9 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
 
             _check_rows(pq.ParquetFile(path).metadata.num_rows, path)
             frame = pd.read_parquet(path)
+            # a file's own metadata is not read (the loader builds a new frame from the arrays); pandas
+            # deep-copies attrs at every column access, a fifth of reading a virtual night's file
+            frame.attrs = {}
             if not isinstance(frame.index, pd.RangeIndex):  # a frame saved with its index: a column
                 name = frame.index.name
                 frame = frame.reset_index(names="" if name is None else str(name))

@@ -34,7 +34,7 @@ from rczone.estimation.data import Dataset
 from rczone.estimation.engines import general_cost
 from rczone.estimation.kalman import kalman_innovations_fast
 from rczone.estimation.methods import Method, method_of
-from rczone.estimation.optimize import OPTIMIZERS
+from rczone.estimation.optimize import OPTIMIZERS, StartOutcome
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.resolution import noise_floor
 from rczone.estimation.result import FitResult
@@ -257,7 +257,7 @@ def fit(
         outcomes, search = global_search(
             objective, spec, method, rng, optimizer, n_starts, max_evals, scale=scale
         )
-    best = min(search.optima[0].starts, key=lambda i: outcomes[i].cost)  # the lowest end of the best optimum
+    best = winning_end(outcomes, search.optima[0].starts)
     win = outcomes[best]
     theta = win.end
     names = spec.names
@@ -268,11 +268,12 @@ def fit(
     positive_definite = True
     near = spec.near_bound(theta)
     if uncertainty:
-        H = (
-            hessian_from_gradient(objective.value_and_gradient, spec.to_eta(theta))
-            if objective.adjoint_gradient
-            else hessian(objective, spec.to_eta(theta))
-        )
+        if win.hessian is not None:  # the search computed it at this end (search.global_search)
+            H = win.hessian
+        elif objective.adjoint_gradient:
+            H = hessian_from_gradient(objective.value_and_gradient, spec.to_eta(theta))
+        else:
+            H = hessian(objective, spec.to_eta(theta))
         scale = 1.0
         if meth.kernel == "ls":
             dt = np.diff(data.t)
@@ -350,6 +351,37 @@ def fit(
         notes=tuple(notes),
         issues=tuple(dict.fromkeys(issues)),
     )
+
+
+#: Relative cost difference below which two ends of the best optimum are one point to rounding: the
+#: cost itself is computed to about 1e-13 of its value (the two ends of an ML fit's early agreement
+#: differ by 3e-13 at most on the virtual building's nights), so which of them is lower is noise.
+COST_TIE = 1e-10
+
+
+def winning_end(outcomes: Sequence[StartOutcome], starts: Sequence[int]) -> int:
+    """The end of the best optimum that a fit reports: the lowest, or one tied with it that has its Hessian.
+
+    Among ends whose costs agree to :data:`COST_TIE`, the one whose Hessian the search computed
+    (:attr:`~rczone.estimation.optimize.StartOutcome.hessian`) is taken, so the standard errors
+    need no second Hessian.
+
+    Parameters
+    ----------
+    outcomes : sequence of StartOutcome
+        Every local search of the fit.
+    starts : sequence of int
+        Indices of the searches that reached the best optimum.
+
+    Returns
+    -------
+    int
+        An index of ``starts``' searches into ``outcomes``.
+    """
+    lowest = min(starts, key=lambda i: outcomes[i].cost)
+    floor = outcomes[lowest].cost
+    tied = [i for i in starts if outcomes[i].cost - floor <= COST_TIE * max(abs(floor), 1.0)]
+    return next((i for i in tied if outcomes[i].hessian is not None), lowest)
 
 
 def log_likelihood(

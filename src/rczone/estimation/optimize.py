@@ -45,6 +45,12 @@ GRADIENT_STEP = 1e-5
 #: L-BFGS phases that may end on their budget and restart with rescaled variables (see ``_lbfgs``).
 LBFGS_RESCALES = 2
 
+#: L-BFGS-B's stopping tolerance on the relative decrease of the cost (scaled to 1 at the start): a
+#: likelihood of a night (start about 1e4) then stops within 1e-8 of its minimum, a million times
+#: below the tolerance that tells optima apart (0.01) and any statistical difference; 1e-15 took 7 %
+#: more gradients for changes in the 8th significant digit of the cost.
+LBFGS_FTOL = 1e-12
+
 #: Largest |z| of a start: a start exactly on a bound (z infinite) begins this far inside it.
 Z_LIMIT = 30.0
 
@@ -114,6 +120,10 @@ class StartOutcome:
     n_evals : int
         Cost evaluations (gradient evaluations included).
     message : str
+    hessian : ndarray or None
+        Hessian of the cost in eta at ``end``, where the search computed it (a global search's
+        first gradient search: it scales the restart that confirms it,
+        :func:`rczone.estimation.search.global_search`); None otherwise.
     """
 
     start: np.ndarray
@@ -122,6 +132,53 @@ class StartOutcome:
     converged: bool
     n_evals: int
     message: str
+    hessian: np.ndarray | None = None
+
+
+class Remembered:
+    """A cost whose value-and-gradient calls remember their last few points (exact repeats are free).
+
+    A gradient search asks for the same point more than once: its start value, the curvature scaling
+    at that start (:func:`~rczone.estimation.uncertainty.curvature_from_gradient` begins there), the
+    end point again for the outcome's cost and for the next phase's scaling, a budgeted search's next
+    stage at the previous one's end. The cost is a pure function of ``eta``, so a repeated point
+    returns the stored value and gradient (bit for bit what the cost would return); only points
+    equal in every bit are repeats. Attributes other than the value and gradient are the cost's.
+
+    Parameters
+    ----------
+    cost : Objective or callable
+        The cost, with ``value_and_gradient(eta)``.
+    size : int
+        Points remembered (the most recent).
+    """
+
+    def __init__(self, cost: Callable[[np.ndarray], float], size: int = 4) -> None:
+        self.cost, self.size = cost, size
+        self._seen: dict[bytes, tuple[float, np.ndarray]] = {}
+
+    def __getattr__(self, name: str):
+        return getattr(self.cost, name)
+
+    def __call__(self, eta: np.ndarray) -> float:
+        return self.cost(eta)
+
+    def value_and_gradient(self, eta: np.ndarray) -> tuple[float, np.ndarray]:
+        key = np.asarray(eta, dtype=float).tobytes()
+        hit = self._seen.get(key)
+        if hit is None:
+            hit = self.cost.value_and_gradient(eta)
+            if len(self._seen) >= self.size:
+                self._seen.pop(next(iter(self._seen)))  # the oldest
+            self._seen[key] = hit
+        return hit[0], hit[1].copy()
+
+
+def remembered(cost: Callable[[np.ndarray], float]) -> Callable[[np.ndarray], float]:
+    """``cost`` as a :class:`Remembered` where it has an exact gradient (else unchanged)."""
+    if isinstance(cost, Remembered) or getattr(cost, "value_and_gradient", None) is None:
+        return cost
+    return Remembered(cost)
 
 
 class _Counted:
@@ -143,6 +200,8 @@ def minimize_from(
     optimizer: str = "nelder-mead",
     max_evals: int | None = None,
     tol: float = 1e-7,
+    *,
+    curvature: np.ndarray | None = None,
 ) -> StartOutcome:
     """Minimize ``cost(eta)`` from physical values ``theta0``.
 
@@ -160,6 +219,9 @@ def minimize_from(
         Tolerance on the parameters in eta (or z) units: about the relative precision of
         the estimates (1e-7 is far below any standard error and saves half the evaluations
         of a tighter setting).
+    curvature : ndarray, optional
+        ``"lbfgs"``: the diagonal curvature (in eta) that scales the first phase, known already
+        (the Hessian's diagonal at a nearby optimum); default computed at the start.
 
     Returns
     -------
@@ -171,6 +233,8 @@ def minimize_from(
     d = spec.n_free
     max_evals = max_evals or 2000 * d
     eta0 = spec.to_eta(theta0)
+    if optimizer == "lbfgs":
+        cost = remembered(cost)
     value = _value_of(cost, optimizer)
     f0 = value(eta0)
     if not math.isfinite(f0):
@@ -178,7 +242,7 @@ def minimize_from(
     # a cost of order one makes the absolute and relative tolerances meaningful
     counted = _Counted(cost, max(abs(f0), 1e-300))
     if optimizer == "lbfgs":
-        eta, converged, message = _lbfgs(cost, spec, eta0, counted, max_evals)
+        eta, converged, message = _lbfgs(cost, spec, eta0, counted, max_evals, curvature)
     else:
 
         def fz(z: np.ndarray) -> float:
@@ -221,7 +285,9 @@ def _value_of(cost: Callable[[np.ndarray], float], optimizer: str) -> Callable[[
     return cost
 
 
-def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_evals: int) -> tuple:
+def _lbfgs(
+    cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_evals: int, first: np.ndarray | None
+) -> tuple:
     """L-BFGS-B on ``eta`` in phases, each on variables scaled by the cost's curvature at its start.
 
     With :meth:`~rczone.estimation.costs.Objective.value_and_gradient` the exact gradient
@@ -235,7 +301,7 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
     of the Hessian from differences of gradients,
     :func:`~rczone.estimation.uncertainty.curvature_from_gradient`), and a phase that runs out of its budget
     (``20 + 2 d`` evaluations, at most :data:`LBFGS_RESCALES` times) restarts with the curvature
-    where it ended [1]_. A plain
+    where it ended [1]_. ``first``, where given, is the first phase's curvature. A plain
     callable cost gets a central-difference gradient and no scaling.
 
     Returns ``(eta, converged, message)``.
@@ -257,8 +323,11 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
     d = spec.n_free
     eta = np.asarray(eta0, dtype=float)
     phases = (*(20 + 2 * d,) * LBFGS_RESCALES, None) if curvature is not None else (None,)
-    for budget in phases:
-        scale = np.ones(d) if curvature is None else _variable_scale(curvature(eta))
+    for k, budget in enumerate(phases):
+        if curvature is None:
+            scale = np.ones(d)
+        else:
+            scale = _variable_scale(first if k == 0 and first is not None else curvature(eta))
 
         def fun(x: np.ndarray, scale: np.ndarray = scale) -> tuple[float, np.ndarray]:
             e = x / scale
@@ -286,7 +355,12 @@ def _lbfgs(cost, spec: ParameterSpec, eta0: np.ndarray, counted: _Counted, max_e
             jac=True,
             method="L-BFGS-B",
             bounds=list(zip(spec.eta_lower * scale, spec.eta_upper * scale)),
-            options={"maxfun": min(left, budget or left), "ftol": 1e-15, "gtol": 1e-9, "maxiter": max_evals},
+            options={
+                "maxfun": min(left, budget or left),
+                "ftol": LBFGS_FTOL,
+                "gtol": 1e-9,
+                "maxiter": max_evals,
+            },
         )
         # strictly inside the box, as the direct searches' transform keeps every point: an estimate
         # exactly on a bound could not start a later fit (starts must lie inside the bounds)

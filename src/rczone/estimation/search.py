@@ -50,13 +50,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from rczone.errors import ParameterError
 from rczone.estimation.methods import method_of
-from rczone.estimation.optimize import StartOutcome, minimize_from
+from rczone.estimation.optimize import StartOutcome, minimize_from, remembered
 from rczone.estimation.parameters import ParameterSpec
 
 #: Costs of two end points closer than ``abs_tol + rel_tol * |cost| + SCALE_TOL * scale`` are the
@@ -293,14 +293,17 @@ def local_search(
     optimizer: str,
     max_evals: int | None,
     tol_of: Callable[[float], float],
+    *,
+    curvature: np.ndarray | None = None,
 ) -> StartOutcome:
     """One local search; Nelder-Mead is restarted from its end point while that lowers the cost.
 
     A Nelder-Mead simplex can collapse before it reaches a minimum, the more so the more parameters
     there are; restarting with a fresh simplex at the claimed minimum is the standard remedy [3]_.
-    The outcome keeps the first start and sums the evaluations.
+    The outcome keeps the first start and sums the evaluations. ``curvature`` scales a gradient
+    search's first phase (:func:`~rczone.estimation.optimize.minimize_from`).
     """
-    out = minimize_from(cost, spec, start, optimizer, max_evals)
+    out = minimize_from(cost, spec, start, optimizer, max_evals, curvature=curvature)
     if optimizer != "nelder-mead":
         return out
     n = out.n_evals
@@ -323,13 +326,15 @@ def budgeted_search(
     max_evals: int | None,
     tol_of: Callable[[float], float],
     done: list[StartOutcome],
+    *,
+    curvature: np.ndarray | None = None,
 ) -> StartOutcome:
     """A local search from a sampled point, in stages of the evaluations the easiest finished search took.
 
     Most points of a box of bounds spanning decades in every parameter lie in poor regions; a search
     from there that has not settled after as much work as the first search needed, and is still
     above the best optimum found, is stopped (its outcome says so). One that is below continues, so a
-    better basin is never given up.
+    better basin is never given up. ``curvature`` scales the first stage's gradient search.
     """
     if optimizer == "lbfgs":
         stage = GRADIENT_STAGE
@@ -342,7 +347,7 @@ def budgeted_search(
         if any(math.isfinite(o.cost) for o in done)
         else math.inf
     )
-    out = local_search(cost, spec, start, optimizer, stage, tol_of)
+    out = local_search(cost, spec, start, optimizer, stage, tol_of, curvature=curvature)
     n = out.n_evals
     for _ in range(MAX_STAGES - 1):
         if out.converged or not out.cost < best - tol_of(best):
@@ -415,6 +420,8 @@ def global_search(
     if n_starts is not None and (not isinstance(n_starts, int) or n_starts < 1):
         raise ParameterError(f"n_starts must be a positive integer (or None for automatic), got {n_starts!r}")
     d = spec.n_free
+    if optimizer == "lbfgs":  # a stage or search resumed at an end point asks for it again
+        cost = remembered(cost)
     outcomes: list[StartOutcome] = []
     n_sampled = 0
     if n_starts == 1:
@@ -445,12 +452,18 @@ def global_search(
 
     lower_left = False
     restarted = False
+    guide = None  # the Hessian at the first search's end: it scales the restart that confirms it
     for k, s in enumerate(starts):
         try:
-            # the model's own start and the restart near its end run in full: a restart that leaves
-            # a stalled search's end point may need many steps to reach the minimum beyond it, and
-            # in stages it would be given up while still above that end point
-            if outcomes and k > 0 and not (k == 1 and restarted):
+            if k == 1 and restarted:
+                # the restart near the first search's end runs in full: from near a stalled search's
+                # end point it may need many steps to reach the minimum beyond, and in stages it was
+                # given up while still above that point
+                curvature = np.diag(guide) if guide is not None else None
+                outcomes.append(
+                    local_search(cost, spec, s, optimizer, max_evals, tol_of, curvature=curvature)
+                )
+            elif outcomes and k > 0:
                 outcomes.append(budgeted_search(cost, spec, s, optimizer, max_evals, tol_of, outcomes))
             else:
                 outcomes.append(local_search(cost, spec, s, optimizer, max_evals, tol_of))
@@ -462,6 +475,13 @@ def global_search(
         if k == 0 and adaptive and optimizer == "lbfgs" and outcomes[-1].converged:
             restart_second(starts, start_costs, spec, outcomes[-1].end, rng)
             restarted = True
+            if getattr(cost, "adjoint_gradient", False):
+                from rczone.estimation.uncertainty import hessian_from_gradient
+
+                # needed for the standard errors if this end wins; its diagonal is the exact
+                # curvature the restart would otherwise estimate at its start (d + 1 gradients)
+                guide = hessian_from_gradient(cost.value_and_gradient, spec.to_eta(outcomes[-1].end))
+                outcomes[-1] = replace(outcomes[-1], hessian=guide)
         if adaptive and len(outcomes) >= 2:
             optima, _ = merge_optima(outcomes, method, scale)
             # stop once the best optimum was reached twice, unless a sampled point not yet used as a

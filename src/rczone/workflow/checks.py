@@ -31,6 +31,7 @@ def fit_and_check(
     label: str = "data",
     others: Mapping[str, pd.DataFrame] | None = None,
     progress: Callable[[str], None] = _quiet,
+    analyses: bool = True,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` with ``settings``, then (``settings.checks``) check the fit.
 
@@ -48,6 +49,9 @@ def fit_and_check(
         Other data to fit and predict in the checks.
     progress : callable
         Called with a short message before each long step.
+    analyses : bool
+        The analyses after the fit that a reader looks at (:func:`rczone.calibration.calibrate`);
+        batch calibration, which stores estimates and errors only, skips them.
 
     Returns
     -------
@@ -69,6 +73,7 @@ def fit_and_check(
         hold=settings.hold,
         bounds=settings.bounds or None,
         fixed=settings.fixed,
+        analyses=analyses,
     )
     if settings.checks or others:
         cal = check_fit(cal, frame, settings, others=others, progress=progress)

@@ -213,3 +213,19 @@ def test_the_manifests_fit_settings_reach_the_fit(tmp_path):
     assert measured < every  # the paper's 2-state model measures one of its two states
     assert {n for n in every if f"{n}_se" in rows["all"]} == every
     assert {n for n in every if f"{n}_se" in rows["measured"]} == measured
+
+
+def test_a_local_clusters_worker_leaves_without_teardown_but_flushes_its_output():
+    # what _connect runs in its own workers: the process ends with code 0 and its buffered output
+    # (a pipe: fully buffered) is written before it leaves
+    code = (
+        "from rczone.batch.runner import _exit_without_teardown\n"
+        "import atexit, sys\n"
+        "atexit.register(lambda: print('a handler registered before it', flush=True))\n"
+        "_exit_without_teardown()\n"
+        "print('result written', end='')\n"
+        "sys.stderr.write('log line')\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0
+    assert done.stdout == "result written" and done.stderr == "log line"

@@ -93,3 +93,17 @@ def test_saved_draws_replace_the_covariance_in_the_band(zone, ml):
     np.testing.assert_allclose(np.mean(pred.sd_parameters), np.mean(delta.sd_parameters), rtol=0.3)
     lo, hi = pred.band
     assert np.all(lo <= pred.predicted + 1e-9) and np.all(hi >= pred.predicted - 1e-9)
+
+
+def test_without_analyses_the_fit_and_its_open_loop_check_are_the_full_calibrations(zone, ml):
+    # what batch calibration stores is computed as the full calibration computes it; only the analyses
+    # a reader of one fit looks at are left out
+    lean = calibrate(TRUE_MODEL, zone.iloc[:400], "ml", n_starts=2, analyses=False)
+    assert lean.result.estimates == ml.result.estimates and lean.result.std_errors == ml.result.std_errors
+    assert lean.result.flags == ml.result.flags and lean.result.llf == ml.result.llf
+    np.testing.assert_array_equal(lean.open_loop.error, ml.open_loop.error)
+    assert lean.residuals.p_value == ml.residuals.p_value
+    assert (lean.innovations, lean.open_loop_residuals, lean.plausibility) == (None, None, None)
+    assert ml.plausibility is not None and ml.model.provenance["band_scale"] is not None
+    assert lean.model.provenance["band_scale"] is None and lean.model.provenance["baselines"] is None
+    assert lean.summary() and lean.to_dict()["innovations"] is None  # still prints and serializes

@@ -164,3 +164,20 @@ def test_map_mode_is_the_precision_weighted_mean_of_tempered_likelihood_and_prio
         assert abs(np.log(mp.estimates["Rw"] / ml.estimates["Rw"])) > 0.2
     # and the posterior standard error combines the two precisions
     assert mp.std_errors["Rw"] / mp.estimates["Rw"] == pytest.approx((p_lik + p_prior) ** -0.5, rel=0.1)
+
+
+def test_the_reported_end_is_the_lowest_unless_one_tied_with_it_has_its_hessian() -> None:
+    from rczone.estimation.fit import COST_TIE, winning_end
+    from rczone.estimation.optimize import StartOutcome
+
+    def end(cost: float, hessian: bool) -> StartOutcome:
+        x = np.ones(2)
+        return StartOutcome(x, x, cost, True, 10, "", np.eye(2) if hessian else None)
+
+    cost = -680.5
+    tied = cost + 0.5 * COST_TIE * abs(cost)  # equal to rounding
+    assert winning_end([end(tied, True), end(cost, False)], [0, 1]) == 0
+    assert winning_end([end(tied, False), end(cost, False)], [0, 1]) == 1
+    lower = cost - 3 * COST_TIE * abs(cost)  # really lower: it wins whatever the Hessian
+    assert winning_end([end(cost, True), end(lower, False)], [0, 1]) == 1
+    assert winning_end([end(cost, True), end(lower, False), end(0.0, True)], [0, 1]) == 1

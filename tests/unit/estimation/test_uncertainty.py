@@ -130,3 +130,23 @@ def test_profile_and_fix_reject_bad_names_and_grids() -> None:
     obj = Objective(NET1, data1(n=20), spec)
     with pytest.raises(ParameterError, match="inside its bounds"):
         profile(obj, spec.start, "R", [1e-6, 0.01])
+
+
+def test_the_adaptive_search_hands_its_first_hessian_to_the_standard_errors() -> None:
+    """The default ML search computes the Hessian at its first search's end (its diagonal scales the
+    restart that confirms it); the standard errors are those of a Hessian computed anew at the estimate,
+    wherever the winning end lies."""
+    data = data2(noise=0.05, rng=np.random.default_rng(3))
+    free = ["Cr", "Cw", "Rw", "Rwin", "sigma_v"]
+    fixed = {"sigma_w_Ti": 1e-3, "sigma_w_Tw": 1e-6}
+    res = fit(NET2, data, free, method="ml", fixed=fixed)
+    spec = make_spec(NET2, free, fixed=fixed)
+    obj = Objective(NET2, data, spec, "ml")
+    first = res.starts[0]
+    assert first.hessian is not None and res.starts[1].hessian is None
+    np.testing.assert_array_equal(
+        first.hessian, hessian_from_gradient(obj.value_and_gradient, spec.to_eta(first.end))
+    )
+    theta = np.array([res.estimates[n] for n in spec.names])
+    fresh = covariance(spec, theta, hessian_from_gradient(obj.value_and_gradient, spec.to_eta(theta)))
+    np.testing.assert_array_equal([res.std_errors[n] for n in spec.names], fresh.std_error)
