@@ -112,6 +112,11 @@ MEMBERS = (
 )
 
 
+def bound_flags(zm: ZoneModel) -> list[str]:
+    """The fitted model's flags that say an estimate is at a bound of its search box."""
+    return [str(f) for f in zm.provenance.get("flags", []) if "at a bound" in str(f)]
+
+
 def bm_frame(shared: Path, zm: ZoneModel) -> tuple[pd.DataFrame, float]:
     """The PRBS house's signals of ``zm`` through its column map, and the split time (s)."""
     frame = read_model_frame(shared / BM_DATA, BM_MAP, zm)
@@ -323,8 +328,7 @@ def member_row(zm: ZoneModel, frame: pd.DataFrame, split: float) -> dict:
     as warm-up (:func:`rczone.calibration.horizons.horizon_scores`).
     """
     table = horizon_scores(zm, frame, horizons=MEMBER_HORIZONS, start=split).table
-    flags = [str(f) for f in zm.provenance.get("flags", [])]
-    out: dict = {"at_bound": [f for f in flags if "at a bound" in f], "flags": flags}
+    out: dict = {"at_bound": bound_flags(zm), "flags": [str(f) for f in zm.provenance.get("flags", [])]}
     for name, part in table.groupby("predictor", sort=False):
         out[name] = {"rmse_K": {_steps_key(r.steps): float(r.rmse_K) for r in part.itertuples()}}
     rows = table[table["predictor"] == "model"].itertuples()
@@ -402,7 +406,7 @@ def run(shared: Path, only: list[str] | None) -> dict:
         key = {k: ("open" if k is None else str(k)) for k in case.horizons}
         results[name] = {
             "model": case.model.network.name,
-            "at_bound": [f for f in case.model.provenance.get("flags", []) if "at a bound" in f],
+            "at_bound": bound_flags(case.model),
             "dt_s": float(np.median(np.diff(case.full.t))),
             "calibration_samples": case.first,
             "held_out_samples": case.full.n_samples - case.first,
