@@ -2,7 +2,7 @@
 
 Usage::
 
-    python validation/holdout_bands.py [--shared ../shared] [--out validation-output] [--only NAME]
+    python validation/holdout_bands.py [--shared ../shared] [--out validation-output] [--only NAME] [--selected MODEL.json]
 
 For each data set the default ML fit (``rczone.calibrate``, process noise on the measured node) is
 made on the calibration part, and the 2-sigma band of its k-step and open-loop predictions is
@@ -26,10 +26,19 @@ scored on the held-out part (the filter warmed up on the calibration part, as ``
   1989, valid for a misspecified model where the inverse Hessian is not).
 
 Data sets: the Bacher & Madsen PRBS house (TiTe with heater and solar aperture, split at
-2009-02-09T12:00 as ``tests/validation/test_holdout_bands.py``), the Armadillo box (pySIP's H2,
-TiTe with heater, the last 25 % held out) and a synthetic zone simulated from a known TiTe model
-with process noise on the room node only (the default fit's own structure, so its raw band is
-right by construction; Euler-Maruyama, independent of rczone's filter; the last 25 % held out).
+2009-02-09T12:00 as ``tests/validation/test_holdout_bands.py``), the same house with the model
+``rczone select --forward --holdout`` chooses from the whole family on the calibration part
+(``bacher_madsen_selected``: the selection's own fit, process noise on every state; the held-out
+days play no part in the choice), the Armadillo box (pySIP's H2, TiTe with heater, the last 25 %
+held out) and a synthetic zone simulated from a known TiTe model with process noise on the room
+node only (the default fit's own structure, so its raw band is right by construction;
+Euler-Maruyama, independent of rczone's filter; the last 25 % held out).
+
+``members`` (``--only members``) is, for the Bacher & Madsen split, the held-out RMSE and 2-sigma coverage (the
+band ``rczone predict --horizons`` gives: noise levels times the saved factors and the estimates'
+covariance) at 5 min, 15 min, 1 h, 3 h, 6 h, 12 h and open loop of the selected model and of
+family members around it, each fitted by ``rczone fit --noise measured`` (its default) or
+``--noise all`` (``select``'s), with persistence, ARX and every R, C or gain at a bound.
 Prints 'skipped: data not found' for the real sets when the shared folder is absent. Writes
 ``<out>/holdout_bands.json`` and prints the coverage table as Markdown (docs/validation.md).
 
@@ -47,6 +56,7 @@ import argparse
 import dataclasses
 import itertools
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -56,12 +66,13 @@ import pandas as pd
 from rczone.calibration import calibrate, dataset
 from rczone.calibration.bands import quantile_scale
 from rczone.calibration.holdout import holdout_start
+from rczone.calibration.horizons import horizon_scores
 from rczone.calibration.prediction import noise_values
 from rczone.estimation import fit
 from rczone.estimation.fit import noise_bounds
 from rczone.estimation.forecast import k_step_bands, noise_band
 from rczone.files.atomic import write_json_atomic
-from rczone.models import load_model
+from rczone.models import ZoneModel, load_model
 from rczone.workflow.reader import read_model_frame
 
 HERE = Path(__file__).resolve().parent
@@ -75,14 +86,77 @@ HORIZONS_S = (300.0, 900.0, 3600.0, 3 * 3600.0, 6 * 3600.0)
 FOLDS = {"block-max": (4,), "rolling": (2, 3, 4, 5, 6), "block-out": (4,), "jackknife": (4, 6)}
 
 
+#: The Bacher & Madsen data, column map and split (``tests/validation/test_holdout_bands.py``).
+BM_DATA = Path("data") / "bacher_madsen_prbs" / "inputPRBS1.csv"
+BM_MAP = HERE / "maps" / "bacher_madsen.toml"
+BM_SPLIT = "2009-02-09T12:00"
+
+#: Horizons of the model comparison, 5-min steps (5 min ... 12 h), then open loop.
+MEMBER_HORIZONS = (1, 3, 12, 36, 72, 144, None)
+
+#: Family members compared with the selected model, and the process noise each is fitted with.
+MEMBERS = (
+    ("TiTe+heater+solar", "measured"),
+    ("TiTe+heater+solar", "all"),
+    ("TiTeAe+heater+solar", "measured"),
+    ("TiTeAe+heater+solar", "all"),
+    ("TiTeTh+heater+solar", "measured"),
+    ("TiTeTh+heater+solar", "all"),
+    ("TiTmTe+heater+solar", "measured"),
+    ("TiTmTe+heater+solar", "all"),
+    ("TiTmTh+heater+solar", "all"),
+    ("TiTmThTsn+heater+solar", "all"),
+    ("TiTmThTsnAs+heater+solar", "measured"),
+    ("TiTmTeThAeRia+heater+solar", "measured"),
+    ("TiTmTeThAeRia+heater+solar", "all"),
+)
+
+
+def bound_flags(zm: ZoneModel) -> list[str]:
+    """The fitted model's flags that say an estimate is at a bound of its search box."""
+    return [str(f) for f in zm.provenance.get("flags", []) if "at a bound" in str(f)]
+
+
+def bm_frame(shared: Path, zm: ZoneModel) -> tuple[pd.DataFrame, float]:
+    """The PRBS house's signals of ``zm`` through its column map, and the split time (s)."""
+    frame = read_model_frame(shared / BM_DATA, BM_MAP, zm)
+    t = frame["time"].to_numpy(float)
+    return frame, holdout_start(t, BM_SPLIT, timezone="Europe/Copenhagen")
+
+
 def bacher_madsen(shared: Path) -> tuple[str, pd.DataFrame, float]:
     """The PRBS house through its column map; held out from 2009-02-09T12:00 (Copenhagen)."""
-    zm = load_model("TiTe+heater+solar")
-    frame = read_model_frame(
-        shared / "data" / "bacher_madsen_prbs" / "inputPRBS1.csv", HERE / "maps" / "bacher_madsen.toml", zm
-    )
-    t = frame["time"].to_numpy(float)
-    return "TiTe+heater+solar", frame, holdout_start(t, "2009-02-09T12:00", timezone="Europe/Copenhagen")
+    return "TiTe+heater+solar", *bm_frame(shared, load_model("TiTe+heater+solar"))
+
+
+def select_on_calibration(shared: Path) -> ZoneModel:
+    """The model ``rczone select --forward --holdout`` picks from the whole family, fitted on the calibration part."""
+    from rczone.cli.main import main as rczone
+
+    with tempfile.TemporaryDirectory() as tmp:
+        saved = Path(tmp) / "selected.json"
+        cmd = ["select", str(shared / BM_DATA), "--columns", str(BM_MAP), "--forward", "--holdout", BM_SPLIT]
+        code = rczone([*cmd, "--save-model", str(saved), "--json", str(Path(tmp) / "select.json")])
+        if code not in (0, 3):
+            raise RuntimeError(f"rczone select failed (exit code {code})")
+        return load_model(saved)
+
+
+#: The selected model, once chosen (or read from ``--selected``): the selection runs once per run.
+SELECTED: dict[str, ZoneModel] = {}
+
+
+def selected_model(shared: Path) -> ZoneModel:
+    """:func:`select_on_calibration`, run once."""
+    if "model" not in SELECTED:
+        SELECTED["model"] = select_on_calibration(shared)
+    return SELECTED["model"]
+
+
+def bacher_madsen_selected(shared: Path) -> tuple[ZoneModel, pd.DataFrame, float]:
+    """The PRBS house with the model forward selection chooses on the calibration part (its own fit)."""
+    zm = selected_model(shared)
+    return zm, *bm_frame(shared, zm)
 
 
 def armadillo(shared: Path) -> tuple[str, pd.DataFrame, float]:
@@ -105,6 +179,7 @@ def synthetic(_shared: Path, seed: int = 1) -> tuple[str, pd.DataFrame, float]:
 
 DATASETS = {
     "bacher_madsen_prbs": ("bacher_madsen_prbs/inputPRBS1.csv", bacher_madsen),
+    "bacher_madsen_selected": ("bacher_madsen_prbs/inputPRBS1.csv", bacher_madsen_selected),
     "armadillo_pysip": ("armadillo_pysip/armadillo_data_H2.csv", armadillo),
     "synthetic": (None, synthetic),
 }
@@ -116,12 +191,12 @@ def head(data, n: int):
 
 
 class Case:
-    """A default fit on the calibration part, and its errors on any part with any values."""
+    """A default fit on the calibration part (or a model fitted on it), and its errors on any part with any values."""
 
-    def __init__(self, model: str, frame: pd.DataFrame, split: float) -> None:
+    def __init__(self, model: str | ZoneModel, frame: pd.DataFrame, split: float) -> None:
         cal_frame = frame[frame["time"].to_numpy(float) < split]
         started = time.perf_counter()
-        self.model = calibrate(load_model(model), cal_frame).model
+        self.model = calibrate(load_model(model), cal_frame).model if isinstance(model, str) else model
         self.fit_s = time.perf_counter() - started
         self.net = self.model.network
         self.values = {**self.model.theta, **noise_values(self.model)}
@@ -241,6 +316,66 @@ def label(k, dt: float) -> str:
     return f"{s / 3600:g} h" if s >= 3600 else f"{s / 60:g} min"
 
 
+def _steps_key(value) -> str:
+    """A scores table's ``steps`` (None or NaN: open loop) as a JSON key."""
+    return "open" if value is None or value != value else str(int(value))
+
+
+def member_row(zm: ZoneModel, frame: pd.DataFrame, split: float) -> dict:
+    """Held-out RMSE per horizon of a model fitted on the calibration part and of the baselines, its coverage, its flags.
+
+    The scores and band of ``rczone predict --horizons ... --baselines`` with the calibration part
+    as warm-up (:func:`rczone.calibration.horizons.horizon_scores`).
+    """
+    table = horizon_scores(zm, frame, horizons=MEMBER_HORIZONS, start=split).table
+    out: dict = {"at_bound": bound_flags(zm), "flags": [str(f) for f in zm.provenance.get("flags", [])]}
+    for name, part in table.groupby("predictor", sort=False):
+        out[name] = {"rmse_K": {_steps_key(r.steps): float(r.rmse_K) for r in part.itertuples()}}
+    rows = table[table["predictor"] == "model"].itertuples()
+    out["model"]["coverage"] = {_steps_key(r.steps): float(r.coverage_2sigma) for r in rows}
+    return out
+
+
+def members(shared: Path, selected: ZoneModel) -> dict:
+    """:func:`member_row` of the selected model and of every :data:`MEMBERS` fit on the calibration part."""
+    frame, split = bm_frame(shared, selected)
+    out = {f"{selected.network.name} (selected, noise all)": member_row(selected, frame, split)}
+    for name, noise in MEMBERS:
+        zm = load_model(name)
+        frame, split = bm_frame(shared, zm)
+        fitted = calibrate(zm, frame[frame["time"].to_numpy(float) < split], noise=noise).model
+        out[f"{name} (noise {noise})"] = member_row(fitted, frame, split)
+        print(f"{name} (noise {noise}): done", flush=True)
+    return out
+
+
+def _short(key: str) -> str:
+    """``"TiTeTh+heater+solar (noise all)"`` -> ``"TiTeTh, noise all"``."""
+    name, _, rest = key.partition(" (")
+    return f"{name.partition('+')[0]}, {rest.rstrip(')')}"
+
+
+def members_markdown(rows: dict) -> str:
+    """The model comparison as Markdown: 2-sigma coverage with the parameters at a bound, then RMSE with the baselines."""
+    keys = [_steps_key(k) for k in MEMBER_HORIZONS]
+    titles = " | ".join(label(None if k == "open" else int(k), 300.0) for k in keys)
+    lines = [f"| 2σ coverage | {titles} | at a bound |", "|---" * (len(keys) + 2) + "|"]
+    for name, r in rows.items():
+        cells = " | ".join(f"{r['model']['coverage'][k]:.0%}" for k in keys)
+        bound = ", ".join(f.partition(" ")[0] for f in r["at_bound"]) or "none"
+        lines.append(f"| {_short(name)} | {cells} | {bound} |")
+    lines += ["", f"| RMSE (K) | {titles} |", "|---" * (len(keys) + 1) + "|"]
+    for name, r in rows.items():
+        lines.append(
+            f"| {_short(name)} | " + " | ".join(f"{r['model']['rmse_K'][k]:.3f}" for k in keys) + " |"
+        )
+    first = next(iter(rows.values()))
+    for base in ("persistence", "arx"):
+        if base in first:
+            lines.append(f"| {base} | " + " | ".join(f"{first[base]['rmse_K'][k]:.3f}" for k in keys) + " |")
+    return "\n".join(lines)
+
+
 def markdown(results: dict) -> str:
     """The coverage tables, one per data set."""
     lines = []
@@ -257,6 +392,7 @@ def markdown(results: dict) -> str:
 
 
 def run(shared: Path, only: list[str] | None) -> dict:
+    """Every data set's schemes (``only``: those named), keyed by data set."""
     results = {}
     for name, (path, load) in DATASETS.items():
         if only and name not in only:
@@ -269,7 +405,8 @@ def run(shared: Path, only: list[str] | None) -> dict:
         schemes = evaluate(case)
         key = {k: ("open" if k is None else str(k)) for k in case.horizons}
         results[name] = {
-            "model": model,
+            "model": case.model.network.name,
+            "at_bound": bound_flags(case.model),
             "dt_s": float(np.median(np.diff(case.full.t))),
             "calibration_samples": case.first,
             "held_out_samples": case.full.n_samples - case.first,
@@ -288,12 +425,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--shared", type=Path, default=DEFAULT_SHARED)
     ap.add_argument("--out", type=Path, default=Path("validation-output"))
     ap.add_argument(
-        "--only", action="append", choices=list(DATASETS), help="run only this data set (repeatable)"
+        "--only",
+        action="append",
+        choices=[*DATASETS, "members"],
+        help="run only this data set, or the model comparison (repeatable)",
+    )
+    ap.add_argument(
+        "--selected",
+        type=Path,
+        help="a model saved by rczone select --forward --holdout on the Bacher-Madsen split: skip the selection",
     )
     args = ap.parse_args(argv)
+    if args.selected:
+        SELECTED["model"] = load_model(args.selected)
     results = run(args.shared, args.only)
+    if (not args.only or "members" in args.only) and (args.shared / BM_DATA).exists():
+        results["members"] = members(args.shared, selected_model(args.shared))
     write_json_atomic(args.out / "holdout_bands.json", results)
-    print(markdown(results))
+    print(markdown({k: v for k, v in results.items() if k != "members"}))
+    if "members" in results:
+        print(members_markdown(results["members"]))
     return 0
 
 

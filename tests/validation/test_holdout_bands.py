@@ -3,7 +3,10 @@
 The data stay outside the project (see their PROVENANCE.md); the test reads them from the shared
 folder through :func:`tests.shared_data.require` (skips without them, fails under ``CI=true``). The
 default ML fit of TiTe on the first four days, then ``rczone predict --horizons`` on the last two
-with the calibration days as warm-up, through the command line. docs/validation.md has the table.
+with the calibration days as warm-up, through the command line; and the honest workflow with a
+better model: ``rczone select --forward --holdout`` chooses from the whole family on the
+calibration days alone, then ``rczone predict`` scores its saved fit the same way.
+docs/validation.md has the tables.
 """
 
 from __future__ import annotations
@@ -34,6 +37,8 @@ Ps = {{ column = "Ps", unit = "kW/m2" }}
 """
 SPLIT = "2009-02-09T12:00"
 HORIZONS = "1,3,12,72,open"
+#: 5 min, 15 min, 1 h, 3 h, 6 h, 12 h and open loop.
+ALL_HORIZONS = "1,3,12,36,72,144,open"
 
 
 def _steps(value) -> int | None:
@@ -109,3 +114,79 @@ def test_on_a_zone_with_known_truth_the_calibration_keeps_the_right_band():
     calibrated = bands.coverage(case, factor)
     assert all(0.85 < c <= 0.98 for c in raw.values()), raw
     assert all(c <= 0.98 for c in calibrated.values()) and min(calibrated[k] for k in case.steps) >= 0.9
+
+
+@pytest.fixture(scope="module")
+def selected(tmp_path_factory):
+    """Forward selection on the calibration days (``select``'s default fit), then its held-out scores."""
+    require(DATA, what="shared real data (Bacher & Madsen PRBS)")
+    d = tmp_path_factory.mktemp("selected")
+    (d / "all.toml").write_text(MAP.format(window=""))
+    columns = ["--columns", str(d / "all.toml")]
+    chosen = [
+        "select",
+        str(DATA),
+        *columns,
+        "--forward",
+        "--holdout",
+        SPLIT,
+        "--save-model",
+        str(d / "sel.json"),
+    ]
+    assert main([*chosen, "--json", str(d / "select.json")]) == 0
+    args = [
+        "predict",
+        str(d / "sel.json"),
+        str(DATA),
+        *columns,
+        "--warmup",
+        SPLIT,
+        "--horizons",
+        ALL_HORIZONS,
+    ]
+    assert main([*args, "--baselines", "--json", str(d / "h.json")]) == 0
+    rows = json.loads((d / "h.json").read_text())["scores"]
+    by = {(r["predictor"], r["steps"]): r for r in rows}
+    return load_model(d / "sel.json"), json.loads((d / "select.json").read_text()), by
+
+
+@pytest.mark.slow
+def test_the_model_selected_on_the_calibration_days_is_richer_and_sound(selected):
+    zm, table, _ = selected
+    assert len(zm.network.node_state_names) >= 4  # beyond TiTeTh
+    assert table["selected"] == zm.network.name and table["models"][zm.network.name]["trustworthy"]
+    # no R, C or solar aperture at (or within a factor 1.01 of) a bound of its box
+    for p in zm.network.parameters.values():
+        if p.is_tied or p.fixed:
+            continue
+        lo, hi = p.bounds
+        value = zm.theta[p.name]
+        assert (value > lo * 1.01 if lo > 0 else value > 1e-3 * hi) and value < hi / 1.01, (p.name, value)
+
+
+@pytest.mark.slow
+def test_the_selected_model_beats_tite_and_the_baselines_and_its_bands_are_not_overconfident(
+    selected, scored
+):
+    _, _, by = selected
+    tite, _, _ = scored
+    for k in (1, 3, 12, 36, 72, 144, None):
+        model = by[("model", k)]
+        assert model["coverage_2sigma"] >= 0.9, (k, model["coverage_2sigma"])
+        assert model["rmse_K"] < min(by[(b, k)]["rmse_K"] for b in ("persistence", "arx")), k
+        if k in tite:
+            assert model["rmse_K"] < tite[k]["rmse_K"], k
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 22 target not reached from the other side: the held-out days are calmer for the model"
+    " selected on the calibration days than the calibration days are (fewer heater switches; 1-step RMSE"
+    " 0.006 K against 0.017 K), so every band calibrated on the calibration days holds 99-100 %"
+    " (docs/validation.md)",
+)
+def test_the_selected_models_two_sigma_coverage_is_at_most_98_percent(selected):
+    _, _, by = selected
+    for k in (1, 3, 12, 36, 72, 144, None):
+        assert by[("model", k)]["coverage_2sigma"] <= 0.98
