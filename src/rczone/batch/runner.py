@@ -369,10 +369,6 @@ def run_batch(
                     cpu += float(row.get("cpu_seconds") or 0.0)
                     if on_result:
                         on_result(row, computed + len(lost), len(todo))
-                if computed == len(outcome):
-                    # the summary's report needs matplotlib (0.3-0.5 s to import): loaded while the
-                    # workers compute, not after the last result, where it adds to the run's wall time
-                    import rczone.report.html  # noqa: F401
         finally:
             if connection:
                 _close(*connection)
