@@ -117,12 +117,16 @@ def _exit_without_teardown() -> None:
 
 def _connect(scheduler: str | None, workers: int):
     """A Dask client (and the LocalCluster it owns, if any); connection problems are one line."""
+    import dask
     from dask.distributed import Client, LocalCluster
 
     if not scheduler:
-        cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
+        # no dashboard, so no one reads the workers' statistical profiler, which samples every
+        # thread's stack every 10 ms: 2 ms of CPU per zone-night (about 6 %) in each worker
+        with dask.config.set({"distributed.worker.profile.enabled": False}):
+            cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+            )
         client = Client(cluster)
         client.run(_exit_without_teardown)  # closing the cluster then takes 0.1 s, not 3-4 s
         return client, cluster

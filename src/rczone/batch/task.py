@@ -82,6 +82,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
         "error": "",
     }
     try:
+        from rczone.calibration.dataset import dataset
         from rczone.workflow.checks import fit_and_check
 
         zm = task_model(task)
@@ -92,7 +93,10 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
         # the row holds the estimates and the open-loop errors: the analyses a reader of one fit looks
         # at (residual whiteness, band calibration, baselines, plausibility) are not made
         settings = replace(task.settings, checks=False)
-        cal = fit_and_check(zm, frame, settings, label=task.source.label, analyses=False)
+        key = ("data", tuple(sorted((settings.constants or {}).items())))
+        if key not in cache:  # the zone's methods fit the same data set
+            cache[key] = dataset(zm, frame, settings.constants or None)
+        cal = fit_and_check(zm, frame, settings, label=task.source.label, analyses=False, data=cache[key])
         r = cal.result
         row.update(
             open_loop_rmse_K=cal.open_loop.rmse_K,

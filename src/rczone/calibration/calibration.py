@@ -238,6 +238,7 @@ def calibrate(
     fixed: Mapping[str, float | None] | None = None,
     *,
     analyses: bool = True,
+    data: Dataset | None = None,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` and check the fitted model open loop.
 
@@ -284,13 +285,16 @@ def calibrate(
         plausibility of the estimates. False (batch calibration, which stores the estimates and the
         open-loop errors only) skips them: the fit, its standard errors and the open-loop check
         are the same, the calibration's analyses are None.
+    data : Dataset, optional
+        ``dataset(model, frame, constants)`` when the caller has built it already (the methods of
+        one zone in a batch share one); default built here.
     """
     zm = as_model(model)
     net = zm.network
     ignored = ignored_channels(frame)
     frame = frame_from(frame)
     used = zm.constants_used(frame, constants)
-    data = dataset(zm, frame, constants)
+    data = dataset(zm, frame, constants) if data is None else data
     stretch = {
         "samples": int(data.n_samples),
         "of": len(frame),

@@ -262,6 +262,8 @@ def _numbers(raw: pd.Series, column: str, rows: np.ndarray, source: str) -> np.n
     """Column as float; a non-empty entry that is not a number is an error naming its row."""
     if pd.api.types.is_bool_dtype(raw.dtype):
         raise DataError(f"{source}: column {column!r} holds true/false values, expected numbers")
+    if pd.api.types.is_float_dtype(raw.dtype) or pd.api.types.is_integer_dtype(raw.dtype):
+        return raw.to_numpy(dtype=float, na_value=np.nan)  # numbers already: nothing to check
     x = pd.to_numeric(raw, errors="coerce").to_numpy(dtype=float)
     bad = np.flatnonzero(np.isnan(x) & raw.notna().to_numpy())
     if bad.size:

@@ -164,6 +164,19 @@ class Remembered:
         return self.cost(eta)
 
     def value_and_gradient(self, eta: np.ndarray) -> tuple[float, np.ndarray]:
+        """The cost's value and gradient at ``eta``, computed once per distinct point.
+
+        Parameters
+        ----------
+        eta : ndarray, shape (d,)
+            Optimizer values.
+
+        Returns
+        -------
+        value : float
+        gradient : ndarray, shape (d,)
+            A copy: changing it does not change what is remembered.
+        """
         key = np.asarray(eta, dtype=float).tobytes()
         hit = self._seen.get(key)
         if hit is None:
@@ -175,7 +188,18 @@ class Remembered:
 
 
 def remembered(cost: Callable[[np.ndarray], float]) -> Callable[[np.ndarray], float]:
-    """``cost`` as a :class:`Remembered` where it has an exact gradient (else unchanged)."""
+    """``cost`` as a :class:`Remembered` where it has an exact gradient (else unchanged).
+
+    Parameters
+    ----------
+    cost : callable
+        A cost of ``eta``, with or without ``value_and_gradient``; one already remembered is
+        returned as it is.
+
+    Returns
+    -------
+    callable
+    """
     if isinstance(cost, Remembered) or getattr(cost, "value_and_gradient", None) is None:
         return cost
     return Remembered(cost)

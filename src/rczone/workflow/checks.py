@@ -15,6 +15,7 @@ from collections.abc import Callable, Mapping
 import pandas as pd
 
 from rczone.calibration import Calibration, calibrate, predict
+from rczone.estimation import Dataset
 from rczone.models import ZoneModel
 from rczone.workflow.settings import FitSettings
 
@@ -32,6 +33,7 @@ def fit_and_check(
     others: Mapping[str, pd.DataFrame] | None = None,
     progress: Callable[[str], None] = _quiet,
     analyses: bool = True,
+    data: Dataset | None = None,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` with ``settings``, then (``settings.checks``) check the fit.
 
@@ -52,6 +54,9 @@ def fit_and_check(
     analyses : bool
         The analyses after the fit that a reader looks at (:func:`rczone.calibration.calibrate`);
         batch calibration, which stores estimates and errors only, skips them.
+    data : Dataset, optional
+        The frame's data set with ``settings.constants`` when the caller has built it already
+        (:func:`rczone.calibration.calibrate`).
 
     Returns
     -------
@@ -74,6 +79,7 @@ def fit_and_check(
         bounds=settings.bounds or None,
         fixed=settings.fixed,
         analyses=analyses,
+        data=data,
     )
     if settings.checks or others:
         cal = check_fit(cal, frame, settings, others=others, progress=progress)

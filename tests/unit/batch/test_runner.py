@@ -229,3 +229,21 @@ def test_a_local_clusters_worker_leaves_without_teardown_but_flushes_its_output(
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0
     assert done.stdout == "result written" and done.stderr == "log line"
+
+
+def _profiler_setting() -> bool:
+    import dask
+
+    return bool(dask.config.get("distributed.worker.profile.enabled"))
+
+
+def test_the_runs_own_cluster_runs_its_workers_without_the_statistical_profiler():
+    pytest.importorskip("dask.distributed")
+    from rczone.batch.runner import _close, _connect
+
+    client, cluster = _connect(None, 1)
+    try:
+        assert list(client.run(_profiler_setting).values()) == [False]
+    finally:
+        _close(client, cluster)
+    assert _profiler_setting()  # the coordinator's own configuration is left as it was

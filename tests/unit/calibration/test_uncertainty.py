@@ -107,3 +107,13 @@ def test_without_analyses_the_fit_and_its_open_loop_check_are_the_full_calibrati
     assert ml.plausibility is not None and ml.model.provenance["band_scale"] is not None
     assert lean.model.provenance["band_scale"] is None and lean.model.provenance["baselines"] is None
     assert lean.summary() and lean.to_dict()["innovations"] is None  # still prints and serializes
+
+
+def test_a_data_set_built_by_the_caller_gives_the_same_calibration(zone, ml):
+    from rczone.calibration.dataset import dataset
+
+    frame = zone.iloc[:400]
+    given = calibrate(TRUE_MODEL, frame, "ml", n_starts=2, data=dataset(TRUE_MODEL, frame))
+    assert given.result.estimates == ml.result.estimates and given.result.std_errors == ml.result.std_errors
+    np.testing.assert_array_equal(given.open_loop.error, ml.open_loop.error)
+    assert given.model.provenance["stretch"] == ml.model.provenance["stretch"]

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rczone.data import load_zone_data, parse_column_map
+from rczone.data import RczoneWarning, load_zone_data, parse_column_map
 
 NY = zoneinfo.ZoneInfo("America/New_York")
 RHO = 1.15  # deliberately not the default, to check the configured density is used
@@ -208,3 +208,20 @@ def test_to_frame_is_the_default_layout(tmp_path):
     np.testing.assert_array_equal(again.t, data.t)
     for name in data.channels:
         np.testing.assert_allclose(again.channel(name), data.channel(name), rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("dtype", ["float64", "Float64", "double[pyarrow]", "object"])
+def test_a_parquet_columns_numbers_and_gaps_whatever_its_dtype(tmp_path, dtype):
+    # numeric columns are taken as they are, others through the numeric check: the same arrays
+    t, ch = si_original(FALL_BACK)
+    frame = pd.DataFrame({"time": t, **ch})
+    ti = frame["Ti"].to_numpy(copy=True)
+    ti[[3, 4]] = np.nan  # a gap in the measurement
+    frame["Ti"] = pd.Series(ti).astype(dtype) if dtype != "object" else pd.Series(ti, dtype=object)
+    frame["Q"] = frame["Q"].round().astype("int64")
+    frame.to_parquet(tmp_path / "zone.parquet", index=False)
+    with pytest.warns(RczoneWarning, match="gap"):  # the gap is reported, not repaired
+        data = load_zone_data(tmp_path / "zone.parquet")
+    _, u, _, y = data.arrays(("To", "Tsd", "Ts", "Q"), ("m",), "Ti", allow_nan=True)
+    np.testing.assert_array_equal(y[:, 0], ti)
+    np.testing.assert_array_equal(u[:, 3], np.round(ch["Q"]))
