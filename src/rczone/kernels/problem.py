@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from rczone.kernels.arrays import (
     Assembled,
@@ -539,8 +539,42 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
 
 
 def value_kernel(prob):
-    """The compiled cost of a packed problem's values: :func:`value_fused` or :func:`value_general`."""
-    return value_fused if prob.consts.fused else value_general
+    """The compiled cost of a packed problem's values: :func:`value_fused` or :func:`value_general`.
+
+    Returned as a callable ``(theta, prob)`` bound to this problem's compiled specialization:
+    a numba dispatcher types a named tuple argument in Python at every call (about 5 us for the
+    40 arrays of a :class:`rczone.kernels.arrays.Problem`, a quarter of a 2-state likelihood),
+    so the specialization is resolved once here and called directly for a float64 ``theta``
+    and this same problem; any other argument goes through the dispatcher.
+
+    Parameters
+    ----------
+    prob : rczone.kernels.arrays.Problem
+        The packed problem.
+
+    Returns
+    -------
+    callable
+        ``value(theta, prob) -> float``, as the kernel.
+    """
+    kernel = value_fused if prob.consts.fused else value_general
+    entry = None  # resolved at the first call: a problem whose values are never asked compiles nothing
+
+    def value(theta: np.ndarray, problem) -> float:
+        nonlocal entry
+        if (
+            problem is prob
+            and type(theta) is np.ndarray
+            and theta.dtype == np.float64
+            and theta.ndim == 1
+            and theta.flags.c_contiguous
+        ):
+            if entry is None:
+                entry = kernel.compile((types.Array(types.float64, 1, "C"), kernel.typeof_pyval(prob)))
+            return entry(theta, prob)
+        return kernel(theta, problem)
+
+    return value
 
 
 def cost(theta: np.ndarray, prob) -> float:
