@@ -57,6 +57,19 @@ class ModalDynamics(NamedTuple):
     Qm: np.ndarray  #: (K, n, n)
 
 
+class ModalBasis(NamedTuple):
+    """The coordinates of each interval in which an RC model's transition matrix is diagonal.
+
+    On interval ``w`` a filter given this basis carries ``xi = V[w]' diag(scale) x`` (so
+    ``x = diag(scale)^-1 V[w] xi``, ``V[w]`` orthogonal) and :class:`Dynamics` in these
+    coordinates: ``Phi[w] = diag(e^{lambda h})``, ``G0 = H0``, ``G1 = H1``, ``Qd = Qm`` of
+    :class:`ModalDynamics`.
+    """
+
+    V: np.ndarray  #: (K, n, n) orthogonal eigenvectors of each interval's symmetrized state matrix
+    scale: np.ndarray  #: (n,) ``sqrt(capacities)``
+
+
 class Observation(NamedTuple):
     """``y = C x + D u + v``, ``cov(v) = diag(r)``, and the derivatives along ``q`` directions."""
 

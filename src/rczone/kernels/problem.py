@@ -16,8 +16,8 @@ proportional to one free parameter (the packing is
 * discretizes each distinct interval (:mod:`rczone.kernels.discretize`) and runs the filter
   (:func:`rczone.kernels.kalman.kalman_filter`) with forward sensitivities; for values only,
   the fused 2-state kernel (:func:`rczone.kernels.rc2.nll_rc2`) where it applies, and the
-  modal filter (:func:`rczone.kernels.kalman.kalman_filter_modal`) for three or more states
-  whose intervals rarely change (:func:`rczone.kernels.kalman.modal_pays`);
+  filter in modal coordinates (``basis`` of :func:`rczone.kernels.kalman.kalman_filter`) for
+  three or more states whose intervals rarely change (:func:`rczone.kernels.kalman.modal_pays`);
 * returns ``J_LS`` (trapezoid rule on the open-loop errors, K^2 s), ``J_ML`` (``-log L``) or
   ``J_MAP`` (tempered likelihood plus log-normal prior) and its gradient in ``theta``.
 
@@ -58,7 +58,7 @@ from rczone.kernels.arrays import (
 )
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
-from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
+from rczone.kernels.kalman import kalman_filter, modal_pays, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
 
 #: Problem kinds.
@@ -457,30 +457,20 @@ def value_general(theta: np.ndarray, prob) -> float:
     ny = mod.C.shape[0]
     N_t = t.shape[0]
     scale = np.sqrt(mod.cap)
+    obs = Observation(
+        mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
+    )
+    prior = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
+    opts = FilterOptions(foh, kind == LS, steady_rtol)
+    outs = outputs(N_t, n, ny, 0, kind == LS, False)
+    dmats = no_sensitivities(keys.shape[0], n, p)
     if kind != LS and modal_pays(which, n):
-        # values of larger models with flows constant over stretches: the modal filter
-        modal = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
-        obs = Observation(
-            mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
-        )
-        prior0 = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
-        nll, n_obs = kalman_filter_modal(modal, scale, obs, prior0, Series(u, y, which), foh)
+        # values of larger models with flows constant over stretches: in modal coordinates
+        mats, basis = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
+        nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs, basis)
     else:
         mats = interval_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh, kind != LS)
-        dmats = no_sensitivities(keys.shape[0], n, p)
-        obs = Observation(
-            mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
-        )
-        outs = outputs(N_t, n, ny, 0, kind == LS, False)
-        nll, n_obs, _, _ = kalman_filter(
-            mats,
-            dmats,
-            obs,
-            Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n))),
-            Series(u, y, which),
-            FilterOptions(foh, kind == LS, steady_rtol),
-            outs,
-        )
+        nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs)
         if n_obs >= 0 and kind == LS:
             return trapezoid(t, outs.e, outs.de, np.zeros(theta.shape[0]), np.zeros(theta.shape[0]))
     if n_obs < 0:
