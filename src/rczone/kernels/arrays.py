@@ -207,11 +207,18 @@ class SearchBox(NamedTuple):
 
 
 class Penalty(NamedTuple):
-    """The log-normal prior of a MAP problem."""
+    """The prior of a MAP problem, packed (:func:`rczone.estimation.priors.LogPrior.packed`).
 
-    prior_idx: np.ndarray  #: int64, parameters with a prior
-    prior_log_construction: np.ndarray  #: their log construction values
-    prior_spread: float  #: standard deviation in log space
+    Prior ``k`` is on ``theta[prior_idx[k]]``, of family ``family[k]`` (``LOGNORMAL``, ``NORMAL``,
+    ``UNIFORM`` of :mod:`rczone.kernels.problem`) with parameters ``(a[k], b[k])``: (median,
+    sigma), (mean, sigma), (lower, upper); evaluated by :func:`rczone.kernels.problem.prior_terms`.
+    """
+
+    prior_idx: np.ndarray  #: (np_,) int64, parameters with a prior
+    family: np.ndarray  #: (np_,) int64
+    a: np.ndarray  #: (np_,) first parameter of each prior (SI)
+    b: np.ndarray  #: (np_,) second parameter
+    log: np.ndarray  #: (np_,) bool, the parameter is searched in log space (the density is on eta)
     likelihood_weight: float
 
 
