@@ -208,16 +208,17 @@ def test_modal_coordinates_compute_values_only():
         )
 
 
-def test_modal_rule_declines_one_interval_and_frequent_changes():
-    """The rule of ``modal_pays`` (docstring there): modal for 3+ states whose matrices change at
-    most at a quarter of the steps, never for one interval, where the general filter's steady
-    state is cheaper; the cases are built so that each clause decides one of them."""
+def test_modal_rule_declines_frequent_changes_and_two_states():
+    """The rule of ``modal_pays`` (docstring there): modal coordinates for 3+ states whose matrices
+    change at most at a quarter of the steps, one interval included; the cases are built so that
+    each clause decides one of them."""
     stretches = np.repeat(np.arange(24), 30)[:-1]  # nll_13state's layout: 23 changes in 719 steps
     lti = np.zeros(999, dtype=np.int64)  # nll_4zone's: one interval
     alternating = np.arange(100) % 2  # a change at every step
     assert modal_pays(stretches, 13)
     assert not modal_pays(stretches, 2)  # two states: the fused kernel's domain
-    assert not modal_pays(lti, 8)
+    assert modal_pays(lti, 8)
     assert not modal_pays(alternating, 8)
     assert not modal_pays(np.repeat(np.arange(30), 3), 5)  # 29 changes in 90 steps: more than a quarter
     assert modal_pays(np.repeat(np.arange(20), 5), 5)  # 19 changes in 100 steps
+    assert not modal_pays(np.zeros(0, dtype=np.int64), 5)  # one sample: no interval at all

@@ -79,7 +79,6 @@ from rczone.kernels.arrays import (
     Prior,
     Series,
 )
-from rczone.kernels.discretize import congruence
 
 #: Default relative tolerance at which the predicted covariance counts as stationary.
 STEADY_RTOL = 1e-14
@@ -269,18 +268,34 @@ def change_basis(
     transform(Mx, x, P, xn)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(error_model="numpy", fastmath=FAST, inline="always")
 def transform(M: np.ndarray, x: np.ndarray, P: np.ndarray, xn: np.ndarray) -> None:
-    """``x = M x``, ``P = M P M'`` (exactly symmetric) in place; ``xn`` (n,) is work space."""
+    """``x = M x``, ``P = M P M'`` (exactly symmetric) in place; ``xn`` (n,) is work space.
+
+    :func:`rczone.kernels.discretize.congruence` with the filter's floating-point freedoms
+    (:data:`FAST`): called from there, strict, it cost the 13-state likelihood 25 %.
+    """
     n = x.shape[0]
+    T = np.empty((n, n))
     for i in range(n):
         acc = 0.0
         for j in range(n):
             acc += M[i, j] * x[j]
         xn[i] = acc
+        for j in range(n):
+            T[i, j] = 0.0
+        for a in range(n):
+            f = M[i, a]
+            for j in range(n):
+                T[i, j] += f * P[a, j]
     for i in range(n):
         x[i] = xn[i]
-    congruence(M, P, P)
+        for j in range(i, n):
+            acc = 0.0
+            for a in range(n):
+                acc += T[i, a] * M[j, a]
+            P[i, j] = acc
+            P[j, i] = acc
 
 
 @njit(cache=True, error_model="numpy")
@@ -689,11 +704,12 @@ def modal_pays(which: np.ndarray, n: int) -> bool:
 
     A change of coordinates costs about three ``n^3`` products, a direct time update one and
     a half; modal coordinates win for three or more states when the intervals change their
-    matrices, but at most at :data:`MODAL_CHANGES` of the steps. Not chosen when they never
-    change (one interval: LTI data, regular sampling), where the covariance becomes stationary
-    and the steady state costs ``O(n)`` per output and sample in either coordinates. Measured by
-    ``bench/filters.py``: the original coordinates take about 2.5x the modal ones' time on
-    ``nll_13state`` (13 states, 24 stretches of 30 samples, never stationary within one).
+    matrices at most at :data:`MODAL_CHANGES` of the steps, and also when they never change (one
+    interval: LTI data, regular sampling), where the ``O(n^2)`` time updates before the steady
+    state beat the ``O(n^3)`` ones (the steady state costs ``O(n)`` per output in either).
+    Measured by ``bench/filters.py`` (load 7.4): the original coordinates take 2.44x the modal
+    ones' time on ``nll_13state`` (13 states, 24 stretches of 30 samples, never stationary within
+    one) and 1.29x on ``nll_4zone`` (8 states, 4 outputs, one interval).
 
     Parameters
     ----------
@@ -710,4 +726,4 @@ def modal_pays(which: np.ndarray, n: int) -> bool:
     for k in range(1, which.shape[0]):
         if which[k] != which[k - 1]:
             changes += 1
-    return n >= 3 and 0 < changes <= MODAL_CHANGES * which.shape[0]
+    return n >= 3 and which.shape[0] > 0 and changes <= MODAL_CHANGES * which.shape[0]
