@@ -1,4 +1,4 @@
-"""The general Kalman filter against the modal one on the likelihoods of ``bench/run.py``.
+"""The one Kalman filter in original against modal coordinates on the likelihoods of ``bench/run.py``.
 
 Usage::
 
@@ -7,10 +7,9 @@ Usage::
 For ``nll_13state`` (13 states, the flow constant over 30-minute stretches) and ``nll_4zone``
 (8 states, 4 outputs, hourly, LTI) the packed problem's model is assembled once at the
 benchmark's parameter values; then, as :func:`rczone.kernels.problem.value_general` does, the
-likelihood is computed (a) by :func:`rczone.kernels.kalman.kalman_filter` after
-:func:`rczone.kernels.discretize.interval_matrices`, and (b) by
-:func:`rczone.kernels.kalman.kalman_filter_modal` after
-:func:`rczone.kernels.discretize.modal_matrices`. The script prints the median time of each
+likelihood is computed by :func:`rczone.kernels.kalman.kalman_filter` (a) after
+:func:`rczone.kernels.discretize.interval_matrices`, and (b) with the ``basis`` of
+:func:`rczone.kernels.discretize.modal_matrices` (modal coordinates). The script prints the median time of each
 (after a warm-up call, so compilation is excluded), their ratio, their agreement and whether
 the rule of :func:`rczone.kernels.kalman.modal_pays` picks the faster one; the machine's load
 average is printed beside them.
@@ -37,7 +36,6 @@ from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series  # n
 from rczone.kernels.discretize import interval_matrices, modal_matrices  # noqa: E402
 from rczone.kernels.kalman import (  # noqa: E402
     kalman_filter,
-    kalman_filter_modal,
     modal_pays,
     no_sensitivities,
     outputs,
@@ -72,7 +70,7 @@ def objectives() -> dict[str, tuple[Objective, np.ndarray]]:
 
 
 def both_filters(prob, theta: np.ndarray):
-    """The general and the modal filter's ``-log L`` (without the constant) as callables."""
+    """The filter's ``-log L`` (without the constant) in original and in modal coordinates, as callables."""
     mod, _, ok = assembled(theta, prob, 0)
     assert ok
     _, _, u, y, keys, which, _ = prob.data
@@ -98,14 +96,17 @@ def both_filters(prob, theta: np.ndarray):
         ).nll
 
     def modal() -> float:
-        return kalman_filter_modal(
-            modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh),
-            scale,
+        mats, basis = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
+        return kalman_filter(
+            mats,
+            no_sensitivities(keys.shape[0], n, p),
             obs,
             prior,
             series,
-            foh,
-        )[0]
+            FilterOptions(foh, False, steady_rtol),
+            outputs(y.shape[0], n, ny, 0, False, False),
+            basis,
+        ).nll
 
     return general, modal
 

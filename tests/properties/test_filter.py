@@ -1,4 +1,4 @@
-"""The compiled Kalman filters against their NumPy twin: the general one, the modal one, the fused 2-state kernel.
+"""The compiled Kalman filter against its NumPy twin, in original and modal coordinates, and the fused 2-state kernel.
 
 References: ``tests/oracles.py`` (plain NumPy, same step
 functions, no steady-state shortcut) fed with the discretization of
@@ -24,7 +24,7 @@ from rczone.estimation.kalman import (
 )
 from rczone.kernels.arrays import Dynamics, FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import modal_matrices
-from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
+from rczone.kernels.kalman import kalman_filter, modal_pays, no_sensitivities, outputs
 from rczone.simulation.discretize import symmetrizing_scale
 from rczone.simulation.intervals import interval_groups, unique_rows
 from tests.netfactory import random_network
@@ -149,8 +149,11 @@ def test_fused_two_state_kernel_equals_the_general_filter(seed, n_massless, hold
     st.integers(1, 3),
     st.sampled_from(["zoh", "foh"]),
 )
-def test_modal_filter_equals_the_numpy_twin(seed, n_cap, n_massless, n_outputs, hold):
-    """Flows constant over stretches (few coordinate changes), irregular steps, outputs missing alone."""
+def test_modal_coordinates_equal_the_numpy_twin(seed, n_cap, n_massless, n_outputs, hold):
+    """The one filter given a modal basis (a diagonal transition, coordinates changed where the
+    interval changes) against the textbook filter in the original coordinates; flows constant
+    over stretches (few coordinate changes), irregular steps, outputs missing alone; with and
+    without the steady-state shortcut, and the innovations (coordinate-free) too."""
     rng = np.random.default_rng(seed)
     net = random_network(rng, n_cap, n_massless, 2, min(n_outputs, n_cap + n_massless))
     ss, t, m, u, y, x0, P0, Qc, R = problem(rng, net, 90)
@@ -160,27 +163,62 @@ def test_modal_filter_equals_the_numpy_twin(seed, n_cap, n_massless, n_outputs, 
     keys = np.column_stack([np.diff(t), m[:-1]])
     uniq, _, which = unique_rows(keys)
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
-    modal = modal_matrices(ss.A, ss.N, ss.B, ss.M, uniq, np.diag(Qc).copy(), scale, hold == "foh")
+    mats, basis = modal_matrices(ss.A, ss.N, ss.B, ss.M, uniq, np.diag(Qc).copy(), scale, hold == "foh")
+    assert np.array_equal(mats.Phi, np.einsum("kii->ki", mats.Phi)[:, :, None] * np.eye(x0.size))  # diagonal
     n, p, ny = x0.size, u.shape[1], y.shape[1]
     obs = Observation(
         ss.C, ss.D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))
     )
     prior = Prior(x0, P0, np.empty((0, n)), np.empty((0, n, n)))
-    nll, n_obs = kalman_filter_modal(modal, scale, obs, prior, Series(u, y, which), hold == "foh")
-    assert n_obs == ref.n_obs
-    assert nll + 0.5 * n_obs * np.log(2 * np.pi) == pytest.approx(ref.nll, rel=RTOL, abs=RTOL)
+    for steady_rtol in (0.0, 1e-14):
+        trace = outputs(t.size, n, ny, 0, True, False)
+        nll, n_obs, _, _ = kalman_filter(
+            mats,
+            no_sensitivities(uniq.shape[0], n, p),
+            obs,
+            prior,
+            Series(u, y, which),
+            FilterOptions(hold == "foh", False, steady_rtol),
+            trace,
+            basis,
+        )
+        assert n_obs == ref.n_obs
+        assert nll + 0.5 * n_obs * np.log(2 * np.pi) == pytest.approx(ref.nll, rel=RTOL, abs=RTOL)
+        assert rel(trace.e, ref.innovations) < 1e-9
 
 
-def test_modal_rule_declines_one_interval_and_frequent_changes():
-    """The rule of ``modal_pays`` (docstring there): modal for 3+ states whose matrices change at
-    most at a quarter of the steps, never for one interval, where the general filter's steady
-    state is cheaper; the cases are built so that each clause decides one of them."""
+def test_modal_coordinates_compute_values_only():
+    """With a basis the filter refuses derivatives and state traces (they would be in modal coordinates)."""
+    rng = np.random.default_rng(5)
+    net = random_network(rng, 3, 0, 2, 1)
+    ss, t, m, u, y, x0, P0, Qc, R = problem(rng, net, 10)
+    uniq, _, which = unique_rows(np.column_stack([np.diff(t), m[:-1]]))
+    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+    mats, basis = modal_matrices(ss.A, ss.N, ss.B, ss.M, uniq, np.diag(Qc).copy(), scale, False)
+    n, p, ny = x0.size, u.shape[1], y.shape[1]
+    obs = Observation(
+        ss.C, ss.D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))
+    )
+    prior = Prior(x0, P0, np.empty((0, n)), np.empty((0, n, n)))
+    dyn0 = no_sensitivities(uniq.shape[0], n, p)
+    opts = FilterOptions(False, False, 0.0)
+    with pytest.raises(ValueError, match="values and innovations only"):
+        kalman_filter(
+            mats, dyn0, obs, prior, Series(u, y, which), opts, outputs(t.size, n, ny, 0, False, True), basis
+        )
+
+
+def test_modal_rule_declines_frequent_changes_and_two_states():
+    """The rule of ``modal_pays`` (docstring there): modal coordinates for 3+ states whose matrices
+    change at most at a quarter of the steps, one interval included; the cases are built so that
+    each clause decides one of them."""
     stretches = np.repeat(np.arange(24), 30)[:-1]  # nll_13state's layout: 23 changes in 719 steps
     lti = np.zeros(999, dtype=np.int64)  # nll_4zone's: one interval
     alternating = np.arange(100) % 2  # a change at every step
     assert modal_pays(stretches, 13)
     assert not modal_pays(stretches, 2)  # two states: the fused kernel's domain
-    assert not modal_pays(lti, 8)
+    assert modal_pays(lti, 8)
     assert not modal_pays(alternating, 8)
     assert not modal_pays(np.repeat(np.arange(30), 3), 5)  # 29 changes in 90 steps: more than a quarter
     assert modal_pays(np.repeat(np.arange(20), 5), 5)  # 19 changes in 100 steps
+    assert not modal_pays(np.zeros(0, dtype=np.int64), 5)  # one sample: no interval at all

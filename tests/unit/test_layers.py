@@ -5,7 +5,8 @@ functions alike, ``TYPE_CHECKING`` blocks included), and mapped to the top-level
 belongs to (``rczone.estimation.costs`` -> ``estimation``, ``rczone.control`` -> ``mpc``). Rules:
 
 * ``kernels`` (compiled hot loops) import nothing of rczone but ``errors``;
-* ``network`` imports nothing of rczone but ``errors``; ``simulation`` nothing but
+* ``network`` imports nothing of rczone but ``errors`` and ``kernels`` (the one compiled assembly,
+  ``kernels.problem.conductances``); ``simulation`` nothing but
   ``errors``, ``network`` and ``kernels``;
 * ``results`` (the result protocol) and ``files`` (reading untrusted files, writing atomically)
   import nothing of rczone but ``errors``;
@@ -32,7 +33,7 @@ ROOT = Path(rczone.__file__).resolve().parent
 #: unit -> the rczone units it may import (None: no restriction here)
 ALLOWED = {
     "kernels": {"errors"},
-    "network": {"errors"},
+    "network": {"errors", "kernels"},
     "simulation": {"errors", "network", "kernels"},
     "results": {"errors"},
     "files": {"errors"},

@@ -20,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 
 from rczone.estimation.methods import METHODS, method_of
+from rczone.estimation.priors import LogPrior
 from rczone.kernels.arrays import (
     ConductanceArrays,
-    Penalty,
     Problem,
     ProblemConstants,
     ProblemData,
@@ -134,10 +134,9 @@ def compiled_problem(objective) -> Problem | None:
     given = np.array([n in spec.names or n in spec.fixed for n in x0_names], dtype=bool)
     x0_idx = np.array([spec.names.index(n) if n in spec.names else -1 for n in x0_names], dtype=np.int64)
     x0_k = np.array([1.0 if n in spec.names else float(spec.fixed.get(n, 0.0)) for n in x0_names])
-    prior = np.flatnonzero(
-        np.array([k in ("resistance", "capacitance") for k in spec.kinds], dtype=bool)
-        & np.isfinite(spec.construction)
-    )
+    # the MAP prior, packed for the one compiled evaluation (rczone.kernels.problem.prior_terms)
+    prior = objective.map_prior or LogPrior(spec, (None,) * len(spec.names), ())  # LS, ML: none
+    penalty = prior.packed(objective.likelihood_weight)
     keys, which = data.intervals
     groups = np.empty(0, dtype=np.int64) if data.interval_groups is None else data.interval_groups
     fused = len(states) == 2 and len(net.outputs) == 1
@@ -153,12 +152,7 @@ def compiled_problem(objective) -> Problem | None:
         ProblemData(c(data.t), c(data.m), c(data.u), c(data.y), c(keys), c(which), c(groups)),
         Slots(*elements[0], *elements[1], *noise[0], *noise[1], *noise[2], x0_idx, x0_k, given),
         SearchBox(c(spec.eta_lower), c(spec.eta_upper), c(spec.log, dtype=bool)),
-        Penalty(
-            prior.astype(np.int64),
-            np.log(spec.construction[prior]) if prior.size else np.empty(0),
-            float(objective.prior_spread),
-            float(objective.likelihood_weight),
-        ),
+        penalty,
         ProblemConstants(objective.hold == "foh", float(SYMMETRY_RTOL), float(STEADY_RTOL), fused),
         np.empty(data.t.shape[0]),
     )

@@ -19,8 +19,8 @@ declared rules (:func:`choose_engine`), never by trying one and catching its fai
     on them (:func:`general_cost`).
 Within the ``"compiled"`` and ``"general"`` engines the likelihood's filter is chosen by a declared
 rule too (:func:`rczone.kernels.kalman.modal_pays`, from the number of states and how often the
-intervals change their matrices): the modal filter for values where it pays, the general filter
-otherwise and for every gradient. The engine is recorded as :attr:`Objective.engine
+intervals change their matrices): the one filter in modal coordinates for values where it pays,
+in the original coordinates otherwise and for every gradient. The engine is recorded as :attr:`Objective.engine
 <rczone.estimation.costs.Objective.engine>` and in every fit result (``FitResult.engine``, the
 ``engine`` of its ``to_dict()``); the filter follows from the engine and the data.
 The tests compare every engine with a plain NumPy computation of the same cost
@@ -57,7 +57,6 @@ from rczone.kernels.discretize import (
 from rczone.kernels.kalman import (
     STEADY_RTOL,
     kalman_filter,
-    kalman_filter_modal,
     modal_pays,
     no_sensitivities,
     outputs,
@@ -382,14 +381,16 @@ def general_cost(
         mats, dmats = interval_derivatives(A, N, B, M, dA0, dN, dB0, dM, keys, qc, dqc, scale, foh, not ls)
     else:
         if scale is not None and not ls and modal_pays(which, n):
-            modal = modal_matrices(A, N, B, M, keys, qc, scale, foh)
-            nll, n_obs = kalman_filter_modal(
-                modal,
-                scale,
+            mats, basis = modal_matrices(A, N, B, M, keys, qc, scale, foh)
+            nll, n_obs, _, _ = kalman_filter(
+                mats,
+                no_sensitivities(keys.shape[0], n, p),
                 Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
                 Prior(x0, np.diag(sx**2), dx0, dP0),
-                Series(f(data.u), f(data.y), which),
-                foh,
+                Series(np.require(data.u, np.float64, "CW"), np.require(data.y, np.float64, "CW"), which),
+                FilterOptions(foh, False, STEADY_RTOL),
+                outputs(data.n_samples, n, ny, 0, False, False),
+                basis,
             )
             if n_obs < 0:
                 raise np.linalg.LinAlgError(

@@ -47,6 +47,8 @@ import numpy as np
 
 from rczone.errors import ParameterError
 from rczone.estimation.parameters import ParameterSpec
+from rczone.kernels.arrays import Penalty
+from rczone.kernels.problem import LOGNORMAL, NORMAL, UNIFORM, prior_terms
 from rczone.network.prior import Prior
 
 #: How a free parameter without a declared prior is treated (see the module notes).
@@ -91,38 +93,46 @@ class LogPrior:
         curv : ndarray, shape (d,)
             The prior's Fisher information in ``theta`` (what optimizers scale with).
         """
-        theta = np.asarray(theta, dtype=float)
-        d = theta.size
-        grad, curv = np.zeros(d), np.zeros(d)
-        total = 0.0
-        for i, (p, logp) in enumerate(zip(self.priors, self.spec.log)):
-            if p is None:
-                continue
-            x = float(theta[i])
-            v, g, c = _term(p, x, bool(logp))
-            total += v
-            grad[i], curv[i] = g, c
-        return total, grad, curv
+        theta = np.ascontiguousarray(theta, dtype=np.float64)
+        grad, curv = np.zeros(theta.size), np.zeros(theta.size)
+        total = prior_terms(theta, self.packed(), grad, curv)
+        if not math.isfinite(total):
+            return math.inf, np.zeros(theta.size), np.zeros(theta.size)
+        return float(total), grad, curv
+
+    def packed(self, likelihood_weight: float = 1.0) -> Penalty:
+        """The priors as the arrays the compiled costs evaluate (:func:`rczone.kernels.problem.prior_terms`).
+
+        Parameters
+        ----------
+        likelihood_weight : float
+            The MAP cost's weight of the likelihood, carried along.
+
+        Returns
+        -------
+        rczone.kernels.arrays.Penalty
+        """
+        rows = [
+            (i, p, bool(lg)) for i, (p, lg) in enumerate(zip(self.priors, self.spec.log)) if p is not None
+        ]
+        family = {"lognormal": LOGNORMAL, "normal": NORMAL, "uniform": UNIFORM}
+        a = [
+            p.median if p.dist == "lognormal" else p.mean if p.dist == "normal" else p.lower
+            for _, p, _ in rows
+        ]
+        b = [p.sigma if p.dist in ("lognormal", "normal") else p.upper for _, p, _ in rows]
+        return Penalty(
+            np.array([i for i, _, _ in rows], dtype=np.int64),
+            np.array([family[p.dist] for _, p, _ in rows], dtype=np.int64),
+            np.array(a, dtype=np.float64),
+            np.array(b, dtype=np.float64),
+            np.array([lg for _, _, lg in rows], dtype=np.bool_),
+            float(likelihood_weight),
+        )
 
     def to_dict(self) -> dict[str, object]:
         """The prior of each free parameter (``None``: flat in ``eta``), SI units."""
         return {n: (p.to_dict() if p is not None else None) for n, p in zip(self.spec.names, self.priors)}
-
-
-def _term(p: Prior, x: float, log: bool) -> tuple[float, float, float]:
-    """One parameter's ``-log p_eta``, its derivative and curvature in ``x`` (see the module table)."""
-    if log and not x > 0:
-        return math.inf, 0.0, 0.0
-    jac = (-math.log(x), -1.0 / x) if log else (0.0, 0.0)  # -log |d theta / d eta|
-    if p.dist == "lognormal":
-        z = (math.log(x) - math.log(p.median)) / p.sigma
-        return 0.5 * z * z, z / (p.sigma * x), 1.0 / (p.sigma * x) ** 2
-    if p.dist == "normal":
-        z = (x - p.mean) / p.sigma
-        return 0.5 * z * z + jac[0], z / p.sigma + jac[1], 1.0 / p.sigma**2
-    if not p.lower <= x <= p.upper:
-        return math.inf, 0.0, 0.0
-    return jac[0], jac[1], 0.0
 
 
 def log_prior(

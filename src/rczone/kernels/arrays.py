@@ -57,6 +57,19 @@ class ModalDynamics(NamedTuple):
     Qm: np.ndarray  #: (K, n, n)
 
 
+class ModalBasis(NamedTuple):
+    """The coordinates of each interval in which an RC model's transition matrix is diagonal.
+
+    On interval ``w`` a filter given this basis carries ``xi = V[w]' diag(scale) x`` (so
+    ``x = diag(scale)^-1 V[w] xi``, ``V[w]`` orthogonal) and :class:`Dynamics` in these
+    coordinates: ``Phi[w] = diag(e^{lambda h})``, ``G0 = H0``, ``G1 = H1``, ``Qd = Qm`` of
+    :class:`ModalDynamics`.
+    """
+
+    V: np.ndarray  #: (K, n, n) orthogonal eigenvectors of each interval's symmetrized state matrix
+    scale: np.ndarray  #: (n,) ``sqrt(capacities)``
+
+
 class Observation(NamedTuple):
     """``y = C x + D u + v``, ``cov(v) = diag(r)``, and the derivatives along ``q`` directions."""
 
@@ -194,11 +207,18 @@ class SearchBox(NamedTuple):
 
 
 class Penalty(NamedTuple):
-    """The log-normal prior of a MAP problem."""
+    """The prior of a MAP problem, packed (:func:`rczone.estimation.priors.LogPrior.packed`).
 
-    prior_idx: np.ndarray  #: int64, parameters with a prior
-    prior_log_construction: np.ndarray  #: their log construction values
-    prior_spread: float  #: standard deviation in log space
+    Prior ``k`` is on ``theta[prior_idx[k]]``, of family ``family[k]`` (``LOGNORMAL``, ``NORMAL``,
+    ``UNIFORM`` of :mod:`rczone.kernels.problem`) with parameters ``(a[k], b[k])``: (median,
+    sigma), (mean, sigma), (lower, upper); evaluated by :func:`rczone.kernels.problem.prior_terms`.
+    """
+
+    prior_idx: np.ndarray  #: (np_,) int64, parameters with a prior
+    family: np.ndarray  #: (np_,) int64
+    a: np.ndarray  #: (np_,) first parameter of each prior (SI)
+    b: np.ndarray  #: (np_,) second parameter
+    log: np.ndarray  #: (np_,) bool, the parameter is searched in log space (the density is on eta)
     likelihood_weight: float
 
 

@@ -41,7 +41,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import Dynamics, DynamicsDerivatives, ModalDynamics, Rc2Matrices
+from rczone.kernels.arrays import Dynamics, DynamicsDerivatives, ModalBasis, ModalDynamics, Rc2Matrices
 from rczone.kernels.expm import expm_frechet, matmul, norm1
 
 #: Below this ``|x|`` the series of ``(e^x - 1 - x)/x^2`` is used.
@@ -273,7 +273,7 @@ def spectral_discretize(
             G0[i, j] = a0
             if foh:
                 G1[i, j] = a1
-    _congruence(T, Qm, Qd)
+    congruence(T, Qm, Qd)
 
 
 @njit(cache=True, error_model="numpy")
@@ -286,21 +286,29 @@ def modal_matrices(
     qc: np.ndarray,
     scale: np.ndarray,
     foh: bool,
-) -> ModalDynamics:
-    """:func:`spectral_modal` of each distinct interval, stacked on a first axis of length K."""
+) -> tuple[Dynamics, ModalBasis]:
+    """The discrete matrices of each distinct interval in its modal coordinates, and those coordinates.
+
+    :func:`spectral_modal` of each interval, as the :class:`Dynamics` the filter runs on
+    (``Phi = diag(e)``, ``G0 = H0``, ``G1 = H1``, ``Qd = Qm``) with the :class:`ModalBasis` that
+    maps them back (:func:`rczone.kernels.kalman.kalman_filter` with ``basis``). Arguments as
+    :func:`rc_interval_matrices`.
+    """
     n = A0.shape[0]
     p = B0.shape[1]
     K = keys.shape[0]
     V = np.empty((K, n, n))
-    e = np.empty((K, n))
-    H0 = np.empty((K, n, p))
-    H1 = np.empty((K, n, p))
-    Qm = np.empty((K, n, n))
+    Phi = np.zeros((K, n, n))
+    G0 = np.empty((K, n, p))
+    G1 = np.empty((K, n, p))
+    Qd = np.empty((K, n, n))
     for k in range(K):
         A, B = _key_matrices(A0, N, B0, M, keys[k])
         step = spectral_modal(A, B, scale, qc, keys[k, 0], foh)
-        V[k], e[k], H0[k], H1[k], Qm[k] = step.V, step.e, step.H0, step.H1, step.Qm
-    return ModalDynamics(V, e, H0, H1, Qm)
+        V[k], G0[k], G1[k], Qd[k] = step.V, step.H0, step.H1, step.Qm
+        for i in range(n):
+            Phi[k, i, i] = step.e[i]
+    return Dynamics(Phi, G0, G1, Qd), ModalBasis(V, scale)
 
 
 @njit(cache=True, error_model="numpy")
@@ -765,7 +773,7 @@ def spectral_derivatives(
         for i in range(n):
             for j in range(n):
                 TE[i, j] = W[i, j] * Om[i, j]
-        _congruence(T, TE, Qd)
+        congruence(T, TE, Qd)
     else:
         for i in range(n):
             for j in range(n):
@@ -928,8 +936,8 @@ def _h2v(Xh: np.ndarray, k: int) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
-def _congruence(T: np.ndarray, Z: np.ndarray, out: np.ndarray) -> None:
-    """``out = T Z T'`` for symmetric ``Z``, exactly symmetric."""
+def congruence(T: np.ndarray, Z: np.ndarray, out: np.ndarray) -> None:
+    """``out = T Z T'`` for symmetric ``Z``, exactly symmetric (``out`` may be ``Z``)."""
     n = T.shape[0]
     TZ = np.empty((n, n))
     matmul(T, Z, TZ)

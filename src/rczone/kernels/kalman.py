@@ -9,7 +9,7 @@ output (NaN) is skipped on its own, and no matrix is inverted.
 
 The steps that cost ``O(n^2)`` to ``O(n^3)`` per sample are short functions: :func:`predict_covariance`
 (``P = Phi P Phi' + Qd`` and its derivatives), :func:`stationary` (the steady-state test),
-:func:`keep_prediction` (what the trace keeps). They are compiled with ``inline="always"``: numba
+:func:`keep_prediction` (what the trace keeps), :func:`change_basis` (modal coordinates). They are compiled with ``inline="always"``: numba
 inlines them into the sample loop at its own intermediate representation, so no call remains.
 Each array argument still becomes a new variable there, with a reference count taken and
 dropped at every call, which numba does not prune across the loops of a step. For the steps
@@ -17,7 +17,13 @@ that cost ``O(n)`` per output (the innovation, the scalar update of the gain and
 state's correction) and for the mean's prediction, run ``ny`` times or on every sample of a
 steady state, those counts cost more than the arithmetic (written as functions they made
 ``nll_4zone`` 2.0x and ``nll_13state`` 1.15x slower, bit-identical values; ``bench`` notes in
-``docs/architecture.md``), so they are written in place in the loop, marked by comments.
+``docs/architecture.md``), so they are written in place in the loop, marked by comments; so are the
+``O(n^2)`` time update in modal coordinates and the ``O(n)`` test of the covariance's diagonal.
+
+Modal coordinates: for an RC model (``diag(c) A`` symmetric) whose flows change the matrices
+only now and then, the same filter runs in the eigen-coordinates of each interval's state
+matrix (``basis``), where ``Phi`` is diagonal and the time update costs ``O(n^2)``
+(:func:`modal_pays` decides; one filter, one set of steps, no second implementation).
 The plain-NumPy twin (``tests/oracles.py``, ``kalman_filter_reference``) is written from the same
 steps; the tests compare the two filters, and both with a brute-force multivariate-normal density.
 
@@ -30,8 +36,9 @@ dynamics unchanged), i.e. one evaluation per optimizer step instead of ``2q + 1`
 
 Steady state: while the interval and the set of observed outputs repeat, the covariance
 recursion does not depend on the data and converges to the stationary solution of the
-Riccati equation. Once the predicted covariance (and each of its derivatives) repeats to
-``steady_rtol`` relative, the gains are kept and the ``O(n^3)`` covariance work is skipped
+Riccati equation. Once the predicted covariance's diagonal repeats (an ``O(n)`` test, necessary
+since a covariance's largest entry is on its diagonal), the full matrices are kept, and once
+the predicted covariance (and each of its derivatives) repeats to ``steady_rtol`` relative, the gains are kept and the ``O(n^3)`` covariance work is skipped
 until the interval or the observed set changes (statsmodels' filter does the same [4]_). The
 frozen covariance differs from the recursion's by at most ``steady_rtol`` relative, and so
 does every later term of the likelihood; ``steady_rtol = 0`` disables it.
@@ -67,7 +74,7 @@ from rczone.kernels.arrays import (
     FilterOptions,
     FilterTrace,
     FilterValue,
-    ModalDynamics,
+    ModalBasis,
     Observation,
     Prior,
     Series,
@@ -76,7 +83,7 @@ from rczone.kernels.arrays import (
 #: Default relative tolerance at which the predicted covariance counts as stationary.
 STEADY_RTOL = 1e-14
 
-#: The modal filter is used when the matrices change, at most at this fraction of the steps.
+#: Modal coordinates are used when the matrices change, at most at this fraction of the steps.
 MODAL_CHANGES = 0.25
 
 #: Floating-point freedoms of the filter: sums may be reassociated (vectorized) and products
@@ -246,6 +253,80 @@ def stationary(P: np.ndarray, dP: np.ndarray, P_prev: np.ndarray, dP_prev: np.nd
     return True
 
 
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def change_basis(
+    Vnew: np.ndarray, Vold: np.ndarray, x: np.ndarray, P: np.ndarray, Mx: np.ndarray, xn: np.ndarray
+) -> None:
+    """Carry ``x, P`` from the modal coordinates ``Vold`` to ``Vnew``: ``M = Vnew' Vold``, ``x = M x``, ``P = M P M'``."""
+    n = x.shape[0]
+    for i in range(n):
+        for j in range(n):
+            acc = 0.0
+            for a in range(n):
+                acc += Vnew[a, i] * Vold[a, j]
+            Mx[i, j] = acc
+    transform(Mx, x, P, xn)
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def transform(M: np.ndarray, x: np.ndarray, P: np.ndarray, xn: np.ndarray) -> None:
+    """``x = M x``, ``P = M P M'`` (exactly symmetric) in place; ``xn`` (n,) is work space.
+
+    :func:`rczone.kernels.discretize.congruence` with the filter's floating-point freedoms
+    (:data:`FAST`): called from there, strict, it cost the 13-state likelihood 25 %.
+    """
+    n = x.shape[0]
+    T = np.empty((n, n))
+    for i in range(n):
+        acc = 0.0
+        for j in range(n):
+            acc += M[i, j] * x[j]
+        xn[i] = acc
+        for j in range(n):
+            T[i, j] = 0.0
+        for a in range(n):
+            f = M[i, a]
+            for j in range(n):
+                T[i, j] += f * P[a, j]
+    for i in range(n):
+        x[i] = xn[i]
+        for j in range(i, n):
+            acc = 0.0
+            for a in range(n):
+                acc += T[i, a] * M[j, a]
+            P[i, j] = acc
+            P[j, i] = acc
+
+
+@njit(cache=True, error_model="numpy")
+def modal_start(basis: ModalBasis, w: int, x: np.ndarray, P: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """Carry the prior ``x, P`` and the output rows ``C`` into the modal coordinates of interval ``w``, in place.
+
+    ``x = V[w]' diag(scale) x``, ``P = V[w]' diag(scale) P diag(scale) V[w]``, ``C = C diag(scale)^-1 V[w]``;
+    returns the output rows of every interval's coordinates, shape (K, ny, n).
+    """
+    V, scale = basis.V, basis.scale
+    K, n, _ = V.shape
+    ny = C.shape[0]
+    Cm = np.empty((K, ny, n))
+    for k in range(K):
+        for o in range(ny):
+            for i in range(n):
+                acc = 0.0
+                for a in range(n):
+                    acc += C[o, a] / scale[a] * V[k, a, i]
+                Cm[k, o, i] = acc
+    for o in range(ny):
+        for i in range(n):
+            C[o, i] = Cm[w, o, i]
+    M = np.empty((n, n))  # V[w]' diag(scale)
+    for i in range(n):
+        for a in range(n):
+            M[i, a] = V[w, a, i] * scale[a]
+    transform(M, x, P, np.empty(n))
+    return Cm
+
+
 @njit(cache=True, error_model="numpy", fastmath=FAST)
 def kalman_filter(
     dyn: Dynamics,
@@ -255,6 +336,7 @@ def kalman_filter(
     series: Series,
     opts: FilterOptions,
     trace: FilterTrace,
+    basis: ModalBasis | None = None,
 ) -> FilterValue:
     """Run the filter over all samples; ``-log L`` without ``0.5 n log 2 pi``, and its gradient.
 
@@ -272,12 +354,22 @@ def kalman_filter(
     series : Series
         Inputs, outputs (NaN marks a missing output) and the interval of each step.
     opts : FilterOptions
+        Hold, open loop, steady-state tolerance.
     trace : FilterTrace
         Each array is filled when its first axis has N entries (:func:`outputs` makes them):
         innovations ``y - C x_pred - D u`` (the output errors in open loop), their derivatives
         (open loop only), predicted and filtered states, predicted covariances, innovation
         covariances, innovation covariances, filtered covariances (not in open loop). Entries of
         missing outputs are left as they are.
+    basis : ModalBasis, optional
+        Run in the modal coordinates of an RC model (values only: ``q = 0``, only the
+        innovations in ``trace``): ``dyn`` holds each interval's matrices in its own modal
+        coordinates (:func:`rczone.kernels.discretize.modal_matrices`), where ``Phi`` is diagonal.
+        The prior and ``C`` are carried into the coordinates of the first interval, the state
+        and covariance into those of the next one where the interval changes (``O(n^3)`` once
+        per change), and the time update costs ``O(n^2)`` instead of ``O(n^3)``. The likelihood
+        is the same (coordinates change nothing but rounding); :func:`modal_pays` says when it
+        is faster.
 
     Returns
     -------
@@ -297,26 +389,44 @@ def kalman_filter(
     gradient gains the derivative of ``0.5 (log s + e^2/s)``.
 
     ``predict_step`` with the matrices of interval ``w`` (the mean in the loop,
-    :func:`predict_covariance`): ``x = Phi x + drive``,
+    :func:`predict_covariance`; with a basis both in the loop, ``Phi`` diagonal, after
+    :func:`change_basis` where the interval changes): ``x = Phi x + drive``,
     ``P = Phi P Phi' + Qd``; ``dx_j = dPhi_j x + Phi dx_j + ddrive_j``,
     ``dP_j = dPhi_j P Phi' + Phi P dPhi_j' + Phi dP_j Phi' + dQd_j`` (the ``dPhi`` terms skipped
     for directions that leave the dynamics unchanged).
     """
     Phi, G0, G1, Qd = dyn
     dPhi, dG0, dG1, dQd = ddyn
-    C, D, r = obs.C, obs.D, obs.r
+    D, r = obs.D, obs.r
     dC, dD, dr = obs.dC, obs.dD, obs.dr
     u, y, which = series
     foh, open_loop, steady_rtol = opts
     N, ny = y.shape
     n = prior.x0.shape[0]
     q = prior.dx0.shape[0]
+    if basis is not None:
+        q = 0  # a constant: the compiler drops every derivative loop of this specialization
     moved, has_dc, has_dd = _moved(ddyn, dC, dD)
     p = u.shape[1]
+    # one definition each (no reassignment): numba then keeps their reference counts out of the loop
     x = prior.x0.copy()
     P = prior.P0.copy()
+    C = obs.C.copy()
+    cur = 0  # the interval whose modal coordinates carry x, P and C (with a basis)
+    Cm = np.empty((0, ny, n))
+    if basis is not None:
+        if (
+            prior.dx0.shape[0] > 0
+            or trace.xp.shape[0] + trace.xf.shape[0] + trace.Pp.shape[0] + trace.S.shape[0] > 0
+        ):
+            raise ValueError("the filter in modal coordinates computes values and innovations only")
+        cur = which[0] if N > 1 else 0
+        Cm = modal_start(basis, cur, x, P, C)
     dx = prior.dx0.copy()
     dP = prior.dP0.copy()
+    d_prev = np.empty(n)  # the diagonal of the last prediction
+    for i in range(n):
+        d_prev[i] = P[i, i]
     grad = np.zeros(q)
     fim = np.zeros(q)
     # work arrays of the steps, local variables (held in a tuple they cost ~10 % on nll_4zone)
@@ -328,13 +438,16 @@ def kalman_filter(
     T = np.empty((n, n))
     X = np.empty((n, n))
     Y = np.empty((n, n))
+    Mx = np.empty((n, n))
     # each output's gain, innovation variance and their derivatives, kept for the steady state
     kg = np.zeros((ny, n))
     dkg = np.zeros((ny, q, n))
     sg = np.ones(ny)
     lg = np.zeros(ny)
     dsg = np.zeros((ny, q))
-    # the covariances the steady state compares with (the last prediction) and returns to (the last filtered)
+    # the covariances the steady state compares with (the last prediction) and returns to (the last
+    # filtered): copied in full only while armed, i.e. once the diagonal has repeated (repeats_diagonal)
+    armed = False
     P_prev = np.empty((n, n))
     dP_prev = np.empty((q, n, n))
     P_filt = np.empty((n, n))
@@ -381,7 +494,7 @@ def kalman_filter(
         else:
             if steady and mask != steady_mask:
                 steady = False
-            if not steady:
+            if not steady and armed:
                 for i in range(n):
                     for j in range(n):
                         P_prev[i, j] = P[i, j]
@@ -438,13 +551,16 @@ def kalman_filter(
                         for i in range(n):
                             dkg[o, d, i] = (dpc[d, i] - kg[o, i] * sd) * inv
                         for i in range(n):
+                            dki = dkg[o, d, i]  # locals: the stores into dP could alias them
+                            ki = kg[o, i]
                             for j in range(i, n):
-                                v = dP[d, i, j] - dkg[o, d, i] * pc[j] - kg[o, i] * dpc[d, j]
+                                v = dP[d, i, j] - dki * pc[j] - ki * dpc[d, j]
                                 dP[d, i, j] = v
                                 dP[d, j, i] = v
                     for i in range(n):
+                        ki = kg[o, i]
                         for j in range(i, n):
-                            v = P[i, j] - kg[o, i] * pc[j]
+                            v = P[i, j] - ki * pc[j]
                             P[i, j] = v
                             P[j, i] = v
                     sg[o] = s
@@ -463,7 +579,7 @@ def kalman_filter(
                     x[i] += kg[o, i] * e
                 nll += 0.5 * (lg[o] + e * e * inv)
                 n_obs += 1
-            if not steady:
+            if not steady and (armed or keep_Pf):
                 for i in range(n):
                     for j in range(n):
                         P_filt[i, j] = P[i, j]
@@ -480,41 +596,7 @@ def kalman_filter(
         if k == N - 1:
             break
         w = which[k]
-        # ---- predict_step: the means
-        for i in range(n):
-            acc = 0.0
-            for j in range(p):
-                acc += G0[w, i, j] * u[k, j]
-            if foh:
-                for j in range(p):
-                    acc += G1[w, i, j] * u[k + 1, j]
-            drive[i] = acc
-        for d in range(q):
-            for i in range(n):
-                acc = 0.0
-                for j in range(n):
-                    acc += Phi[w, i, j] * dx[d, j]
-                if moved[d]:
-                    for j in range(n):
-                        acc += dPhi[w, d, i, j] * x[j]
-                    for j in range(p):
-                        acc += dG0[w, d, i, j] * u[k, j]
-                    if foh:
-                        for j in range(p):
-                            acc += dG1[w, d, i, j] * u[k + 1, j]
-                xn[i] = acc
-            for i in range(n):
-                dx[d, i] = xn[i]
-        for i in range(n):
-            acc = drive[i]
-            for j in range(n):
-                acc += Phi[w, i, j] * x[j]
-            xn[i] = acc
-        for i in range(n):
-            x[i] = xn[i]
-        if open_loop:
-            continue
-        if steady and w != steady_key:
+        if not open_loop and steady and w != steady_key:
             # leave the steady state from its filtered covariance
             steady = False
             for i in range(n):
@@ -522,193 +604,126 @@ def kalman_filter(
                     P[i, j] = P_filt[i, j]
                     for d in range(q):
                         dP[d, i, j] = dP_filt[d, i, j]
+        if basis is not None:
+            if w != cur:
+                change_basis(basis.V[w], basis.V[cur], x, P, Mx, xn)
+                cur = w
+                for o in range(ny):
+                    for i in range(n):
+                        C[o, i] = Cm[w, o, i]
+            # ---- predict_step in modal coordinates: Phi diagonal, no derivatives
+            for i in range(n):
+                drive[i] = Phi[w, i, i]  # contiguous, so the loops below vectorize
+            for i in range(n):
+                acc = drive[i] * x[i]
+                for j in range(p):
+                    acc += G0[w, i, j] * u[k, j]
+                if foh:
+                    for j in range(p):
+                        acc += G1[w, i, j] * u[k + 1, j]
+                x[i] = acc
+        else:
+            # ---- predict_step: the means
+            for i in range(n):
+                acc = 0.0
+                for j in range(p):
+                    acc += G0[w, i, j] * u[k, j]
+                if foh:
+                    for j in range(p):
+                        acc += G1[w, i, j] * u[k + 1, j]
+                drive[i] = acc
+            for d in range(q):
+                for i in range(n):
+                    acc = 0.0
+                    for j in range(n):
+                        acc += Phi[w, i, j] * dx[d, j]
+                    if moved[d]:
+                        for j in range(n):
+                            acc += dPhi[w, d, i, j] * x[j]
+                        for j in range(p):
+                            acc += dG0[w, d, i, j] * u[k, j]
+                        if foh:
+                            for j in range(p):
+                                acc += dG1[w, d, i, j] * u[k + 1, j]
+                    xn[i] = acc
+                for i in range(n):
+                    dx[d, i] = xn[i]
+            for i in range(n):
+                acc = drive[i]
+                for j in range(n):
+                    acc += Phi[w, i, j] * x[j]
+                xn[i] = acc
+            for i in range(n):
+                x[i] = xn[i]
+        if open_loop:
+            continue
         if steady:
             prev_key = w
             prev_mask = mask
             continue
-        predict_covariance(w, P, dP, Phi, Qd, dPhi, dQd, moved, T, X, Y)
-        # the steady state: the same interval and observed outputs as before, and P repeats
-        if steady_rtol > 0.0 and w == prev_key and mask == prev_mask:
-            steady = stationary(P, dP, P_prev, dP_prev, steady_rtol)
-            if steady:
-                steady_key = w
-                steady_mask = mask
+        if basis is not None:
+            # ---- predict_step in modal coordinates: P_ij e_i e_j + Qd_ij, O(n^2) (in the loop, see above)
+            for i in range(n):
+                ei = drive[i]
+                for j in range(i, n):
+                    v = P[i, j] * ei * drive[j] + Qd[w, i, j]
+                    P[i, j] = v
+                    P[j, i] = v
+        else:
+            predict_covariance(w, P, dP, Phi, Qd, dPhi, dQd, moved, T, X, Y)
+        # the steady state: the same interval and observed outputs as before, and P repeats. First the
+        # diagonal repeats the last prediction's (O(n), in the loop): necessary for the stationary test of a
+        # covariance, whose largest entry lies on its diagonal; the full matrices are kept for it from then on
+        repeats = False
+        if steady_rtol > 0.0:
+            big = 0.0
+            diff = 0.0
+            for i in range(n):
+                v = P[i, i]
+                big = max(big, abs(v))
+                diff = max(diff, abs(v - d_prev[i]))
+                d_prev[i] = v
+            repeats = w == prev_key and mask == prev_mask and diff <= steady_rtol * big
+        if repeats:
+            if armed:
+                steady = stationary(P, dP, P_prev, dP_prev, steady_rtol)
+                if steady:
+                    steady_key = w
+                    steady_mask = mask
+            armed = True
+        else:
+            armed = False
         prev_key = w
         prev_mask = mask
     return FilterValue(nll, n_obs, grad, fim)
 
 
-@njit(cache=True, error_model="numpy", fastmath=FAST)
-def kalman_filter_modal(
-    modal: ModalDynamics, scale: np.ndarray, obs: Observation, prior: Prior, series: Series, foh: bool
-) -> tuple[float, int]:
-    """``-log L`` (without ``0.5 n log 2 pi``) and the observation count, in modal coordinates.
+@njit(cache=True, error_model="numpy")
+def modal_pays(which: np.ndarray, n: int) -> bool:
+    """Whether :func:`kalman_filter` in modal coordinates (``basis``) beats it in the original ones (``-log L`` only).
 
-    The filter of :func:`kalman_filter` for an RC model (no sensitivities, no intermediate
-    outputs) carried in the modal coordinates ``xi = V_k' diag(scale) x`` of the interval in
-    use (:func:`rczone.kernels.discretize.spectral_modal`), where ``Phi = diag(e)``: the time
-    update costs ``O(n^2)`` (``P_ij e_i e_j + Qm_ij``) instead of ``O(n^3)``, and so do the
-    scalar updates (with the output row ``c' diag(scale)^-1 V_k``). When the interval's matrices
-    change, the state moves to the new coordinates, ``xi = V_new' V_old xi``,
-    ``P = M P M'`` (``O(n^3)``, once per change). With flows constant over stretches (a damper
-    held for minutes) a likelihood costs ``O(n^2)`` per sample; a caller picks
-    :func:`kalman_filter` when the interval changes at most samples.
+    A change of coordinates costs about three ``n^3`` products, a direct time update one and
+    a half; modal coordinates win for three or more states when the intervals change their
+    matrices at most at :data:`MODAL_CHANGES` of the steps, and also when they never change (one
+    interval: LTI data, regular sampling), where the ``O(n^2)`` time updates before the steady
+    state beat the ``O(n^3)`` ones (the steady state costs ``O(n)`` per output in either).
+    Measured by ``bench/filters.py`` (load 7.4): the original coordinates take 2.44x the modal
+    ones' time on ``nll_13state`` (13 states, 24 stretches of 30 samples, never stationary within
+    one) and 1.29x on ``nll_4zone`` (8 states, 4 outputs, one interval).
 
     Parameters
     ----------
-    modal : ModalDynamics
-        Of :func:`rczone.kernels.discretize.modal_matrices`.
-    scale : ndarray, shape (n,)
-        ``sqrt(capacities)``.
-    obs, prior, series
-        As in :func:`kalman_filter`; their derivatives are not used.
-    foh : bool
+    which : ndarray of int64, shape (N - 1,)
+        The interval of each step.
+    n : int
+        The number of states.
 
     Returns
     -------
-    nll : float
-        NaN for an invalid model.
-    n_obs : int
-        -1 for an invalid model.
-    """
-    V, e, H0, H1, Qm = modal.V, modal.e, modal.H0, modal.H1, modal.Qm
-    C, D, r = obs.C, obs.D, obs.r
-    x0, P0 = prior.x0, prior.P0
-    u, y, which = series
-    N, ny = y.shape
-    n = x0.shape[0]
-    p = u.shape[1]
-    K = V.shape[0]
-    # output rows in the modal coordinates of each interval: c' diag(scale)^-1 V_k
-    Cm = np.empty((K, ny, n))
-    for w in range(K):
-        for o in range(ny):
-            for i in range(n):
-                acc = 0.0
-                for a in range(n):
-                    acc += C[o, a] / scale[a] * V[w, a, i]
-                Cm[w, o, i] = acc
-    cur = which[0] if N > 1 else 0
-    # xi = V' diag(scale) x, P = V' diag(scale) P0 diag(scale) V
-    xi = np.empty(n)
-    P = np.empty((n, n))
-    T = np.empty((n, n))
-    for i in range(n):
-        acc = 0.0
-        for a in range(n):
-            acc += V[cur, a, i] * scale[a] * x0[a]
-        xi[i] = acc
-        for j in range(n):
-            acc = 0.0
-            for a in range(n):
-                acc += V[cur, a, i] * scale[a] * P0[a, j] * scale[j]
-            T[i, j] = acc
-    for i in range(n):
-        for j in range(i, n):
-            acc = 0.0
-            for a in range(n):
-                acc += T[i, a] * V[cur, a, j]
-            P[i, j] = acc
-            P[j, i] = acc
-    Mx = np.empty((n, n))
-    xn = np.empty(n)
-    pc = np.empty(n)
-    nll = 0.0
-    n_obs = 0
-    for k in range(N):
-        for o in range(ny):
-            yk = y[k, o]
-            if yk != yk:
-                continue
-            ev = yk
-            for i in range(p):
-                ev -= D[o, i] * u[k, i]
-            s = r[o]
-            for i in range(n):
-                ev -= Cm[cur, o, i] * xi[i]
-                acc = 0.0
-                for j in range(n):
-                    acc += P[i, j] * Cm[cur, o, j]
-                pc[i] = acc
-                s += Cm[cur, o, i] * acc
-            if not s > 0.0:
-                return math.nan, -1
-            inv = 1.0 / s
-            for i in range(n):
-                xi[i] += pc[i] * inv * ev
-            for i in range(n):
-                ki = pc[i] * inv
-                for j in range(i, n):
-                    v = P[i, j] - ki * pc[j]
-                    P[i, j] = v
-                    P[j, i] = v
-            nll += 0.5 * (math.log(s) + ev * ev * inv)
-            n_obs += 1
-        if k == N - 1:
-            break
-        w = which[k]
-        if w != cur:
-            # new coordinates: M = V_w' V_cur, xi = M xi, P = M P M'
-            for i in range(n):
-                for j in range(n):
-                    acc = 0.0
-                    for a in range(n):
-                        acc += V[w, a, i] * V[cur, a, j]
-                    Mx[i, j] = acc
-            for i in range(n):
-                acc = 0.0
-                for j in range(n):
-                    acc += Mx[i, j] * xi[j]
-                xn[i] = acc
-                for j in range(n):
-                    T[i, j] = 0.0
-                for a in range(n):
-                    f = Mx[i, a]
-                    for j in range(n):
-                        T[i, j] += f * P[a, j]
-            for i in range(n):
-                xi[i] = xn[i]
-                for j in range(i, n):
-                    acc = 0.0
-                    for a in range(n):
-                        acc += T[i, a] * Mx[j, a]
-                    P[i, j] = acc
-                    P[j, i] = acc
-            cur = w
-        # the time update, diagonal in these coordinates
-        for i in range(n):
-            acc = e[w, i] * xi[i]
-            for j in range(p):
-                acc += H0[w, i, j] * u[k, j]
-            if foh:
-                for j in range(p):
-                    acc += H1[w, i, j] * u[k + 1, j]
-            xi[i] = acc
-        for i in range(n):
-            ei = e[w, i]
-            for j in range(i, n):
-                v = P[i, j] * ei * e[w, j] + Qm[w, i, j]
-                P[i, j] = v
-                P[j, i] = v
-    return nll, n_obs
-
-
-@njit(cache=True, error_model="numpy")
-def modal_pays(which: np.ndarray, n: int) -> bool:
-    """Whether :func:`kalman_filter_modal` beats :func:`kalman_filter` (both ``-log L`` only).
-
-    A change of coordinates costs about three ``n^3`` products, a direct time update one and
-    a half; the modal filter wins for three or more states when the intervals change their
-    matrices, but at most at :data:`MODAL_CHANGES` of the steps. Not when they never change (one
-    interval: LTI data, regular sampling): then the general filter's covariance becomes
-    stationary and its steady state costs ``O(n)`` per output and sample, less than the modal
-    filter's ``O(n^2)`` scalar updates. Measured by ``bench/filters.py``: the general filter takes
-    3.1-4.1x the modal one's time on ``nll_13state`` (13 states, 24 stretches of 30 samples, never
-    stationary within one), 0.58-0.82x on ``nll_4zone`` (8 states, 4 outputs, one interval,
-    stationary after 277 of 1,000 samples).
+    bool
     """
     changes = 0
     for k in range(1, which.shape[0]):
         if which[k] != which[k - 1]:
             changes += 1
-    return n >= 3 and 0 < changes <= MODAL_CHANGES * which.shape[0]
+    return n >= 3 and which.shape[0] > 0 and changes <= MODAL_CHANGES * which.shape[0]

@@ -16,8 +16,8 @@ proportional to one free parameter (the packing is
 * discretizes each distinct interval (:mod:`rczone.kernels.discretize`) and runs the filter
   (:func:`rczone.kernels.kalman.kalman_filter`) with forward sensitivities; for values only,
   the fused 2-state kernel (:func:`rczone.kernels.rc2.nll_rc2`) where it applies, and the
-  modal filter (:func:`rczone.kernels.kalman.kalman_filter_modal`) for three or more states
-  whose intervals rarely change (:func:`rczone.kernels.kalman.modal_pays`);
+  filter in modal coordinates (``basis`` of :func:`rczone.kernels.kalman.kalman_filter`) for
+  three or more states whose intervals rarely change (:func:`rczone.kernels.kalman.modal_pays`);
 * returns ``J_LS`` (trapezoid rule on the open-loop errors, K^2 s), ``J_ML`` (``-log L``) or
   ``J_MAP`` (tempered likelihood plus log-normal prior) and its gradient in ``theta``.
 
@@ -45,7 +45,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 from rczone.kernels.arrays import (
     Assembled,
@@ -58,11 +58,14 @@ from rczone.kernels.arrays import (
 )
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
-from rczone.kernels.kalman import kalman_filter, kalman_filter_modal, modal_pays, no_sensitivities, outputs
+from rczone.kernels.kalman import kalman_filter, modal_pays, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
 
 #: Problem kinds.
 LS, ML, MAP = 0, 1, 2
+
+#: Prior families of a packed :class:`rczone.kernels.arrays.Penalty`.
+LOGNORMAL, NORMAL, UNIFORM = 0, 1, 2
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -83,31 +86,81 @@ def theta_of_z(z: np.ndarray, lo: np.ndarray, hi: np.ndarray, logp: np.ndarray) 
 
 
 @njit(cache=True, error_model="numpy")
-def assemble(
-    L: np.ndarray, P: np.ndarray, E: np.ndarray, Gb0: np.ndarray, Nf: np.ndarray, Mf: np.ndarray, res, cap
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(A0, N, B0, M)`` of the conductance form for resistor values ``res`` and capacities ``cap``."""
+def conductances(
+    L: np.ndarray, P: np.ndarray, E: np.ndarray, Gb0: np.ndarray, res: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The conductance matrices of an RC network: ``G = L' diag(1/R) L``, ``Gb = P' diag(1/R) E + Gb0``.
+
+    The one assembly of the network's energy balance ``c dT/dt = -G T + Gb u`` (nodal analysis [1]_):
+    :func:`assemble` scales it to ``A, B`` for the compiled costs, and
+    :meth:`rczone.network.RCNetwork.state_space` eliminates massless nodes from it first. Real or
+    complex ``res`` (complex-step derivatives); the result has its type.
+
+    Parameters
+    ----------
+    L : ndarray, shape (nr, nn)
+        Incidence of the resistors on the nodes (+1, -1; one +1 for a resistor to a boundary).
+    P : ndarray, shape (nr, nn)
+        The node end of each resistor to a boundary.
+    E : ndarray, shape (nr, p)
+        The boundary input at the other end.
+    Gb0 : ndarray, shape (nn, p)
+        Heat-input gains given as numbers (W per unit input).
+    res : ndarray, shape (nr,)
+        Resistances, K/W.
+
+    Returns
+    -------
+    G : ndarray, shape (nn, nn)
+        W/K.
+    Gb : ndarray, shape (nn, p)
+
+    References
+    ----------
+    .. [1] F. Doerfler, F. Bullo, "Kron reduction of graphs with applications to electrical
+       networks", IEEE Trans. Circuits Syst. I, 60(1), 2013, section II (the loopy Laplacian).
+    """
     nr, n = L.shape
     p = E.shape[1]
-    nf = Nf.shape[0]
-    A0 = np.zeros((n, n))
-    B0 = np.zeros((n, p))
-    N = np.empty((nf, n, n))
-    M = np.empty((nf, n, p))
+    G = np.zeros((n, n), dtype=res.dtype)
+    Gb = np.zeros((n, p), dtype=res.dtype)
     for k in range(nr):
         g = 1.0 / res[k]
         for i in range(n):
             if L[k, i] != 0.0:
                 for j in range(n):
-                    A0[i, j] -= L[k, i] * g * L[k, j]
+                    G[i, j] += L[k, i] * g * L[k, j]
             if P[k, i] != 0.0:
                 for j in range(p):
-                    B0[i, j] += P[k, i] * g * E[k, j]
+                    Gb[i, j] += P[k, i] * g * E[k, j]
+    for i in range(n):
+        for j in range(p):
+            Gb[i, j] += Gb0[i, j]
+    return G, Gb
+
+
+@njit(cache=True, error_model="numpy")
+def assemble(
+    L: np.ndarray, P: np.ndarray, E: np.ndarray, Gb0: np.ndarray, Nf: np.ndarray, Mf: np.ndarray, res, cap
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(A0, N, B0, M)`` of the conductance form for resistor values ``res`` and capacities ``cap``.
+
+    ``A0 = -G / c``, ``B0 = Gb / c`` (rows divided by the capacities) of :func:`conductances`,
+    ``N = Nf / c``, ``M = Mf / c``.
+    """
+    n = L.shape[1]
+    p = E.shape[1]
+    nf = Nf.shape[0]
+    G, Gb = conductances(L, P, E, Gb0, res)
+    A0 = np.empty((n, n))
+    B0 = np.empty((n, p))
+    N = np.empty((nf, n, n))
+    M = np.empty((nf, n, p))
     for i in range(n):
         for j in range(n):
-            A0[i, j] /= cap[i]
+            A0[i, j] = -G[i, j] / cap[i]
         for j in range(p):
-            B0[i, j] = (B0[i, j] + Gb0[i, j]) / cap[i]
+            B0[i, j] = Gb[i, j] / cap[i]
         for f in range(nf):
             for j in range(n):
                 N[f, i, j] = Nf[f, i, j] / cap[i]
@@ -376,27 +429,89 @@ def assembled(theta: np.ndarray, prob, q: int) -> tuple[Assembled, AssembledDeri
 
 
 @njit(cache=True, error_model="numpy")
+def prior_terms(theta: np.ndarray, penalty, grad: np.ndarray, curv: np.ndarray) -> float:
+    """``-log p_eta`` of the packed priors at ``theta`` (up to a constant), added to ``grad`` and ``curv``.
+
+    The one evaluation of a MAP prior (the compiled costs and :meth:`rczone.estimation.priors.LogPrior.terms`
+    call it). A prior on ``theta`` becomes a density on the optimizer's ``eta``: for a parameter
+    searched in log space the Jacobian ``|d theta / d eta| = theta`` adds ``-log theta`` [1]_,
+    except to a log-normal, which is a normal in ``log theta``. Per prior, with ``x = theta[i]``:
+
+    * log-normal (median ``a``, sigma ``b``): ``0.5 z^2``, ``z = (log x - log a) / b``; gradient
+      ``z / (b x)``, curvature ``1 / (b x)^2``;
+    * normal (mean ``a``, sigma ``b``): ``0.5 z^2``, ``z = (x - a) / b``; gradient ``z / b``,
+      curvature ``1 / b^2``;
+    * uniform on ``[a, b]``: ``0``, ``inf`` outside;
+
+    plus the Jacobian term where it applies; ``inf`` for ``x <= 0`` in log space. The curvature
+    is the prior's Fisher information (what optimizers scale their variables with).
+
+    Parameters
+    ----------
+    theta : ndarray, shape (d,)
+        Physical values.
+    penalty : rczone.kernels.arrays.Penalty
+        The packed priors.
+    grad, curv : ndarray, shape (d,)
+        Receive the gradient and curvature in ``theta`` (added).
+
+    Returns
+    -------
+    float
+
+    References
+    ----------
+    .. [1] A. Gelman et al., *Bayesian Data Analysis*, 3rd ed., CRC Press, 2013, section 1.8
+       (transformation of variables).
+    """
+    idx, family, pa, pb, logp = penalty.prior_idx, penalty.family, penalty.a, penalty.b, penalty.log
+    total = 0.0
+    for k in range(idx.shape[0]):
+        i = idx[k]
+        x = theta[i]
+        f = family[k]
+        jac = 0.0
+        djac = 0.0
+        if logp[k]:
+            if not x > 0.0:
+                return math.inf
+            if f != LOGNORMAL:
+                jac = -math.log(x)
+                djac = -1.0 / x
+        if f == LOGNORMAL:
+            z = (math.log(x) - math.log(pa[k])) / pb[k]
+            total += 0.5 * z * z
+            grad[i] += z / (pb[k] * x)
+            curv[i] += 1.0 / (pb[k] * x) ** 2
+        elif f == NORMAL:
+            z = (x - pa[k]) / pb[k]
+            total += 0.5 * z * z + jac
+            grad[i] += z / pb[k] + djac
+            curv[i] += 1.0 / (pb[k] * pb[k])
+        else:
+            if not pa[k] <= x <= pb[k]:
+                return math.inf
+            total += jac
+            grad[i] += djac
+    return total
+
+
+@njit(cache=True, error_model="numpy")
 def with_prior(
     j: float, theta: np.ndarray, penalty, grad: np.ndarray, curv: np.ndarray, want_grad: bool
 ) -> float:
-    """``J_MAP = w J + 0.5 sum z^2`` (log-normal prior, ``z = (log theta - log c) / s``) of ``J = -log L``.
+    """``J_MAP = w J + prior`` (:func:`prior_terms`) of ``J = -log L``, with ``w`` the likelihood weight.
 
-    ``grad`` and ``curv`` (of ``J``) are updated in place; the prior's own terms are added
+    ``grad`` and ``curv`` (of ``J``) are scaled by ``w`` in place; the prior's own terms are added
     only ``want_grad``.
     """
-    prior_idx, prior_logc, spread, weight = penalty
-    pen = 0.0
+    weight = penalty.likelihood_weight
     for i in range(theta.shape[0]):
         grad[i] *= weight
         curv[i] *= weight
-    for a in range(prior_idx.shape[0]):
-        i = prior_idx[a]
-        z = (math.log(theta[i]) - prior_logc[a]) / spread
-        pen += z * z
-        if want_grad:
-            grad[i] += z / (spread * theta[i])
-            curv[i] += 1.0 / (spread * theta[i]) ** 2
-    return weight * j + 0.5 * pen
+    if want_grad:
+        return weight * j + prior_terms(theta, penalty, grad, curv)
+    return weight * j + prior_terms(theta, penalty, np.zeros(theta.shape[0]), np.zeros(theta.shape[0]))
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -457,30 +572,20 @@ def value_general(theta: np.ndarray, prob) -> float:
     ny = mod.C.shape[0]
     N_t = t.shape[0]
     scale = np.sqrt(mod.cap)
+    obs = Observation(
+        mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
+    )
+    prior = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
+    opts = FilterOptions(foh, kind == LS, steady_rtol)
+    outs = outputs(N_t, n, ny, 0, kind == LS, False)
+    dmats = no_sensitivities(keys.shape[0], n, p)
     if kind != LS and modal_pays(which, n):
-        # values of larger models with flows constant over stretches: the modal filter
-        modal = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
-        obs = Observation(
-            mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
-        )
-        prior0 = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
-        nll, n_obs = kalman_filter_modal(modal, scale, obs, prior0, Series(u, y, which), foh)
+        # values of larger models with flows constant over stretches: in modal coordinates
+        mats, basis = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
+        nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs, basis)
     else:
         mats = interval_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh, kind != LS)
-        dmats = no_sensitivities(keys.shape[0], n, p)
-        obs = Observation(
-            mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
-        )
-        outs = outputs(N_t, n, ny, 0, kind == LS, False)
-        nll, n_obs, _, _ = kalman_filter(
-            mats,
-            dmats,
-            obs,
-            Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n))),
-            Series(u, y, which),
-            FilterOptions(foh, kind == LS, steady_rtol),
-            outs,
-        )
+        nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs)
         if n_obs >= 0 and kind == LS:
             return trapezoid(t, outs.e, outs.de, np.zeros(theta.shape[0]), np.zeros(theta.shape[0]))
     if n_obs < 0:
@@ -539,8 +644,42 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
 
 
 def value_kernel(prob):
-    """The compiled cost of a packed problem's values: :func:`value_fused` or :func:`value_general`."""
-    return value_fused if prob.consts.fused else value_general
+    """The compiled cost of a packed problem's values: :func:`value_fused` or :func:`value_general`.
+
+    Returned as a callable ``(theta, prob)`` bound to this problem's compiled specialization:
+    a numba dispatcher types a named tuple argument in Python at every call (about 5 us for the
+    40 arrays of a :class:`rczone.kernels.arrays.Problem`, a quarter of a 2-state likelihood),
+    so the specialization is resolved once here and called directly for a float64 ``theta``
+    and this same problem; any other argument goes through the dispatcher.
+
+    Parameters
+    ----------
+    prob : rczone.kernels.arrays.Problem
+        The packed problem.
+
+    Returns
+    -------
+    callable
+        ``value(theta, prob) -> float``, as the kernel.
+    """
+    kernel = value_fused if prob.consts.fused else value_general
+    entry = None  # resolved at the first call: a problem whose values are never asked compiles nothing
+
+    def value(theta: np.ndarray, problem) -> float:
+        nonlocal entry
+        if (
+            problem is prob
+            and type(theta) is np.ndarray
+            and theta.dtype == np.float64
+            and theta.ndim == 1
+            and theta.flags.c_contiguous
+        ):
+            if entry is None:
+                entry = kernel.compile((types.Array(types.float64, 1, "C"), kernel.typeof_pyval(prob)))
+            return entry(theta, prob)
+        return kernel(theta, problem)
+
+    return value
 
 
 def cost(theta: np.ndarray, prob) -> float:

@@ -682,9 +682,12 @@ class RCNetwork:
         xs, zs = st["xs"], st["zs"]
         res = np.array([v(r) for r in st["res"]], dtype)
         _check_positive(res, st["res"], "resistor")
-        g = 1.0 / res
-        G = st["L"].T @ (g[:, None] * st["L"])  # conductance (Laplacian) among nodes
-        Gb = st["P"].T @ (g[:, None] * st["E"]) + st["Gb"]  # nodes to inputs (conductances, heat gains)
+        # the conductance (Laplacian) among nodes and from nodes to inputs, with the numeric heat
+        # gains: the one compiled assembly, also the compiled costs' (imported here: a network is
+        # declared without loading numba)
+        from rczone.kernels.problem import conductances
+
+        G, Gb = conductances(st["L"], st["P"], st["E"], st["Gb"], res)
         for i, j, gain in st["heat"]:
             Gb[i, j] += v(gain)
         Nf, Mf = st["Nf"], st["Mf"]

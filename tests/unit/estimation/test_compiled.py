@@ -52,6 +52,28 @@ def test_compiled_cost_equals_the_python_objective_at_random_points(method, hold
         assert obj(eta) == pytest.approx(objective_reference_cost(obj, spec.to_theta(eta)), rel=1e-12)
 
 
+@pytest.mark.parametrize("method", ["ml", "ls"])
+def test_the_bound_value_kernel_takes_any_theta_and_problem(method) -> None:
+    """``value_kernel`` calls its problem's specialization directly (no per-call typing of the
+    named tuple) only for a contiguous float64 ``theta`` and that same problem; a strided or
+    integer ``theta`` and another problem give the oracle's values through the dispatcher."""
+    from rczone.kernels.problem import value_kernel
+
+    data = noisy_data()
+    spec = make_spec(NET2, FREE[method], fixed={"sigma_x0_Tw": 0.7})
+    obj = Objective(NET2, data, spec, method)
+    other = Objective(NET2, noisy_data(seed=4), spec, method)
+    value = value_kernel(obj._packed)
+    theta = np.asarray(spec.start, dtype=np.float64)
+    want = objective_reference_cost(obj, theta)
+    assert value(theta, obj._packed) == pytest.approx(want, rel=1e-12)
+    strided = np.repeat(theta, 2)[::2]
+    assert not strided.flags.c_contiguous
+    assert value(strided, obj._packed) == pytest.approx(want, rel=1e-12)
+    assert value(theta, other._packed) == pytest.approx(objective_reference_cost(other, theta), rel=1e-12)
+    assert value(theta, other._packed) != pytest.approx(want, rel=1e-6)
+
+
 def test_problems_the_compiled_path_cannot_take_go_the_general_way() -> None:
     d2 = noisy_data()
     # a tie that is a sum of parameters; a massless node

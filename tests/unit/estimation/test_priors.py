@@ -110,6 +110,13 @@ def test_map_cost_uses_a_declared_prior_in_every_engine() -> None:
     assert values[0] == pytest.approx(expect, rel=1e-9)
     assert values[1] == pytest.approx(expect, rel=1e-9)
     assert values[2] == pytest.approx(expect, rel=1e-9)
+    # the packed problem carries the declared prior too: the compiled kernel evaluates it with the
+    # same function (rczone.kernels.problem.prior_terms) as the Python objective
+    from rczone.estimation.compiled import compiled_cost, compiled_problem
+
+    packed = compiled_problem(Objective(net, data, spec, "map", prior_spread=0.5, likelihood_weight=w))
+    assert packed.penalty.prior_idx.size == 2
+    assert compiled_cost(packed, eta) == pytest.approx(expect, rel=1e-9)
 
 
 def test_map_without_declared_prior_keeps_the_compiled_search() -> None:

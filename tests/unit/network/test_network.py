@@ -47,6 +47,29 @@ def test_second_order_matrices_match_paper_eq4_written_by_hand():
     np.testing.assert_allclose(Bm, B + 0.1 * M[0], rtol=1e-14)
 
 
+def test_the_compiled_costs_assemble_the_same_hand_written_matrices():
+    """One assembly: the compiled costs' ``assemble`` (kernels/problem.py) on the network's conductance
+    form gives eq. (4) by hand, as ``state_space`` does through the same ``conductances``; and the
+    complex-step path (complex resistances) differentiates it exactly: dA/dR1 by hand."""
+    from rczone.kernels.problem import assemble
+
+    Cr, Cw, Rwin, R1, R2, cp = 2e5, 5e6, 0.12, 0.004, 0.006, 1005.0
+    net = second_order()
+    form = net.conductance_form
+    res, cap = net.conductance_values()
+    A0, N, B0, M = assemble(form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, res, cap)
+    A = np.array([[-(1 / Rwin + 1 / R1) / Cr, 1 / (R1 * Cr)], [1 / (R1 * Cw), -(1 / R1 + 1 / R2) / Cw]])
+    B = np.array([[1 / (Rwin * Cr), 0, 0, 1 / Cr], [0, 1 / (R2 * Cw), 0, 0]])
+    np.testing.assert_allclose(A0, A, rtol=1e-14)
+    np.testing.assert_allclose(B0, B, rtol=1e-14)
+    np.testing.assert_allclose(N, [[[-cp / Cr, 0], [0, 0]]], rtol=1e-14)
+    np.testing.assert_allclose(M, [[[0, 0, cp / Cr, 0], [0, 0, 0, 0]]], rtol=1e-14)
+    (d,) = net.state_space_derivatives(None, ["R1"], log=False)
+    dA = np.array([[1 / Cr, -1 / Cr], [-1 / Cw, 1 / Cw]]) / R1**2
+    np.testing.assert_allclose(d.dA, dA, rtol=1e-12)
+    np.testing.assert_array_equal(d.dB, np.zeros_like(B))
+
+
 def test_massless_node_between_two_resistors_equals_their_series_sum():
     series = RCNetwork(
         "s",
