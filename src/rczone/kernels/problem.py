@@ -151,16 +151,14 @@ def assemble(
     n = L.shape[1]
     p = E.shape[1]
     nf = Nf.shape[0]
-    G, Gb = conductances(L, P, E, Gb0, res)
-    A0 = np.empty((n, n))
-    B0 = np.empty((n, p))
+    A0, B0 = conductances(L, P, E, Gb0, res)  # scaled in place below
     N = np.empty((nf, n, n))
     M = np.empty((nf, n, p))
     for i in range(n):
         for j in range(n):
-            A0[i, j] = -G[i, j] / cap[i]
+            A0[i, j] = -A0[i, j] / cap[i]
         for j in range(p):
-            B0[i, j] = Gb[i, j] / cap[i]
+            B0[i, j] = B0[i, j] / cap[i]
         for f in range(nf):
             for j in range(n):
                 N[f, i, j] = Nf[f, i, j] / cap[i]
