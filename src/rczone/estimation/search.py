@@ -56,7 +56,7 @@ import numpy as np
 
 from rczone.errors import ParameterError
 from rczone.estimation.methods import method_of
-from rczone.estimation.optimize import StartOutcome, minimize_from, remembered
+from rczone.estimation.optimize import FINAL_FTOL, StartOutcome, minimize_from, remembered
 from rczone.estimation.parameters import ParameterSpec
 
 #: Costs of two end points closer than ``abs_tol + rel_tol * |cost| + SCALE_TOL * scale`` are the
@@ -357,6 +357,38 @@ def budgeted_search(
     return StartOutcome(np.asarray(start, dtype=float), out.end, out.cost, out.converged, n, out.message)
 
 
+def _polish(
+    cost: Callable[[np.ndarray], float],
+    spec: ParameterSpec,
+    outcomes: list[StartOutcome],
+    optima: tuple[Optimum, ...],
+    max_evals: int | None,
+    method: str,
+    scale: float,
+) -> tuple[tuple[Optimum, ...], float]:
+    """The best end searched on with the strict tolerance (:data:`~rczone.estimation.optimize.FINAL_FTOL`).
+
+    The exploring searches stop on a looser relative decrease; on a flat likelihood that can leave
+    the best end short of its minimum. The search that reached it goes on from there; its outcome
+    keeps its start and counts the extra evaluations (no start is added).
+    """
+    i = optima[0].starts[0]
+    out = outcomes[i]
+    more = minimize_from(cost, spec, out.end, "lbfgs", max_evals, ftol=FINAL_FTOL)
+    if not more.cost < out.cost:
+        outcomes[i] = replace(out, n_evals=out.n_evals + more.n_evals)
+        return optima, merge_optima(outcomes, method, scale)[1]
+    outcomes[i] = replace(
+        out,
+        end=more.end,
+        cost=more.cost,
+        n_evals=out.n_evals + more.n_evals,
+        converged=more.converged,
+        hessian=None,
+    )
+    return merge_optima(outcomes, method, scale)
+
+
 def merge_optima(
     outcomes: list[StartOutcome], method: str, scale: float = 0.0
 ) -> tuple[tuple[Optimum, ...], float]:
@@ -534,6 +566,8 @@ def global_search(
                 f"the best optimum was reached from only 1 of {n_runs} starts and {check_by}"
                 f" kept finding lower costs ({POLISH_ROUNDS} rounds): the search has not settled"
             )
+    if optimizer == "lbfgs":
+        optima, tol = _polish(cost, spec, outcomes, optima, max_evals, method, scale)
     best = optima[0]
     winner = outcomes[best.starts[0]]
     # the optimum is a minimum when at least one search that reached it ended by its own test (a
