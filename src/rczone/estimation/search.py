@@ -318,6 +318,38 @@ def local_search(
     return StartOutcome(np.asarray(start, dtype=float), out.end, out.cost, out.converged, n, out.message)
 
 
+def restart_search(
+    cost: Callable[[np.ndarray], float],
+    spec: ParameterSpec,
+    start: np.ndarray,
+    max_evals: int | None,
+    tol_of: Callable[[float], float],
+    best: float,
+    *,
+    curvature: np.ndarray | None = None,
+) -> StartOutcome:
+    """A gradient search restarted near the best end (cost ``best``): one stage, then in full unless it came back.
+
+    Back within the tolerance of ``best`` after :data:`GRADIENT_STAGE` evaluations, it has
+    confirmed that end (the cheap, usual case). Otherwise it goes on to its own end whether it is
+    above or below ``best``: from near a stalled search's end point the minimum beyond may take many
+    steps, and given up while still above that point (as a sampled start is) it was missed.
+    """
+    stage = GRADIENT_STAGE if max_evals is None else min(GRADIENT_STAGE, max_evals)
+    out = local_search(cost, spec, start, "lbfgs", stage, tol_of, curvature=curvature)
+    if out.converged or abs(out.cost - best) <= tol_of(best):
+        return out
+    more = local_search(cost, spec, out.end, "lbfgs", max_evals, tol_of)
+    return StartOutcome(
+        np.asarray(start, dtype=float),
+        more.end,
+        more.cost,
+        more.converged,
+        out.n_evals + more.n_evals,
+        more.message,
+    )
+
+
 def budgeted_search(
     cost: Callable[[np.ndarray], float],
     spec: ParameterSpec,
@@ -493,7 +525,7 @@ def global_search(
                 # given up while still above that point
                 curvature = np.diag(guide) if guide is not None else None
                 outcomes.append(
-                    local_search(cost, spec, s, optimizer, max_evals, tol_of, curvature=curvature)
+                    restart_search(cost, spec, s, max_evals, tol_of, outcomes[0].cost, curvature=curvature)
                 )
             elif outcomes and k > 0:
                 outcomes.append(budgeted_search(cost, spec, s, optimizer, max_evals, tol_of, outcomes))
@@ -541,7 +573,9 @@ def global_search(
                 # a restart near it, in full: from near a stalled search's end point it goes on to the
                 # minimum beyond (in stages it was given up while still above that point, which then
                 # counted as confirmed)
-                check = local_search(cost, spec, displaced(spec, best.theta, rng), second, max_evals, tol_of)
+                check = restart_search(
+                    cost, spec, displaced(spec, best.theta, rng), max_evals, tol_of, best.cost
+                )
             else:
                 check = minimize_from(cost, spec, best.theta, second, max_evals)
             outcomes.append(check)
