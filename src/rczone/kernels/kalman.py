@@ -189,13 +189,7 @@ def predict_covariance(
 ) -> None:  # fmt: skip
     """``P = Phi P Phi' + Qd``; ``dP = dPhi P Phi' + Phi P dPhi' + Phi dP Phi' + dQd`` (exactly symmetric)."""
     n = P.shape[0]
-    for i in range(n):
-        for j in range(n):
-            T[i, j] = 0.0
-        for a in range(n):
-            f = Phi[w, i, a]
-            for j in range(n):
-                T[i, j] += f * P[a, j]
+    phi_times(w, Phi, P, T)
     for d in range(dP.shape[0]):
         if moved[d]:
             for i in range(n):
@@ -220,6 +214,26 @@ def predict_covariance(
                     acc += X[i, j] + X[j, i]
                 dP[d, i, j] = acc
                 dP[d, j, i] = acc
+    times_phi_plus(w, T, Phi, Qd, P)
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def phi_times(w: int, Phi: np.ndarray, P: np.ndarray, T: np.ndarray) -> None:
+    """``T = Phi[w] P``: the first half of the covariance prediction (also kept by the reverse pass)."""
+    n = P.shape[0]
+    for i in range(n):
+        for j in range(n):
+            T[i, j] = 0.0
+        for a in range(n):
+            f = Phi[w, i, a]
+            for j in range(n):
+                T[i, j] += f * P[a, j]
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def times_phi_plus(w: int, T: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, P: np.ndarray) -> None:
+    """``P = T Phi[w]' + Qd[w]`` from the upper triangle, mirrored: exactly symmetric."""
+    n = P.shape[0]
     for i in range(n):
         for j in range(i, n):
             acc = Qd[w, i, j]

@@ -63,7 +63,7 @@ from rczone.kernels.arrays import (
     Prior,
     Series,
 )
-from rczone.kernels.kalman import FAST, stationary
+from rczone.kernels.kalman import FAST, phi_times, stationary, times_phi_plus
 
 
 class Adjoints(NamedTuple):
@@ -255,20 +255,8 @@ def nll_reverse(
         # P = Phi P Phi' + Qd, keeping T = Phi P
         flags[k] |= _COV
         T = tape.T[k]
-        for i in range(n):
-            for j in range(n):
-                T[i, j] = 0.0
-            for a in range(n):
-                f = Phi[w, i, a]
-                for j in range(n):
-                    T[i, j] += f * P[a, j]
-        for i in range(n):
-            for j in range(i, n):
-                acc = Qd[w, i, j]
-                for a in range(n):
-                    acc += T[i, a] * Phi[w, j, a]
-                P[i, j] = acc
-                P[j, i] = acc
+        phi_times(w, Phi, P, T)
+        times_phi_plus(w, T, Phi, Qd, P)
         if steady_rtol > 0.0 and w == prev_key and mask == prev_mask:
             steady = stationary(P, no_dP, P_prev, no_dP, steady_rtol)
             if steady:
