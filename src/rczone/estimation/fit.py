@@ -38,7 +38,7 @@ from rczone.estimation.optimize import OPTIMIZERS, StartOutcome
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.resolution import noise_floor
 from rczone.estimation.result import FitResult
-from rczone.estimation.search import global_search
+from rczone.estimation.search import COST_TIE, global_search
 from rczone.estimation.uncertainty import covariance, hessian, hessian_from_gradient
 from rczone.network import RCNetwork
 from rczone.network.stochastic import (
@@ -351,12 +351,6 @@ def fit(
         notes=tuple(notes),
         issues=tuple(dict.fromkeys(issues)),
     )
-
-
-#: Relative cost difference below which two ends of the best optimum are one point to rounding: the
-#: cost itself is computed to about 1e-13 of its value (the two ends of an ML fit's early agreement
-#: differ by 3e-13 at most on the virtual building's nights), so which of them is lower is noise.
-COST_TIE = 1e-10
 
 
 def winning_end(outcomes: Sequence[StartOutcome], starts: Sequence[int]) -> int:

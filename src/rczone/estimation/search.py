@@ -389,6 +389,13 @@ def budgeted_search(
     return StartOutcome(np.asarray(start, dtype=float), out.end, out.cost, out.converged, n, out.message)
 
 
+#: Relative cost difference below which two ends of the best optimum are one point to rounding: the
+#: cost itself is computed to about 1e-13 of its value (the two ends of an ML fit's early agreement
+#: differ by 3e-13 at most on the virtual building's nights), so which of them is lower is noise.
+#: The polish keeps an end (and the Hessian computed there) unless it gains more than this.
+COST_TIE = 1e-10
+
+
 def _polish(
     cost: Callable[[np.ndarray], float],
     spec: ParameterSpec,
@@ -397,6 +404,7 @@ def _polish(
     max_evals: int | None,
     method: str,
     scale: float,
+    tol: float,
 ) -> tuple[tuple[Optimum, ...], float]:
     """The best end searched on with the strict tolerance (:data:`~rczone.estimation.optimize.FINAL_FTOL`).
 
@@ -407,9 +415,9 @@ def _polish(
     i = optima[0].starts[0]
     out = outcomes[i]
     more = minimize_from(cost, spec, out.end, "lbfgs", max_evals, ftol=FINAL_FTOL)
-    if not more.cost < out.cost:
+    if not more.cost < out.cost - COST_TIE * max(abs(out.cost), 1.0):
         outcomes[i] = replace(out, n_evals=out.n_evals + more.n_evals)
-        return optima, merge_optima(outcomes, method, scale)[1]
+        return optima, tol
     outcomes[i] = replace(
         out,
         end=more.end,
@@ -601,7 +609,7 @@ def global_search(
                 f" kept finding lower costs ({POLISH_ROUNDS} rounds): the search has not settled"
             )
     if optimizer == "lbfgs":
-        optima, tol = _polish(cost, spec, outcomes, optima, max_evals, method, scale)
+        optima, tol = _polish(cost, spec, outcomes, optima, max_evals, method, scale, tol)
     best = optima[0]
     winner = outcomes[best.starts[0]]
     # the optimum is a minimum when at least one search that reached it ended by its own test (a

@@ -143,12 +143,10 @@ def test_the_adaptive_search_hands_its_first_hessian_to_the_standard_errors() ->
     spec = make_spec(NET2, free, fixed=fixed)
     obj = Objective(NET2, data, spec, "ml")
     first = res.starts[0]
-    assert res.starts[1].hessian is None
-    # kept only while it belongs to the first end (the final polish may move that end: then None)
-    if first.hessian is not None:
-        np.testing.assert_array_equal(
-            first.hessian, hessian_from_gradient(obj.value_and_gradient, spec.to_eta(first.end))
-        )
+    assert first.hessian is not None and res.starts[1].hessian is None
+    np.testing.assert_array_equal(
+        first.hessian, hessian_from_gradient(obj.value_and_gradient, spec.to_eta(first.end))
+    )
     theta = np.array([res.estimates[n] for n in spec.names])
     fresh = covariance(spec, theta, hessian_from_gradient(obj.value_and_gradient, spec.to_eta(theta)))
     np.testing.assert_array_equal([res.std_errors[n] for n in spec.names], fresh.std_error)
