@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import problems  # noqa: E402
 from rczone.estimation import Dataset, Objective, make_spec  # noqa: E402
-from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series  # noqa: E402
+from rczone.kernels.arrays import Discretization, FilterOptions, Observation, Prior, Series  # noqa: E402
 from rczone.kernels.discretize import interval_matrices, modal_matrices  # noqa: E402
 from rczone.kernels.kalman import (  # noqa: E402
     kalman_filter,
@@ -84,7 +84,7 @@ def both_filters(prob, theta: np.ndarray):
     series = Series(u, y, which)
 
     def general() -> float:
-        mats = interval_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh, True)
+        mats = interval_matrices(mod, Discretization(keys, scale, foh, True))
         return kalman_filter(
             mats,
             no_sensitivities(keys.shape[0], n, p),
@@ -96,7 +96,7 @@ def both_filters(prob, theta: np.ndarray):
         ).nll
 
     def modal() -> float:
-        mats, basis = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
+        mats, basis = modal_matrices(mod, Discretization(keys, scale, foh, True))
         return kalman_filter(
             mats,
             no_sensitivities(keys.shape[0], n, p),

@@ -22,7 +22,15 @@ from rczone.estimation.kalman import (
     kalman_nll_rc2,
     stochastic_matrices,
 )
-from rczone.kernels.arrays import Dynamics, FilterOptions, Observation, Prior, Series
+from rczone.kernels.arrays import (
+    Discretization,
+    Dynamics,
+    FilterOptions,
+    Observation,
+    Prior,
+    Series,
+    dynamics_model,
+)
 from rczone.kernels.discretize import modal_matrices
 from rczone.kernels.kalman import kalman_filter, modal_pays, no_sensitivities, outputs
 from rczone.simulation.discretize import symmetrizing_scale
@@ -163,7 +171,8 @@ def test_modal_coordinates_equal_the_numpy_twin(seed, n_cap, n_massless, n_outpu
     keys = np.column_stack([np.diff(t), m[:-1]])
     uniq, _, which = unique_rows(keys)
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
-    mats, basis = modal_matrices(ss.A, ss.N, ss.B, ss.M, uniq, np.diag(Qc).copy(), scale, hold == "foh")
+    mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, np.diag(Qc).copy())
+    mats, basis = modal_matrices(mod, Discretization(uniq, scale, hold == "foh", True))
     assert np.array_equal(mats.Phi, np.einsum("kii->ki", mats.Phi)[:, :, None] * np.eye(x0.size))  # diagonal
     n, p, ny = x0.size, u.shape[1], y.shape[1]
     obs = Observation(
@@ -194,7 +203,8 @@ def test_modal_coordinates_compute_values_only():
     ss, t, m, u, y, x0, P0, Qc, R = problem(rng, net, 10)
     uniq, _, which = unique_rows(np.column_stack([np.diff(t), m[:-1]]))
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
-    mats, basis = modal_matrices(ss.A, ss.N, ss.B, ss.M, uniq, np.diag(Qc).copy(), scale, False)
+    mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, np.diag(Qc).copy())
+    mats, basis = modal_matrices(mod, Discretization(uniq, scale, False, True))
     n, p, ny = x0.size, u.shape[1], y.shape[1]
     obs = Observation(
         ss.C, ss.D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))

@@ -29,6 +29,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from rczone.kernels.arrays import Discretization, dynamics_derivatives, dynamics_model
 from rczone.kernels.discretize import interval_derivatives
 from rczone.simulation import foh, zoh
 from rczone.simulation.discretize import process_noise_covariance, symmetrizing_scale
@@ -59,10 +60,11 @@ def both_routes(A, B, scale, qc, keys, hold, dA, dB, dqc, noise=True):
     """``interval_derivatives`` of one LTI model by the spectral route and by the expm route."""
     n, p = B.shape
     q = dA.shape[0]
-    args = (A, np.zeros((0, n, n)), B, np.zeros((0, n, p)), dA, np.zeros((q, 0, n, n)), dB)
-    args += (np.zeros((q, 0, n, p)), keys, qc, dqc)
-    spec = interval_derivatives(*args, scale, hold == "foh", noise)
-    ref = interval_derivatives(*args, np.empty(0), hold == "foh", noise)
+    mod = dynamics_model(A, np.zeros((0, n, n)), B, np.zeros((0, n, p)), qc)
+    der = dynamics_derivatives(dA, np.zeros((q, 0, n, n)), dB, np.zeros((q, 0, n, p)), dqc)
+    how = Discretization(np.ascontiguousarray(keys, dtype=float), np.empty(0), hold == "foh", noise)
+    spec = interval_derivatives(mod, der, how._replace(scale=scale))
+    ref = interval_derivatives(mod, der, how)
     return spec, ref
 
 

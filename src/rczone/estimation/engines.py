@@ -47,7 +47,17 @@ from rczone.estimation.kalman import (
     kalman_filter_arrays,
     stochastic_matrices,
 )
-from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series
+from rczone.kernels.arrays import (
+    AssembledDerivatives,
+    Discretization,
+    FilterOptions,
+    Observation,
+    Prior,
+    Series,
+    Start,
+    dynamics_derivatives,
+    dynamics_model,
+)
 from rczone.kernels.discretize import (
     interval_derivatives,
     interval_matrices,
@@ -156,19 +166,14 @@ class StartData(NamedTuple):
     y0: np.ndarray  #: (ny,), NaN where not measured
 
 
-class Directions(NamedTuple):
-    """Derivatives of the state-space matrices along ``q`` parameter directions."""
-
-    dA: np.ndarray  #: (q, n, n)
-    dN: np.ndarray  #: (q, n_flows, n, n)
-    dB: np.ndarray  #: (q, n, p)
-    dM: np.ndarray  #: (q, n_flows, n, p)
-
-
-def _no_directions(ss: BilinearStateSpace, q: int) -> Directions:
+def _no_directions(ss: BilinearStateSpace, q: int) -> AssembledDerivatives:
     n, p, nf = ss.n_states, ss.n_inputs, ss.n_flows
-    return Directions(
-        np.zeros((q, n, n)), np.zeros((q, nf, n, n)), np.zeros((q, n, p)), np.zeros((q, nf, n, p))
+    return dynamics_derivatives(
+        np.zeros((q, n, n)),
+        np.zeros((q, nf, n, n)),
+        np.zeros((q, n, p)),
+        np.zeros((q, nf, n, p)),
+        np.zeros((q, n)),
     )
 
 
@@ -177,7 +182,7 @@ def _start(
     first: StartData,
     given: np.ndarray,
     x0: np.ndarray,
-    directions: Directions,
+    directions: AssembledDerivatives,
     given_direction: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The initial state and its derivatives (q, n) by :func:`rczone.kernels.problem.initial_state`.
@@ -190,25 +195,21 @@ def _start(
     direct = measured_states(ss)
     states = np.array(sorted(direct), dtype=np.int64)
     first_y = np.asarray(first.y0, dtype=float)[[direct[i] for i in states.tolist()]]
-    f = np.ascontiguousarray
-    n = ss.n_states
-    x, dx, ok = start_kernel(
-        f(ss.A, dtype=float),
-        f(ss.N, dtype=float),
-        f(ss.B, dtype=float),
-        f(ss.M, dtype=float),
-        *(f(d, dtype=float) for d in directions),
-        np.array(first.m0, dtype=float),  # writable copies, as the compiled engine passes: one specialization
-        np.array(first.u0, dtype=float),
-        f(first_y),
-        states,
-        f(given, dtype=bool),
-        f(x0, dtype=float),
-        np.full(n, -1, dtype=np.int64) if given_direction is None else f(given_direction, dtype=np.int64),
-    )
-    if not ok:
+    q = directions.dA0.shape[0]
+    mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, np.zeros(ss.n_states))
+    given = np.ascontiguousarray(given, dtype=bool)
+    mod.x0[given] = np.asarray(x0, dtype=float)[given]
+    dx0 = np.zeros((q, ss.n_states))
+    if given_direction is not None:
+        for i, d in enumerate(np.asarray(given_direction).tolist()):
+            if given[i] and 0 <= d < q:
+                dx0[d, i] = 1.0
+    der = directions._replace(dx0=dx0)
+    # writable copies, as the compiled engine passes: one specialization
+    start = Start(np.array(first.m0, dtype=float), np.array(first.u0, dtype=float), first_y, states, given)
+    if not start_kernel(mod, der, start):
         raise np.linalg.LinAlgError("the steady state that starts the unmeasured states is singular")
-    return x, dx
+    return mod.x0, der.dx0
 
 
 def network_theta(network: RCNetwork, values: Mapping[str, float]) -> dict[str, float]:
@@ -288,7 +289,7 @@ def _initial_state_derivatives(
     values: Mapping[str, float],
     data: Dataset,
     wrt: Sequence[str],
-    directions: Directions,
+    directions: AssembledDerivatives,
 ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`initial_state` and its derivatives (len(wrt), n) along ``directions`` of the state space."""
     names = initial_state_names(ss.state_names)
@@ -369,19 +370,20 @@ def general_cost(
         for k, d in enumerate(derivs):  # the disturbances' diffusion follows their hyper-parameters
             if d is not None and d.dQ is not None:
                 dqc[k] += d.dQ
-    x0, dx0 = _initial_state_derivatives(ss, values, data, wrt, Directions(dA0, dN, dB0, dM))
+    qc = sw**2 + (0.0 if ls else ss.diffusion)
+    mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, qc)
+    der = dynamics_derivatives(dA0, dN, dB0, dM, dqc)
+    x0, dx0 = _initial_state_derivatives(ss, values, data, wrt, der)
     keys, which = data.intervals
     foh = hold == "foh"
     f = np.ascontiguousarray
-    A, N, B, M = f(ss.A), f(ss.N), f(ss.B), f(ss.M)
-    qc = sw**2 + (0.0 if ls else ss.diffusion)
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+    how = Discretization(keys, np.empty(0) if scale is None else scale, foh, not ls)
     if q:
-        scale = np.empty(0) if scale is None else scale
-        mats, dmats = interval_derivatives(A, N, B, M, dA0, dN, dB0, dM, keys, qc, dqc, scale, foh, not ls)
+        mats, dmats = interval_derivatives(mod, der, how)
     else:
         if scale is not None and not ls and modal_pays(which, n):
-            mats, basis = modal_matrices(A, N, B, M, keys, qc, scale, foh)
+            mats, basis = modal_matrices(mod, how)
             nll, n_obs, _, _ = kalman_filter(
                 mats,
                 no_sensitivities(keys.shape[0], n, p),
@@ -398,8 +400,7 @@ def general_cost(
                 )
             return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
         kernel = interval_matrices if scale is None else rc_interval_matrices  # see interval_discretization
-        scale = np.empty(0) if scale is None else scale
-        mats = kernel(A, N, B, M, keys, qc, scale, foh, not ls)
+        mats = kernel(mod, how)
         dmats = no_sensitivities(keys.shape[0], n, p)
     # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization
     y = np.require(data.y, np.float64, "CW")

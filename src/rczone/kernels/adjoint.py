@@ -47,7 +47,15 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import Assembled, AssembledDerivatives, FilterOptions, Observation, Prior, Series
+from rczone.kernels.arrays import (
+    Assembled,
+    AssembledDerivatives,
+    Discretization,
+    FilterOptions,
+    Observation,
+    Prior,
+    Series,
+)
 from rczone.kernels.discretize import rc_interval_derivatives
 from rczone.kernels.problem import LS, MAP, assembled, with_prior
 from rczone.kernels.reverse import Adjoints, contract, nll_reverse, zero_adjoints
@@ -227,10 +235,7 @@ def nll_rc2_adjoint(
 @njit(cache=True, error_model="numpy", inline="always")
 def _discretized(mod: Assembled, der: AssembledDerivatives, keys: np.ndarray, foh: bool):
     """The discrete matrices of each distinct interval and their derivatives, by the spectral formulas only."""
-    return rc_interval_derivatives(
-        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
-        np.sqrt(mod.cap), foh, True,
-    )  # fmt: skip
+    return rc_interval_derivatives(mod, der, Discretization(keys, np.sqrt(mod.cap), foh, True))
 
 
 @njit(cache=True, error_model="numpy", inline="always")

@@ -127,6 +127,47 @@ class FilterValue(NamedTuple):
     fim: np.ndarray  #: (q,) diagonal of the Fisher information
 
 
+class Discretization(NamedTuple):
+    """How the intervals of a bilinear model are discretized (:func:`rczone.kernels.discretize.interval_matrices`)."""
+
+    keys: np.ndarray  #: (K, 1 + nf) ``(dt, m_1, ..., m_nf)`` of each distinct interval
+    scale: (
+        np.ndarray
+    )  #: (n,) ``sqrt(capacities)`` of an RC network (spectral formulas), or (0,) (matrix exponentials)
+    foh: bool  #: first-order hold of the inputs (else zero-order)
+    noise: bool  #: compute ``Qd`` and its derivatives (zero otherwise)
+
+
+class Interval(NamedTuple):
+    """The continuous model over one interval: ``dx = (A x + B u) dt + dw``, ``cov(dw) = diag(qc) dt``."""
+
+    A: np.ndarray  #: (n, n)
+    B: np.ndarray  #: (n, p)
+    qc: np.ndarray  #: (n,) process-noise intensities
+    h: float  #: length of the interval, s
+
+
+class IntervalDirections(NamedTuple):
+    """Derivatives of an :class:`Interval`'s matrices along ``q`` parameter directions."""
+
+    dA: np.ndarray  #: (q, n, n)
+    dB: np.ndarray  #: (q, n, p)
+    dqc: np.ndarray  #: (q, n)
+
+
+class Rc2Model(NamedTuple):
+    """A 2-state RC model as scalars: ``A = [[a, a01], [a10, d]]`` and ``s = sqrt(capacities)``, ``is = 1/s``."""
+
+    a: float
+    a01: float
+    a10: float
+    d: float
+    s0: float
+    s1: float
+    is0: float
+    is1: float
+
+
 class Rc2Matrices(NamedTuple):
     """The exact discrete matrices of a 2-state RC model over one interval, as named scalars.
 
@@ -270,6 +311,16 @@ class AssembledDerivatives(NamedTuple):
     dr: np.ndarray  #: (ny, q)
 
 
+class Start(NamedTuple):
+    """What the initial state is derived from (:func:`rczone.kernels.problem.initial_state`)."""
+
+    m0: np.ndarray  #: (nf,) flows at the first sample, kg/s
+    u0: np.ndarray  #: (p,) inputs at the first sample
+    y0: np.ndarray  #: (ny,) first measurement, NaN where missing
+    out_state: np.ndarray  #: (ny,) int64, output j reads state out_state[j]
+    given: np.ndarray  #: (n,) bool, the state's initial value is given (kept as it is)
+
+
 class Problem(NamedTuple):
     """A packed estimation problem (:func:`rczone.estimation.compiled.compiled_problem`)."""
 
@@ -281,3 +332,57 @@ class Problem(NamedTuple):
     penalty: Penalty
     consts: ProblemConstants
     scratch: np.ndarray  #: (N,) buffer for the fused open-loop errors
+
+
+def dynamics_model(A0: np.ndarray, N: np.ndarray, B0: np.ndarray, M: np.ndarray, qc: np.ndarray) -> Assembled:
+    """An :class:`Assembled` of a bilinear model's dynamics only, for callers that have no filter start.
+
+    Parameters
+    ----------
+    A0, N, B0, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
+        ``A = A0 + sum_f m_f N_f``, ``B = B0 + sum_f m_f M_f``.
+    qc : ndarray, shape (n,)
+        Process-noise intensities.
+
+    Returns
+    -------
+    Assembled
+        With unit capacities, a zero initial state and covariance and no outputs (``C`` of shape
+        (0, n)): what :mod:`rczone.kernels.discretize` and the initial state read are the
+        dynamics. Every array is contiguous, writable float64, so one compiled specialization
+        serves these and the packed problem's.
+    """
+    n = A0.shape[0]
+    return Assembled(
+        _writable(A0), _writable(N), _writable(B0), _writable(M), np.ones(n), np.zeros(n), np.zeros((n, n)),
+        _writable(qc), np.zeros(0), np.zeros((0, n)),
+    )  # fmt: skip
+
+
+def dynamics_derivatives(
+    dA0: np.ndarray, dN: np.ndarray, dB0: np.ndarray, dM: np.ndarray, dqc: np.ndarray
+) -> AssembledDerivatives:
+    """An :class:`AssembledDerivatives` of the dynamics only (no outputs, a fixed initial covariance).
+
+    Parameters
+    ----------
+    dA0, dN, dB0, dM : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p)
+        Derivatives of the matrices of :func:`dynamics_model` along ``q`` directions.
+    dqc : ndarray, shape (q, n)
+        Derivatives of the process-noise intensities.
+
+    Returns
+    -------
+    AssembledDerivatives
+        With zero ``dx0`` and ``dP0`` and ``dr`` of shape (0, q).
+    """
+    q, n = dqc.shape
+    return AssembledDerivatives(
+        _writable(dA0), _writable(dN), _writable(dB0), _writable(dM), np.zeros((q, n)), np.zeros((q, n, n)),
+        _writable(dqc), np.zeros((0, q)),
+    )  # fmt: skip
+
+
+def _writable(a: np.ndarray) -> np.ndarray:
+    # contiguous, writable float64, as the packed problem's arrays: one compiled specialization
+    return np.require(a, np.float64, "CW")

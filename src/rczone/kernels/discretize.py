@@ -41,7 +41,19 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import Dynamics, DynamicsDerivatives, ModalBasis, ModalDynamics, Rc2Matrices
+from rczone.kernels.arrays import (
+    Assembled,
+    AssembledDerivatives,
+    Discretization,
+    Dynamics,
+    DynamicsDerivatives,
+    Interval,
+    IntervalDirections,
+    ModalBasis,
+    ModalDynamics,
+    Rc2Matrices,
+    Rc2Model,
+)
 from rczone.kernels.expm import expm_frechet, matmul, norm1
 
 #: Below this ``|x|`` the series of ``(e^x - 1 - x)/x^2`` is used.
@@ -71,20 +83,7 @@ def phi2(x: float, em1: float) -> float:
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def rc2_discretize(
-    a: float,
-    a01: float,
-    a10: float,
-    d: float,
-    s0: float,
-    s1: float,
-    is0: float,
-    is1: float,
-    h: float,
-    q0: float,
-    q1: float,
-    foh: bool,
-) -> Rc2Matrices:
+def rc2_discretize(model: Rc2Model, h: float, q0: float, q1: float, foh: bool) -> Rc2Matrices:
     """Exact discrete matrices of a 2-state RC model over ``h`` s, as 15 named numbers.
 
     ``A = [[a, a01], [a10, d]]`` with ``diag(s)^2 A`` symmetric (``s = sqrt(capacities)``), so
@@ -98,10 +97,15 @@ def rc2_discretize(
 
     Parameters
     ----------
-    s0, s1, is0, is1 : float
-        ``sqrt`` of the capacities and their reciprocals (constant over a data set: no division here).
+    model : Rc2Model
+        ``A`` and the ``sqrt`` of the capacities with their reciprocals (constant over a data set:
+        no division here), as named scalars (passed by value: no reference counts).
+    h : float
+        Interval, s.
     q0, q1 : float
         Process-noise intensities of the two states, K^2/s.
+    foh : bool
+        First-order hold (else zero-order).
 
     Returns
     -------
@@ -109,6 +113,8 @@ def rc2_discretize(
         ``Phi``, ``H0`` and ``H1`` with ``G0 = H0 B`` and ``G1 = H1 B`` (``H1 = 0`` for ZOH), and
         the upper triangle of ``Qd``.
     """
+    a, a01, a10, d = model.a, model.a01, model.a10, model.d
+    s0, s1, is0, is1 = model.s0, model.s1, model.is0, model.is1
     # symmetric S and its rotation [[cs, sn], [-sn, cs]]
     b = 0.5 * (a01 * s0 * is1 + a10 * s1 * is0)
     if b == 0.0:
@@ -237,19 +243,21 @@ def spectral_modal(
 
 
 @njit(cache=True, error_model="numpy")
-def spectral_discretize(
-    A: np.ndarray,
-    B: np.ndarray,
-    scale: np.ndarray,
-    qc: np.ndarray,
-    h: float,
-    foh: bool,
-    Phi: np.ndarray,
-    G0: np.ndarray,
-    G1: np.ndarray,
-    Qd: np.ndarray,
-) -> None:
-    """Exact ``Phi, G0, G1, Qd`` of an RC model: :func:`spectral_modal` brought back by ``T = diag(scale)^-1 V``."""
+def spectral_discretize(step: Interval, how: Discretization, out: Dynamics) -> None:
+    """Exact ``Phi, G0, G1, Qd`` of an RC model: :func:`spectral_modal` brought back by ``T = diag(scale)^-1 V``.
+
+    Parameters
+    ----------
+    step : Interval
+        The model over one interval.
+    how : Discretization
+        ``scale`` (``sqrt(capacities)``) and the hold are read.
+    out : Dynamics
+        Receives the matrices of this interval (2-d arrays; ``G1`` untouched for ZOH).
+    """
+    A, B, qc, h = step
+    scale, foh = how.scale, how.foh
+    Phi, G0, G1, Qd = out
     n = A.shape[0]
     p = B.shape[1]
     modal = spectral_modal(A, B, scale, qc, h, foh)
@@ -277,33 +285,37 @@ def spectral_discretize(
 
 
 @njit(cache=True, error_model="numpy")
-def modal_matrices(
-    A0: np.ndarray,
-    N: np.ndarray,
-    B0: np.ndarray,
-    M: np.ndarray,
-    keys: np.ndarray,
-    qc: np.ndarray,
-    scale: np.ndarray,
-    foh: bool,
-) -> tuple[Dynamics, ModalBasis]:
+def modal_matrices(mod: Assembled, how: Discretization) -> tuple[Dynamics, ModalBasis]:
     """The discrete matrices of each distinct interval in its modal coordinates, and those coordinates.
 
     :func:`spectral_modal` of each interval, as the :class:`Dynamics` the filter runs on
     (``Phi = diag(e)``, ``G0 = H0``, ``G1 = H1``, ``Qd = Qm``) with the :class:`ModalBasis` that
-    maps them back (:func:`rczone.kernels.kalman.kalman_filter` with ``basis``). Arguments as
-    :func:`rc_interval_matrices`.
+    maps them back (:func:`rczone.kernels.kalman.kalman_filter` with ``basis``).
+
+    Parameters
+    ----------
+    mod : Assembled
+        The bilinear model (``A0, N, B0, M``) and its process noise ``qc``.
+    how : Discretization
+        The distinct intervals, ``scale`` (``sqrt(capacities)``, required), the hold and ``noise``.
+
+    Returns
+    -------
+    Dynamics
+    ModalBasis
     """
-    n = A0.shape[0]
-    p = B0.shape[1]
+    keys, scale, foh = how.keys, how.scale, how.foh
+    n = mod.A0.shape[0]
+    p = mod.B0.shape[1]
     K = keys.shape[0]
     V = np.empty((K, n, n))
     Phi = np.zeros((K, n, n))
     G0 = np.empty((K, n, p))
     G1 = np.empty((K, n, p))
     Qd = np.empty((K, n, n))
+    qc = mod.qc if how.noise else np.zeros(n)
     for k in range(K):
-        A, B = _key_matrices(A0, N, B0, M, keys[k])
+        A, B = _key_matrices(mod, keys[k])
         step = spectral_modal(A, B, scale, qc, keys[k, 0], foh)
         V[k], G0[k], G1[k], Qd[k] = step.V, step.H0, step.H1, step.Qm
         for i in range(n):
@@ -313,40 +325,30 @@ def modal_matrices(
 
 @njit(cache=True, error_model="numpy")
 def expm_discretize(
-    A: np.ndarray,
-    B: np.ndarray,
-    qc: np.ndarray,
-    h: float,
-    foh: bool,
-    noise: bool,
-    dA: np.ndarray,
-    dB: np.ndarray,
-    dqc: np.ndarray,
-    Phi: np.ndarray,
-    G0: np.ndarray,
-    G1: np.ndarray,
-    Qd: np.ndarray,
-    dPhi: np.ndarray,
-    dG0: np.ndarray,
-    dG1: np.ndarray,
-    dQd: np.ndarray,
+    step: Interval, dstep: IntervalDirections, how: Discretization, out: Dynamics, dout: DynamicsDerivatives
 ) -> None:
     """``Phi, G0, G1, Qd`` and their derivatives along ``q`` directions, by matrix exponentials.
 
     Parameters
     ----------
-    A, B : ndarray, shapes (n, n), (n, p)
-    qc : ndarray, shape (n,)
-        ``Qc = diag(qc)``.
-    h : float
-        Interval, s.
-    foh : bool
-    dA, dB, dqc : ndarray, shapes (q, n, n), (q, n, p), (q, n)
-        Directions (derivatives of ``A``, ``B``, ``qc`` with respect to one parameter each).
-    Phi, G0, G1, Qd : outputs (``G1`` untouched for ZOH).
-    dPhi, dG0, dG1, dQd : ndarray, shapes (q, n, n), (q, n, p), (q, n, p), (q, n, n)
-        Outputs; ``dG1`` untouched for ZOH. Without ``noise``, ``Qd`` and ``dQd`` are zero.
+    step : Interval
+        ``A``, ``B`` (shapes (n, n), (n, p)), ``Qc = diag(qc)`` and the interval ``h``, s.
+    dstep : IntervalDirections
+        Directions (derivatives of ``A``, ``B``, ``qc`` with respect to one parameter each),
+        shapes (q, n, n), (q, n, p), (q, n).
+    how : Discretization
+        The hold (``foh``) and ``noise`` are read.
+    out : Dynamics
+        Receives ``Phi, G0, G1, Qd`` of this interval (2-d arrays; ``G1`` untouched for ZOH).
+    dout : DynamicsDerivatives
+        Receives their derivatives, shapes (q, n, n), (q, n, p), (q, n, p), (q, n, n); ``dG1``
+        untouched for ZOH. Without ``noise``, ``Qd`` and ``dQd`` are zero.
     """
+    A, B, qc, h = step
+    dA, dB, dqc = dstep
+    foh, noise = how.foh, how.noise
+    Phi, G0, G1, Qd = out
+    dPhi, dG0, dG1, dQd = dout
     n = A.shape[0]
     p = B.shape[1]
     q = dA.shape[0]
@@ -634,24 +636,7 @@ def _dd4_00(a: float, b: float, ea: float, eb: float) -> float:
 
 @njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
 def spectral_derivatives(
-    A: np.ndarray,
-    B: np.ndarray,
-    scale: np.ndarray,
-    qc: np.ndarray,
-    h: float,
-    foh: bool,
-    noise: bool,
-    dA: np.ndarray,
-    dB: np.ndarray,
-    dqc: np.ndarray,
-    Phi: np.ndarray,
-    G0: np.ndarray,
-    G1: np.ndarray,
-    Qd: np.ndarray,
-    dPhi: np.ndarray,
-    dG0: np.ndarray,
-    dG1: np.ndarray,
-    dQd: np.ndarray,
+    step: Interval, dstep: IntervalDirections, how: Discretization, out: Dynamics, dout: DynamicsDerivatives
 ) -> None:
     """As :func:`expm_discretize` for an RC model, from one symmetric eigen-decomposition.
 
@@ -676,10 +661,11 @@ def spectral_derivatives(
 
     Parameters
     ----------
-    scale : ndarray, shape (n,)
-        ``sqrt(capacities)``: ``diag(scale) A diag(scale)^-1`` is symmetric (checked by the caller).
-
-    Other parameters and outputs are those of :func:`expm_discretize`.
+    step, dstep, out, dout
+        As :func:`expm_discretize`.
+    how : Discretization
+        ``scale``, ``sqrt(capacities)``: ``diag(scale) A diag(scale)^-1`` is symmetric (checked by
+        the caller); the hold and ``noise``.
 
     References
     ----------
@@ -687,6 +673,11 @@ def spectral_derivatives(
     .. [2] A. McCurdy, K. C. Ng, B. N. Parlett, "Accurate computation of divided differences of
        the exponential function", Math. Comp. 43(168), 1984.
     """
+    A, B, qc, h = step
+    dA, dB, dqc = dstep
+    scale, foh, noise = how.scale, how.foh, how.noise
+    Phi, G0, G1, Qd = out
+    dPhi, dG0, dG1, dQd = dout
     n = A.shape[0]
     p = B.shape[1]
     q = dA.shape[0]
@@ -960,12 +951,11 @@ def _symmetrize(X: np.ndarray) -> None:
 
 
 @njit(cache=True, error_model="numpy")
-def _key_matrices(
-    A0: np.ndarray, N: np.ndarray, B0: np.ndarray, M: np.ndarray, key: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def _key_matrices(mod: Assembled, key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``A0 + sum m_f N_f`` and ``B0 + sum m_f M_f`` for ``key = (dt, m_1, ...)``."""
-    A = A0.copy()
-    B = B0.copy()
+    N, M = mod.N, mod.M
+    A = mod.A0.copy()
+    B = mod.B0.copy()
     for f in range(N.shape[0]):
         mf = key[1 + f]
         if mf != 0.0:
@@ -978,25 +968,17 @@ def _key_matrices(
 
 
 @njit(cache=True, error_model="numpy")
-def _rc_interval(
-    A: np.ndarray,
-    B: np.ndarray,
-    scale: np.ndarray,
-    qc: np.ndarray,
-    h: float,
-    foh: bool,
-    Phi: np.ndarray,
-    G0: np.ndarray,
-    G1: np.ndarray,
-    Qd: np.ndarray,
-) -> None:
+def _rc_interval(step: Interval, how: Discretization, out: Dynamics) -> None:
     """One interval of an RC network: the closed 2-state form or the spectral formulas."""
+    A, B, qc, h = step
+    scale = how.scale
+    Phi, G0, G1, Qd = out
     p = B.shape[1]
     if scale.shape[0] == 2:
-        m = rc2_discretize(
-            A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1], h,
-            qc[0], qc[1], foh,
-        )  # fmt: skip
+        model = Rc2Model(
+            A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1]
+        )
+        m = rc2_discretize(model, h, qc[0], qc[1], how.foh)
         Phi[0, 0], Phi[0, 1], Phi[1, 0], Phi[1, 1] = m.phi00, m.phi01, m.phi10, m.phi11
         Qd[0, 0], Qd[0, 1], Qd[1, 0], Qd[1, 1] = m.qd00, m.qd01, m.qd01, m.qd11
         for j in range(p):
@@ -1005,47 +987,45 @@ def _rc_interval(
             G1[0, j] = m.h1_00 * B[0, j] + m.h1_01 * B[1, j]
             G1[1, j] = m.h1_10 * B[0, j] + m.h1_11 * B[1, j]
     else:
-        spectral_discretize(A, B, scale, qc, h, foh, Phi, G0, G1, Qd)
+        spectral_discretize(step, how, out)
 
 
 @njit(cache=True, error_model="numpy")
-def rc_interval_matrices(
-    A0: np.ndarray,
-    N: np.ndarray,
-    B0: np.ndarray,
-    M: np.ndarray,
-    keys: np.ndarray,
-    qc: np.ndarray,
-    scale: np.ndarray,
-    foh: bool,
-    noise: bool,
-) -> Dynamics:
+def rc_interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
     """:func:`interval_matrices` of an RC network (``scale`` symmetrizes every ``A``), by spectral formulas only.
 
     The same matrices; a caller that knows its model is an RC network calls this one, which does
     not compile the matrix-exponential route (a first run's compile time, issue 19).
+
+    Parameters
+    ----------
+    mod, how
+        As :func:`interval_matrices` (``how.scale`` required).
+
+    Returns
+    -------
+    Dynamics
     """
-    n = A0.shape[0]
-    p = B0.shape[1]
+    keys = how.keys
+    n = mod.A0.shape[0]
+    p = mod.B0.shape[1]
     K = keys.shape[0]
-    Phi = np.empty((K, n, n))
-    G0 = np.empty((K, n, p))
-    G1 = np.zeros((K, n, p))
-    Qd = np.zeros((K, n, n))
-    q = qc if noise else np.zeros(n)
+    out = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.zeros((K, n, n)))
+    qc = mod.qc if how.noise else np.zeros(n)
     for k in range(K):
-        A, B = _key_matrices(A0, N, B0, M, keys[k])
-        _rc_interval(A, B, scale, q, keys[k, 0], foh, Phi[k], G0[k], G1[k], Qd[k])
-    return Dynamics(Phi, G0, G1, Qd)
+        A, B = _key_matrices(mod, keys[k])
+        _rc_interval(
+            Interval(A, B, qc, keys[k, 0]), how, Dynamics(out.Phi[k], out.G0[k], out.G1[k], out.Qd[k])
+        )
+    return out
 
 
 @njit(cache=True, error_model="numpy")
-def _key_directions(
-    dA0: np.ndarray, dN: np.ndarray, dB0: np.ndarray, dM: np.ndarray, key: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+def _key_directions(der: AssembledDerivatives, key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The derivatives of :func:`_key_matrices`' sums along each direction, shapes (q, n, n), (q, n, p)."""
-    dA = dA0.copy()
-    dB = dB0.copy()
+    dN, dM = der.dN, der.dM
+    dA = der.dA0.copy()
+    dB = der.dB0.copy()
     for f in range(dN.shape[1]):
         mf = key[1 + f]
         if mf != 0.0:
@@ -1059,67 +1039,79 @@ def _key_directions(
 
 
 @njit(cache=True, error_model="numpy")
-def interval_matrices(
-    A0: np.ndarray,
-    N: np.ndarray,
-    B0: np.ndarray,
-    M: np.ndarray,
-    keys: np.ndarray,
-    qc: np.ndarray,
-    scale: np.ndarray,
-    foh: bool,
-    noise: bool,
-) -> Dynamics:
+def interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
     """The discrete matrices of each distinct interval.
 
     Parameters
     ----------
-    A0, N, B0, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
-    keys : ndarray, shape (K, 1 + nf)
-        ``(dt, m_1, ..., m_nf)`` of each distinct interval.
-    qc : ndarray, shape (n,)
-    scale : ndarray, shape (n,) or (0,)
-        ``sqrt(capacities)`` when it symmetrizes every ``A`` (an RC network: spectral
-        formulas, :func:`rc_interval_matrices`); empty for matrix exponentials.
-    foh : bool
-    noise : bool
-        Compute ``Qd`` (zero otherwise, e.g. for open-loop least squares).
+    mod : Assembled
+        The bilinear model: ``A = A0 + sum_f m_f N_f``, ``B = B0 + sum_f m_f M_f`` (shapes (n, n),
+        (nf, n, n), (n, p), (nf, n, p)) and the process-noise intensities ``qc`` (n,); the other
+        fields are not read (:func:`rczone.kernels.arrays.dynamics_model` builds one from matrices).
+    how : Discretization
+        ``keys`` (K, 1 + nf), ``(dt, m_1, ..., m_nf)`` of each distinct interval; ``scale``,
+        ``sqrt(capacities)`` when it symmetrizes every ``A`` (an RC network: spectral formulas,
+        :func:`rc_interval_matrices`), empty for matrix exponentials; the hold; ``noise``: compute
+        ``Qd`` (zero otherwise, e.g. for open-loop least squares).
+
+    Returns
+    -------
+    Dynamics
     """
-    n = A0.shape[0]
-    if scale.shape[0] == n:
-        return rc_interval_matrices(A0, N, B0, M, keys, qc, scale, foh, noise)
-    p = B0.shape[1]
+    n = mod.A0.shape[0]
+    if how.scale.shape[0] == n:
+        return rc_interval_matrices(mod, how)
+    keys = how.keys
+    p = mod.B0.shape[1]
     K = keys.shape[0]
-    Phi = np.empty((K, n, n))
-    G0 = np.empty((K, n, p))
-    G1 = np.zeros((K, n, p))
-    Qd = np.zeros((K, n, n))
-    none = np.empty((0, n, n))
+    out = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.zeros((K, n, n)))
+    none = IntervalDirections(np.empty((0, n, n)), np.empty((0, n, p)), np.empty((0, n)))
+    dout = DynamicsDerivatives(
+        np.empty((0, n, n)), np.empty((0, n, p)), np.empty((0, n, p)), np.empty((0, n, n))
+    )
     for k in range(K):
-        A, B = _key_matrices(A0, N, B0, M, keys[k])
-        expm_discretize(
-            A, B, qc, keys[k, 0], foh, noise, none, np.empty((0, n, p)), np.empty((0, n)),
-            Phi[k], G0[k], G1[k], Qd[k], none, np.empty((0, n, p)), np.empty((0, n, p)), none,
-        )  # fmt: skip
-    return Dynamics(Phi, G0, G1, Qd)
+        A, B = _key_matrices(mod, keys[k])
+        step = Interval(A, B, mod.qc, keys[k, 0])
+        expm_discretize(step, none, how, Dynamics(out.Phi[k], out.G0[k], out.G1[k], out.Qd[k]), dout)
+    return out
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _stacks(mod: Assembled, der: AssembledDerivatives, K: int) -> tuple[Dynamics, DynamicsDerivatives]:
+    """Room for the matrices of ``K`` intervals and their derivatives (``G1``, ``dG1`` zero: ZOH leaves them)."""
+    n = mod.A0.shape[0]
+    p = mod.B0.shape[1]
+    q = der.dA0.shape[0]
+    mats = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.empty((K, n, n)))
+    dmats = DynamicsDerivatives(
+        np.empty((K, q, n, n)), np.empty((K, q, n, p)), np.zeros((K, q, n, p)), np.empty((K, q, n, n))
+    )
+    return mats, dmats
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _interval(
+    mod: Assembled,
+    der: AssembledDerivatives,
+    key: np.ndarray,
+    mats: Dynamics,
+    dmats: DynamicsDerivatives,
+    k: int,
+) -> tuple[Interval, IntervalDirections, Dynamics, DynamicsDerivatives]:
+    """Interval ``key = (dt, m_1, ...)``'s model and directions, and the ``k``-th slices of the stacks it fills."""
+    A, B = _key_matrices(mod, key)
+    dA, dB = _key_directions(der, key)
+    return (
+        Interval(A, B, mod.qc, key[0]),
+        IntervalDirections(dA, dB, der.dqc),
+        Dynamics(mats.Phi[k], mats.G0[k], mats.G1[k], mats.Qd[k]),
+        DynamicsDerivatives(dmats.dPhi[k], dmats.dG0[k], dmats.dG1[k], dmats.dQd[k]),
+    )
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def rc_interval_derivatives(
-    A0: np.ndarray,
-    N: np.ndarray,
-    B0: np.ndarray,
-    M: np.ndarray,
-    dA0: np.ndarray,
-    dN: np.ndarray,
-    dB0: np.ndarray,
-    dM: np.ndarray,
-    keys: np.ndarray,
-    qc: np.ndarray,
-    dqc: np.ndarray,
-    scale: np.ndarray,
-    foh: bool,
-    noise: bool,
+    mod: Assembled, der: AssembledDerivatives, how: Discretization
 ) -> tuple[Dynamics, DynamicsDerivatives]:
     """:func:`interval_derivatives` of an RC network, by the spectral formulas only.
 
@@ -1131,69 +1123,37 @@ def rc_interval_derivatives(
 
     Parameters
     ----------
-    A0, N, B0, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
-        ``A = A0 + sum_f m_f N_f``, ``B = B0 + sum_f m_f M_f``.
-    dA0, dN, dB0, dM : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p)
-        Their derivatives along ``q`` directions.
-    keys : ndarray, shape (K, 1 + nf)
-        ``(dt, m_1, ..., m_nf)`` of each distinct interval.
-    qc, dqc : ndarray, shapes (n,), (q, n)
-        Process-noise intensities and their derivatives.
-    scale : ndarray, shape (n,)
-        ``sqrt(capacities)``.
-    foh : bool
-        First-order hold.
-    noise : bool
-        Compute ``Qd`` and its derivatives.
+    mod, der, how
+        As :func:`interval_derivatives` (``how.scale``, ``sqrt(capacities)``, required).
 
     Returns
     -------
     Dynamics
     DynamicsDerivatives
     """
-    n = A0.shape[0]
-    p = B0.shape[1]
-    K = keys.shape[0]
-    q = dA0.shape[0]
-    mats = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.empty((K, n, n)))
-    dmats = DynamicsDerivatives(
-        np.empty((K, q, n, n)), np.empty((K, q, n, p)), np.zeros((K, q, n, p)), np.empty((K, q, n, n))
-    )
-    for k in range(K):
-        A, B = _key_matrices(A0, N, B0, M, keys[k])
-        dA, dB = _key_directions(dA0, dN, dB0, dM, keys[k])
-        spectral_derivatives(
-            A, B, scale, qc, keys[k, 0], foh, noise, dA, dB, dqc, mats.Phi[k], mats.G0[k], mats.G1[k],
-            mats.Qd[k], dmats.dPhi[k], dmats.dG0[k], dmats.dG1[k], dmats.dQd[k],
-        )  # fmt: skip
+    mats, dmats = _stacks(mod, der, how.keys.shape[0])
+    for k in range(how.keys.shape[0]):
+        step, dstep, out, dout = _interval(mod, der, how.keys[k], mats, dmats, k)
+        spectral_derivatives(step, dstep, how, out, dout)
     return mats, dmats
 
 
 @njit(cache=True, error_model="numpy")
 def interval_derivatives(
-    A0: np.ndarray,
-    N: np.ndarray,
-    B0: np.ndarray,
-    M: np.ndarray,
-    dA0: np.ndarray,
-    dN: np.ndarray,
-    dB0: np.ndarray,
-    dM: np.ndarray,
-    keys: np.ndarray,
-    qc: np.ndarray,
-    dqc: np.ndarray,
-    scale: np.ndarray,
-    foh: bool,
-    noise: bool,
+    mod: Assembled, der: AssembledDerivatives, how: Discretization
 ) -> tuple[Dynamics, DynamicsDerivatives]:
     """As :func:`interval_matrices`, with the derivatives along ``q`` directions.
 
     Parameters
     ----------
-    dA0, dN, dB0, dM, dqc : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p), (q, n)
-    scale : ndarray, shape (n,) or (0,)
-        ``sqrt(capacities)`` when it symmetrizes every ``A`` (an RC network:
-        :func:`rc_interval_derivatives`); empty for matrix exponentials (:func:`expm_discretize`).
+    mod : Assembled
+        As :func:`interval_matrices`.
+    der : AssembledDerivatives
+        ``dA0, dN, dB0, dM, dqc`` (shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p),
+        (q, n)) are read (:func:`rczone.kernels.arrays.dynamics_derivatives` builds one).
+    how : Discretization
+        As :func:`interval_matrices`: ``scale`` for an RC network (:func:`rc_interval_derivatives`),
+        empty for matrix exponentials (:func:`expm_discretize`).
 
     Returns
     -------
@@ -1202,25 +1162,11 @@ def interval_derivatives(
     DynamicsDerivatives
         Their derivatives along the ``q`` directions.
     """
-    n = A0.shape[0]
-    if scale.shape[0] == n:
-        return rc_interval_derivatives(A0, N, B0, M, dA0, dN, dB0, dM, keys, qc, dqc, scale, foh, noise)
-    p = B0.shape[1]
-    K = keys.shape[0]
-    q = dA0.shape[0]
-    Phi = np.empty((K, n, n))
-    G0 = np.empty((K, n, p))
-    G1 = np.zeros((K, n, p))
-    Qd = np.empty((K, n, n))
-    dPhi = np.empty((K, q, n, n))
-    dG0 = np.empty((K, q, n, p))
-    dG1 = np.zeros((K, q, n, p))
-    dQd = np.empty((K, q, n, n))
-    for k in range(K):
-        A, B = _key_matrices(A0, N, B0, M, keys[k])
-        dA, dB = _key_directions(dA0, dN, dB0, dM, keys[k])
-        expm_discretize(
-            A, B, qc, keys[k, 0], foh, noise, dA, dB, dqc, Phi[k], G0[k], G1[k], Qd[k], dPhi[k], dG0[k],
-            dG1[k], dQd[k],
-        )  # fmt: skip
-    return Dynamics(Phi, G0, G1, Qd), DynamicsDerivatives(dPhi, dG0, dG1, dQd)
+    n = mod.A0.shape[0]
+    if how.scale.shape[0] == n:
+        return rc_interval_derivatives(mod, der, how)
+    mats, dmats = _stacks(mod, der, how.keys.shape[0])
+    for k in range(how.keys.shape[0]):
+        step, dstep, out, dout = _interval(mod, der, how.keys[k], mats, dmats, k)
+        expm_discretize(step, dstep, how, out, dout)
+    return mats, dmats

@@ -50,11 +50,15 @@ from numba import njit, types
 from rczone.kernels.arrays import (
     Assembled,
     AssembledDerivatives,
+    ConductanceArrays,
+    Discretization,
     ElementValues,
     FilterOptions,
     Observation,
     Prior,
     Series,
+    Slots,
+    Start,
 )
 from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
@@ -140,18 +144,30 @@ def conductances(
 
 
 @njit(cache=True, error_model="numpy")
-def assemble(
-    L: np.ndarray, P: np.ndarray, E: np.ndarray, Gb0: np.ndarray, Nf: np.ndarray, Mf: np.ndarray, res, cap
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def assemble(form: ConductanceArrays, res, cap) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(A0, N, B0, M)`` of the conductance form for resistor values ``res`` and capacities ``cap``.
 
     ``A0 = -G / c``, ``B0 = Gb / c`` (rows divided by the capacities) of :func:`conductances`,
     ``N = Nf / c``, ``M = Mf / c``.
+
+    Parameters
+    ----------
+    form : ConductanceArrays
+        The network in conductance form.
+    res : ndarray, shape (nr,)
+        Resistances, K/W.
+    cap : ndarray, shape (n,)
+        Capacities, J/K.
+
+    Returns
+    -------
+    A0, N, B0, M : ndarray, shapes (n, n), (nf, n, n), (n, p), (nf, n, p)
     """
-    n = L.shape[1]
-    p = E.shape[1]
+    Nf, Mf = form.Nf, form.Mf
+    n = form.L.shape[1]
+    p = form.E.shape[1]
     nf = Nf.shape[0]
-    A0, B0 = conductances(L, P, E, Gb0, res)  # scaled in place below
+    A0, B0 = conductances(form.L, form.P, form.E, form.Gb0, res)  # scaled in place below
     N = np.empty((nf, n, n))
     M = np.empty((nf, n, p))
     for i in range(n):
@@ -168,11 +184,31 @@ def assemble(
 
 
 @njit(cache=True, error_model="numpy")
-def assemble_derivatives(L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_idx, cap_k, q: int) -> tuple:
+def assemble_derivatives(
+    form: ConductanceArrays, slots: Slots, res: np.ndarray, mod: Assembled, q: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Derivatives of ``(A0, N, B0, M)`` with respect to ``theta[0..q-1]`` through the element slots.
 
-    Returns arrays of shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p).
+    Parameters
+    ----------
+    form : ConductanceArrays
+        The network in conductance form.
+    slots : Slots
+        The resistances' and capacities' slots are read.
+    res : ndarray, shape (nr,)
+        Resistances, K/W.
+    mod : Assembled
+        ``A0, N, B0, M`` and the capacities ``cap`` of :func:`assemble` are read.
+    q : int
+        Number of directions.
+
+    Returns
+    -------
+    dA0, dN, dB0, dM : ndarray, shapes (q, n, n), (q, nf, n, n), (q, n, p), (q, nf, n, p)
     """
+    L, P, E = form.L, form.P, form.E
+    A0, N, B0, M, cap = mod.A0, mod.N, mod.B0, mod.M, mod.cap
+    res_idx, res_k, cap_idx, cap_k = slots.res_idx, slots.res_k, slots.cap_idx, slots.cap_k
     nr, n = L.shape
     p = E.shape[1]
     nf = N.shape[0]
@@ -212,98 +248,113 @@ def assemble_derivatives(L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_id
 
 
 @njit(cache=True, error_model="numpy")
-def initial_state(
-    A0, N, B0, M, dA0, dN, dB0, dM, m0, u0, y0, out_state, x0_given, x0_values, x0_idx
-) -> tuple[np.ndarray, np.ndarray, bool]:
-    """Initial state and its derivatives (q, n); False when the steady state is singular.
+def initial_state(mod: Assembled, der: AssembledDerivatives, start: Start) -> bool:
+    """Derive the initial state ``mod.x0`` and its derivatives ``der.dx0`` (q, n) in place; False when singular.
 
-    Given ``x0`` values are used; the other states are derived from the data when needed: the
-    measured ones (first measurement finite) at ``y0``, the rest at the steady state given
-    them, ``A_ff x_f = -(B_f u0 + A_fm x_m)`` at the first flows.
+    The given states (``start.given``) keep the values and derivatives the caller put there; the
+    others are derived from the data when needed: the measured ones (first measurement finite) at
+    ``y0``, the rest at the steady state given them, ``A_ff x_f = -(B_f u0 + A_fm x_m)`` at the
+    first flows (every state that is not measured counts as free there, given or not).
+
+    Parameters
+    ----------
+    mod : Assembled
+        ``A0, N, B0, M`` are read; ``x0`` receives the derived states.
+    der : AssembledDerivatives
+        ``dA0, dN, dB0, dM`` are read; ``dx0`` receives the derived states' derivatives.
+    start : Start
+        The first sample, which state each output measures, and which states are given.
+
+    Returns
+    -------
+    bool
+        False when the steady state of the unmeasured states is singular (``x0`` then partial).
     """
+    A0, N, B0, M = mod.A0, mod.N, mod.B0, mod.M
+    dA0, dN, dB0, dM = der.dA0, der.dN, der.dB0, der.dM
+    m0, u0, y0, out_state, given = start.m0, start.u0, start.y0, start.out_state, start.given
     n = A0.shape[0]
     p = B0.shape[1]
     q = dA0.shape[0]
-    x = np.zeros(n)
-    dx = np.zeros((q, n))
     auto = False
     for i in range(n):
-        auto = auto or not x0_given[i]
-    if auto:
-        A = A0.copy()
-        B = B0.copy()
-        dA = dA0.copy()
-        dB = dB0.copy()
-        for f in range(N.shape[0]):
-            mf = m0[f]
-            for i in range(n):
-                for j in range(n):
-                    A[i, j] += mf * N[f, i, j]
-                for j in range(p):
-                    B[i, j] += mf * M[f, i, j]
-                for d in range(q):
-                    for j in range(n):
-                        dA[d, i, j] += mf * dN[d, f, i, j]
-                    for j in range(p):
-                        dB[d, i, j] += mf * dM[d, f, i, j]
-        measured = np.zeros(n, dtype=np.bool_)
-        for j in range(out_state.shape[0]):
-            s = out_state[j]
-            if y0[j] == y0[j] and not measured[s]:
-                measured[s] = True
-                x[s] = y0[j]
-        free = np.empty(n, dtype=np.int64)
-        nfree = 0
+        auto = auto or not given[i]
+    if not auto:
+        return True
+    x = np.zeros(n)
+    dx = np.zeros((q, n))
+    A = A0.copy()
+    B = B0.copy()
+    dA = dA0.copy()
+    dB = dB0.copy()
+    for f in range(N.shape[0]):
+        mf = m0[f]
         for i in range(n):
-            if not measured[i]:
-                free[nfree] = i
-                nfree += 1
-        if nfree:
-            Aff = np.empty((nfree, nfree))
-            rhs = np.zeros((nfree, 1))
+            for j in range(n):
+                A[i, j] += mf * N[f, i, j]
+            for j in range(p):
+                B[i, j] += mf * M[f, i, j]
+            for d in range(q):
+                for j in range(n):
+                    dA[d, i, j] += mf * dN[d, f, i, j]
+                for j in range(p):
+                    dB[d, i, j] += mf * dM[d, f, i, j]
+    measured = np.zeros(n, dtype=np.bool_)
+    for j in range(out_state.shape[0]):
+        s = out_state[j]
+        if y0[j] == y0[j] and not measured[s]:
+            measured[s] = True
+            x[s] = y0[j]
+    free = np.empty(n, dtype=np.int64)
+    nfree = 0
+    for i in range(n):
+        if not measured[i]:
+            free[nfree] = i
+            nfree += 1
+    if nfree:
+        Aff = np.empty((nfree, nfree))
+        rhs = np.zeros((nfree, 1))
+        for a in range(nfree):
+            i = free[a]
+            for b in range(nfree):
+                Aff[a, b] = A[i, free[b]]
+            acc = 0.0
+            for j in range(p):
+                acc -= B[i, j] * u0[j]
+            for j in range(n):
+                if measured[j]:
+                    acc -= A[i, j] * x[j]
+            rhs[a, 0] = acc
+        piv = np.empty(nfree, dtype=np.int64)
+        lu_factor(Aff, piv)
+        for a in range(nfree):
+            if not (Aff[a, a] != 0.0 and abs(Aff[a, a]) < math.inf):
+                return False
+        lu_solve(Aff, piv, rhs)
+        for a in range(nfree):
+            x[free[a]] = rhs[a, 0]
+        if q:
+            # A_ff dx_f = -(dA_f. x + dB_f u0)
+            sub = np.empty((nfree, q))
             for a in range(nfree):
                 i = free[a]
-                for b in range(nfree):
-                    Aff[a, b] = A[i, free[b]]
-                acc = 0.0
-                for j in range(p):
-                    acc -= B[i, j] * u0[j]
-                for j in range(n):
-                    if measured[j]:
-                        acc -= A[i, j] * x[j]
-                rhs[a, 0] = acc
-            piv = np.empty(nfree, dtype=np.int64)
-            lu_factor(Aff, piv)
+                for d in range(q):
+                    acc = 0.0
+                    for j in range(n):
+                        acc -= dA[d, i, j] * x[j]
+                    for j in range(p):
+                        acc -= dB[d, i, j] * u0[j]
+                    sub[a, d] = acc
+            lu_solve(Aff, piv, sub)
             for a in range(nfree):
-                if not (Aff[a, a] != 0.0 and abs(Aff[a, a]) < math.inf):
-                    return x, dx, False
-            lu_solve(Aff, piv, rhs)
-            for a in range(nfree):
-                x[free[a]] = rhs[a, 0]
-            if q:
-                # A_ff dx_f = -(dA_f. x + dB_f u0)
-                sub = np.empty((nfree, q))
-                for a in range(nfree):
-                    i = free[a]
-                    for d in range(q):
-                        acc = 0.0
-                        for j in range(n):
-                            acc -= dA[d, i, j] * x[j]
-                        for j in range(p):
-                            acc -= dB[d, i, j] * u0[j]
-                        sub[a, d] = acc
-                lu_solve(Aff, piv, sub)
-                for a in range(nfree):
-                    for d in range(q):
-                        dx[d, free[a]] = sub[a, d]
+                for d in range(q):
+                    dx[d, free[a]] = sub[a, d]
     for i in range(n):
-        if x0_given[i]:
-            x[i] = x0_values[i]
+        if not given[i]:
+            mod.x0[i] = x[i]
             for d in range(q):
-                dx[d, i] = 0.0
-            if 0 <= x0_idx[i] < q:
-                dx[x0_idx[i], i] = 1.0
-    return x, dx, True
+                der.dx0[d, i] = dx[d, i]
+    return True
 
 
 @njit(cache=True, error_model="numpy")
@@ -380,24 +431,15 @@ def assembled(theta: np.ndarray, prob, q: int) -> tuple[Assembled, AssembledDeri
     but meaningless) or the steady state that starts the unmeasured states is singular.
     """
     vals, valid = element_values(theta, prob)
-    form = prob.form
-    L, P, E, Gb0 = form.L, form.P, form.E, form.Gb0
-    Nf, Mf, out_state = form.Nf, form.Mf, form.output_state
+    out_state = prob.form.output_state
     m, u, y = prob.data.m, prob.data.u, prob.data.y
     sl = prob.slots
-    res_idx, res_k, cap_idx, cap_k = sl.res_idx, sl.res_k, sl.cap_idx, sl.cap_k
     sv_idx, sv_k, sw_idx, sw_k = sl.sv_idx, sl.sv_k, sl.sw_idx, sl.sw_k
     sx_idx, sx_k, x0_idx, x0_given = sl.sx_idx, sl.sx_k, sl.x0_idx, sl.x0_given
-    res, cap, sv, sw, sx, x0v = vals.res, vals.cap, vals.sv, vals.sw, vals.sx, vals.x0
-    n = L.shape[1]
+    sv, sw, sx = vals.sv, vals.sw, vals.sx
+    n = prob.form.L.shape[1]
     ny = out_state.shape[0]
-    A0, N, B0, M = assemble(L, P, E, Gb0, Nf, Mf, res, cap)
-    dA0, dN, dB0, dM = assemble_derivatives(
-        L, P, E, res, cap, A0, N, B0, M, res_idx, res_k, cap_idx, cap_k, q
-    )
-    x0, dx0, ok = initial_state(
-        A0, N, B0, M, dA0, dN, dB0, dM, m[0], u[0], y[0], out_state, x0_given, x0v, x0_idx
-    )
+    A0, N, B0, M = assemble(prob.form, vals.res, vals.cap)
     qc = np.zeros(n)
     P0 = np.zeros((n, n))
     r = np.ones(ny)
@@ -419,11 +461,17 @@ def assembled(theta: np.ndarray, prob, q: int) -> tuple[Assembled, AssembledDeri
     C = np.zeros((ny, n))  # output j reads state out_state[j]
     for s in range(ny):
         C[s, out_state[s]] = 1.0
-    return (
-        Assembled(A0, N, B0, M, cap, x0, P0, qc, r, C),
-        AssembledDerivatives(dA0, dN, dB0, dM, dx0, dP0, dqc, dr),
-        valid and ok,
-    )
+    # the given initial states, moving with their own parameter; initial_state derives the others
+    x0 = vals.x0.copy()
+    dx0 = np.zeros((q, n))
+    for s in range(n):
+        if x0_given[s] and 0 <= x0_idx[s] < q:
+            dx0[x0_idx[s], s] = 1.0
+    mod = Assembled(A0, N, B0, M, vals.cap, x0, P0, qc, r, C)
+    dA0, dN, dB0, dM = assemble_derivatives(prob.form, sl, vals.res, mod, q)
+    der = AssembledDerivatives(dA0, dN, dB0, dM, dx0, dP0, dqc, dr)
+    ok = initial_state(mod, der, Start(m[0], u[0], y[0], out_state, x0_given))
+    return mod, der, valid and ok
 
 
 @njit(cache=True, error_model="numpy")
@@ -579,10 +627,10 @@ def value_general(theta: np.ndarray, prob) -> float:
     dmats = no_sensitivities(keys.shape[0], n, p)
     if kind != LS and modal_pays(which, n):
         # values of larger models with flows constant over stretches: in modal coordinates
-        mats, basis = modal_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh)
+        mats, basis = modal_matrices(mod, Discretization(keys, scale, foh, True))
         nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs, basis)
     else:
-        mats = interval_matrices(mod.A0, mod.N, mod.B0, mod.M, keys, mod.qc, scale, foh, kind != LS)
+        mats = interval_matrices(mod, Discretization(keys, scale, foh, kind != LS))
         nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs)
         if n_obs >= 0 and kind == LS:
             return trapezoid(t, outs.e, outs.de, np.zeros(theta.shape[0]), np.zeros(theta.shape[0]))
@@ -613,10 +661,7 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
     n = mod.A0.shape[0]
     p = mod.B0.shape[1]
     ny = mod.C.shape[0]
-    mats, dmats = interval_derivatives(
-        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
-        np.sqrt(mod.cap), foh, kind != LS,
-    )  # fmt: skip
+    mats, dmats = interval_derivatives(mod, der, Discretization(keys, np.sqrt(mod.cap), foh, kind != LS))
     obs = Observation(mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, d, n)), np.zeros((ny, d, p)), der.dr)
     outs = outputs(t.shape[0], n, ny, d, kind == LS, False)
     nll, n_obs, g, fim = kalman_filter(

@@ -25,6 +25,7 @@ import math
 import numpy as np
 from numba import njit
 
+from rczone.kernels.arrays import Rc2Model
 from rczone.kernels.discretize import rc2_discretize
 
 
@@ -169,7 +170,7 @@ def nll_rc2(
             continue
         ready[g] = True
         a, a01, a10, d = flow_matrix(A0, N, m, k)
-        mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], qc[0], qc[1], foh)
+        mt = rc2_discretize(Rc2Model(a, a01, a10, d, s0, s1, is0, is1), t[k + 1] - t[k], qc[0], qc[1], foh)
         Phi[g, 0], Phi[g, 1], Phi[g, 2], Phi[g, 3] = mt.phi00, mt.phi01, mt.phi10, mt.phi11
         Qd[g, 0], Qd[g, 1], Qd[g, 2] = mt.qd00, mt.qd01, mt.qd11
         for j in range(p):
@@ -375,7 +376,7 @@ def simulate_rc2(
             fresh = fresh or m[k, f] != m[k - 1, f]
         if fresh:
             a, a01, a10, d = flow_matrix(A0, N, m, k)
-            mt = rc2_discretize(a, a01, a10, d, s0, s1, is0, is1, t[k + 1] - t[k], 0.0, 0.0, foh)
+            mt = rc2_discretize(Rc2Model(a, a01, a10, d, s0, s1, is0, is1), t[k + 1] - t[k], 0.0, 0.0, foh)
             f00, f01, f10, f11 = mt.phi00, mt.phi01, mt.phi10, mt.phi11
             for j in range(p):
                 b0, b1 = flow_column(B0, M, m, k, j)

@@ -37,7 +37,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import Dynamics, DynamicsDerivatives, FilterOptions, Observation, Prior, Series
+from rczone.kernels.arrays import (
+    Discretization,
+    Dynamics,
+    DynamicsDerivatives,
+    FilterOptions,
+    Observation,
+    Prior,
+    Series,
+)
 from rczone.kernels.discretize import interval_derivatives
 from rczone.kernels.kalman import kalman_filter, outputs
 from rczone.kernels.problem import assembled
@@ -158,10 +166,7 @@ def residuals(theta: np.ndarray, prob) -> Residuals:
             out.r[i] = math.nan
         return Residuals(out.r, out.jac, False)
     foh = prob.consts.foh
-    dyn, ddyn = interval_derivatives(
-        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, keys, mod.qc, der.dqc,
-        np.sqrt(mod.cap), foh, False,
-    )  # fmt: skip
+    dyn, ddyn = interval_derivatives(mod, der, Discretization(keys, np.sqrt(mod.cap), foh, False))
     n = mod.A0.shape[0]
     w = trapezoid_weights(t, y)
     state = prob.form.output_state

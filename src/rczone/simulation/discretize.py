@@ -420,26 +420,19 @@ def interval_discretization(
     """
     qc = _diagonal_intensity(Qc, A.shape[0])
     if qc is not None and not any(np.iscomplexobj(a) for a in (A, N, B, M)):
+        from rczone.kernels.arrays import Discretization, dynamics_model
         from rczone.kernels.discretize import interval_matrices, rc_interval_matrices
 
         scale = symmetrizing_scale(A, N, capacities)
-
-        def f(a: np.ndarray) -> np.ndarray:  # writable as the packed problem's: one compiled specialization
-            return np.require(a, np.float64, "CW")
-
         # an RC network's route does not compile the matrix exponentials (a first run's time)
         kernel = interval_matrices if scale is None else rc_interval_matrices
-        return kernel(
-            f(A),
-            f(N),
-            f(B),
-            f(M),
-            f(keys),
-            qc,
+        how = Discretization(
+            np.require(keys, np.float64, "CW"),
             np.empty(0) if scale is None else scale,
             hold == "foh",
             Qc is not None,
         )
+        return kernel(dynamics_model(A, N, B, M, qc), how)
     n, p, K = A.shape[0], B.shape[1], keys.shape[0]
     dtype = np.result_type(A, N, B, M, float if Qc is None else Qc)
     Phi = np.empty((K, n, n), dtype)

@@ -85,6 +85,7 @@ def test_adjoint_gradient_of_the_two_state_likelihood_equals_forward_sensitiviti
 def test_the_rc_discretization_derivatives_equal_the_matrix_exponentials(hold: str) -> None:
     """The spectral route the adjoint compiles alone (rc_interval_derivatives) against the other
     route of interval_derivatives: block matrix exponentials and their Frechet derivatives."""
+    from rczone.kernels.arrays import Discretization
     from rczone.kernels.discretize import interval_derivatives, rc_interval_derivatives
     from rczone.kernels.problem import LS, assembled
 
@@ -95,9 +96,9 @@ def test_the_rc_discretization_derivatives_equal_the_matrix_exponentials(hold: s
     theta = np.asarray(spec.start, dtype=float)
     mod, der, ok = assembled(theta, prob, theta.shape[0])
     assert ok and prob.data.keys.shape[0] > 1
-    args = (mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, prob.data.keys, mod.qc, der.dqc)
-    ours = rc_interval_derivatives(*args, np.sqrt(mod.cap), hold == "foh", prob.kind != LS)
-    expm = interval_derivatives(*args, np.empty(0), hold == "foh", prob.kind != LS)
+    how = Discretization(prob.data.keys, np.sqrt(mod.cap), hold == "foh", prob.kind != LS)
+    ours = rc_interval_derivatives(mod, der, how)
+    expm = interval_derivatives(mod, der, how._replace(scale=np.empty(0)))
     for a, b in zip((*ours[0], *ours[1]), (*expm[0], *expm[1])):
         np.testing.assert_allclose(a, b, rtol=1e-7, atol=1e-9 * np.abs(b).max())
 

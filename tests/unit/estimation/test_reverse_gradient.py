@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from rczone.estimation import Dataset, Objective, make_spec
-from rczone.kernels.arrays import FilterOptions, Observation, Prior, Series
+from rczone.kernels.arrays import Discretization, FilterOptions, Observation, Prior, Series
 from rczone.kernels.discretize import rc_interval_derivatives
 from rczone.kernels.problem import assembled, value_and_gradient
 from rczone.kernels.reverse import contract, nll_reverse, zero_adjoints
@@ -130,9 +130,8 @@ def test_reverse_gradient_through_steady_states_that_end_both_ways(hold: str) ->
     mod, der, ok = assembled(theta, prob, theta.size)
     assert ok
     mats, dmats = rc_interval_derivatives(
-        mod.A0, mod.N, mod.B0, mod.M, der.dA0, der.dN, der.dB0, der.dM, prob.data.keys, mod.qc, der.dqc,
-        np.sqrt(mod.cap), hold == "foh", True,
-    )  # fmt: skip
+        mod, der, Discretization(prob.data.keys, np.sqrt(mod.cap), hold == "foh", True)
+    )
     n, p, ny, K = 3, mod.B0.shape[1], 2, prob.data.keys.shape[0]
     obs = Observation(
         mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))

@@ -51,13 +51,17 @@ def test_the_compiled_costs_assemble_the_same_hand_written_matrices():
     """One assembly: the compiled costs' ``assemble`` (kernels/problem.py) on the network's conductance
     form gives eq. (4) by hand, as ``state_space`` does through the same ``conductances``; and the
     complex-step path (complex resistances) differentiates it exactly: dA/dR1 by hand."""
+    from rczone.kernels.arrays import ConductanceArrays
     from rczone.kernels.problem import assemble
 
     Cr, Cw, Rwin, R1, R2, cp = 2e5, 5e6, 0.12, 0.004, 0.006, 1005.0
     net = second_order()
     form = net.conductance_form
     res, cap = net.conductance_values()
-    A0, N, B0, M = assemble(form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, res, cap)
+    arrays = ConductanceArrays(
+        form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, np.array(form.output_state)
+    )
+    A0, N, B0, M = assemble(arrays, res, cap)
     A = np.array([[-(1 / Rwin + 1 / R1) / Cr, 1 / (R1 * Cr)], [1 / (R1 * Cw), -(1 / R1 + 1 / R2) / Cw]])
     B = np.array([[1 / (Rwin * Cr), 0, 0, 1 / Cr], [0, 1 / (R2 * Cw), 0, 0]])
     np.testing.assert_allclose(A0, A, rtol=1e-14)
