@@ -296,9 +296,6 @@ class Objective:
             packed = packed._replace(
                 consts=packed.consts._replace(fused=False)
             )  # values from the general kernel
-        if packed is not None and self.declared_prior:
-            # the kernel's prior is the construction log-normal only: a declared one is added here
-            packed = packed._replace(penalty=packed.penalty._replace(prior_idx=np.empty(0, dtype=np.int64)))
         object.__setattr__(self, "engine", engine)
         object.__setattr__(self, "_packed", packed if engine in ("rc2-fused", "compiled") else None)
         # the compiled value kernel of the engine, chosen once (rczone.kernels.problem.value_kernel)
@@ -312,10 +309,12 @@ class Objective:
     def compiled(self) -> Problem | None:
         """The packed problem of a search that never leaves compiled code, or None.
 
-        None also where the problem has a declared prior: the compiled kernels then evaluate the
-        tempered likelihood and :class:`Objective` adds the prior (:mod:`rczone.estimation.priors`).
+        A MAP problem's packed prior (:attr:`rczone.kernels.arrays.Problem.penalty`) holds every
+        prior of :attr:`map_prior`, declared or the construction default, and the compiled costs
+        evaluate it (:func:`rczone.kernels.problem.prior_terms`, the function
+        :meth:`rczone.estimation.priors.LogPrior.terms` calls too).
         """
-        return None if self.declared_prior else self._packed
+        return self._packed
 
     @property
     def declared_prior(self) -> bool:
@@ -326,15 +325,6 @@ class Objective:
     def map_prior(self) -> LogPrior | None:
         """The prior a MAP cost adds (:func:`rczone.estimation.priors.log_prior`); None for LS and ML."""
         return self._prior
-
-    def _with_declared_prior(
-        self, theta: np.ndarray, j: float, g: np.ndarray, c: np.ndarray
-    ) -> tuple[float, np.ndarray, np.ndarray]:
-        """A compiled value (tempered likelihood, kernel prior emptied) plus the declared prior."""
-        if not (self.declared_prior and math.isfinite(j)):
-            return j, g, c
-        pen, dpen, cpen = self._prior.terms(theta)
-        return j + pen, g + dpen, c + cpen
 
     @property
     def adjoint_gradient(self) -> bool:
@@ -355,9 +345,7 @@ class Objective:
     def theta_cost(self, theta: np.ndarray) -> float:
         """Cost at physical values ``theta`` (order of ``spec.names``)."""
         if self._packed is not None:
-            theta = np.asarray(theta, dtype=np.float64)
-            j = self._value(theta, self._packed)
-            return self._with_declared_prior(theta, j, np.zeros(theta.size), np.zeros(theta.size))[0]
+            return self._value(np.asarray(theta, dtype=np.float64), self._packed)
         return self._general(np.asarray(theta, dtype=float), False)[0]
 
     def theta_value_and_gradient(self, theta: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -368,7 +356,7 @@ class Objective:
         """
         theta = np.asarray(theta, dtype=np.float64)
         if self.gradient_engine == "compiled":
-            j, g, c = self._with_declared_prior(theta, *cost_and_gradient(theta, self._packed))
+            j, g, c = cost_and_gradient(theta, self._packed)
             return (
                 (float(j), g, c)
                 if math.isfinite(j)
@@ -419,7 +407,6 @@ class Objective:
         if self._adjoint or self._reverse:
             theta = np.asarray(theta, dtype=np.float64)
             j, g = (gradient_fused if self._adjoint else gradient_general)(theta, self._packed)
-            j, g, _ = self._with_declared_prior(theta, j, g, np.zeros(theta.size))
         else:
             j, g, _ = self.theta_value_and_gradient(theta)
         if not math.isfinite(j):

@@ -99,7 +99,8 @@ def test_map_cost_uses_a_declared_prior_in_every_engine() -> None:
     for engine in ("general", "compiled", "auto"):
         mp = Objective(net, data, spec, "map", prior_spread=0.5, likelihood_weight=w, engine=engine)
         assert mp.declared_prior
-        assert mp.compiled is None  # the compiled search knows only the construction prior
+        # the packed problem carries it where the engine is compiled: the compiled search applies
+        assert (mp.compiled is not None) == (mp.engine != "general")
         values.append(mp(eta))
         j, g = mp.value_and_gradient(eta)
         assert j == pytest.approx(expect, rel=1e-9)
@@ -139,3 +140,84 @@ def test_a_tight_declared_prior_holds_the_map_estimate_at_its_mean() -> None:
     mp = fit(net, data, free, method="map", fixed=fixed, n_starts=1, correlation_time_s=600.0)
     assert ml.estimates["Rw"] == pytest.approx(0.01, rel=0.02)
     assert mp.estimates["Rw"] == pytest.approx(0.013, rel=1e-3)
+
+
+# (parameter, prior, scipy's density of the physical value, its mode, a physical value): the
+# declared families on a log parameter (Rw) and on a linear one (g), apart from the optimum
+FAMILIES = [
+    ("Rw", Prior("lognormal", median=0.012, sigma=0.3), stats.lognorm(0.3, scale=0.012), 0.012, 0.0092),
+    ("Rw", Prior("normal", mean=0.011, sigma=0.002), stats.norm(0.011, 0.002), 0.011, 0.0093),
+    ("Rw", Prior("uniform", lower=0.005, upper=0.02), stats.uniform(0.005, 0.015), 0.01, 0.0094),
+    ("g", Prior("normal", mean=1.2, sigma=0.1), stats.norm(1.2, 0.1), 1.2, 1.1),
+    ("g", Prior("uniform", lower=0.5, upper=2.0), stats.uniform(0.5, 1.5), 1.0, 1.05),
+]
+
+
+def _neg_log_prior_eta(prior, density, mode, x, log):
+    """``-log p_eta`` from scipy's density (``p_eta = p_theta theta`` in log space), zero at the mode,
+    and its derivative in ``eta`` written out per family."""
+    jac = math.log(x) if log else 0.0
+    at_mode = math.log(mode) if log and prior.dist == "lognormal" else 0.0
+    value = -(density.logpdf(x) + jac) + (density.logpdf(mode) + at_mode)
+    if prior.dist == "lognormal":  # a normal in log theta
+        slope = (math.log(x) - math.log(prior.median)) / prior.sigma**2
+    elif prior.dist == "normal":
+        slope = (x - prior.mean) / prior.sigma**2 * (x if log else 1.0) - (1.0 if log else 0.0)
+    else:
+        slope = -1.0 if log else 0.0
+    return value, slope
+
+
+@pytest.mark.parametrize("engine", ["rc2-fused", "compiled"])
+@pytest.mark.parametrize(
+    ("name", "prior", "density", "mode", "x"), FAMILIES, ids=[f"{f[0]}-{f[1].dist}" for f in FAMILIES]
+)
+def test_the_compiled_map_cost_carries_every_declared_prior(engine, name, prior, density, mode, x) -> None:
+    """The kernel's MAP value and gradient are the tempered likelihood plus the declared density
+    (scipy's, on the optimizer's scale) and the construction log-normal, to rounding."""
+    data = data2(noise=0.05, rng=np.random.default_rng(3))
+    kind = "resistance" if name == "Rw" else "gain"
+    net = NET2.replace_parameters([Parameter(name, kind, 0.01 if name == "Rw" else 1.0, prior=prior)])
+    spec = make_spec(net, ["Cr", name, "sigma_v"])
+    theta = np.array([9e5, x, 0.05])
+    eta = spec.to_eta(theta)
+    w, s = 0.3, 0.5
+    mp = Objective(net, data, spec, "map", prior_spread=s, likelihood_weight=w, engine=engine)
+    ml = Objective(net, data, spec, "ml", engine=engine)
+    assert mp.engine == engine and mp.compiled is not None
+    assert mp.compiled.penalty.prior_idx.tolist() == [0, 1]  # nothing stripped
+    # independent: the construction log-normal on Cr (log space: no Jacobian) and the declared one
+    z = (math.log(9e5) - math.log(8e5)) / s
+    p_value, p_slope = _neg_log_prior_eta(prior, density, mode, x, bool(spec.log[1]))
+    ml_value, ml_grad = ml.value_and_gradient(eta)
+    expect = w * ml_value + 0.5 * z * z + p_value
+    expect_grad = w * ml_grad + np.array([z / s, p_slope, 0.0])
+    j, g = mp.value_and_gradient(eta)
+    assert j == pytest.approx(expect, rel=1e-12)
+    # values alone come from the value kernel (the fused 2-state filter): against its likelihood
+    assert mp(eta) == pytest.approx(w * ml(eta) + 0.5 * z * z + p_value, rel=1e-12)
+    scale = w * np.abs(ml_grad) + np.abs(expect_grad)  # the size of the terms summed
+    assert np.all(np.abs(g - expect_grad) <= 1e-12 * scale)
+    # the same numbers as the Python prior (rczone.estimation.priors.LogPrior.terms) added to the likelihood
+    pen, dpen, _ = mp.map_prior.terms(theta)
+    assert j == pytest.approx(w * ml_value + pen, rel=1e-12)
+    assert np.all(np.abs(g - (w * ml_grad + dpen * spec.jacobian(eta))) <= 1e-12 * scale)
+
+
+def test_a_map_fit_with_a_declared_prior_stays_compiled() -> None:
+    """The engine of the fit is the compiled one the rules choose, and the compiled direct search
+    (Nelder-Mead without leaving compiled code) serves it."""
+    from rczone.estimation.compiled import compiled_cost
+
+    data = data2(noise=0.02, rng=np.random.default_rng(4))
+    net = NET2.replace_parameters(
+        [Parameter("Rw", "resistance", 0.01, prior=Prior("normal", mean=0.011, sigma=0.001))]
+    )
+    free = ["Cr", "Rw", "sigma_v"]
+    spec = make_spec(net, free, fixed={"sigma_w_Ti": 1e-6})
+    obj = Objective(net, data, spec, "map", engine="compiled")
+    eta = spec.to_eta(spec.start)
+    assert obj.compiled is not None and compiled_cost(obj.compiled, eta) == pytest.approx(obj(eta), rel=1e-12)
+    res = fit(net, data, free, method="map", fixed={"sigma_w_Ti": 1e-6}, n_starts=1)
+    assert res.engine == "rc2-fused"  # the rules' compiled engine for two states and one output
+    assert res.to_dict()["engine"] == "rc2-fused"
