@@ -31,6 +31,7 @@ References
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -38,6 +39,16 @@ from numba import njit
 from rczone.kernels.discretize import phi1, phi2
 
 _EPS = float(np.finfo(float).eps)
+
+
+class RankOneModel(NamedTuple):
+    """A model with a rank-one flow term in the coordinates ``xi = Q' diag(s) x`` of :func:`simulate_rank_one_kernel`."""
+
+    d: np.ndarray  #: (n,) eigenvalues of ``S0``: the r active ones ascending first, then the deflated ones
+    z: np.ndarray  #: (r,) active components of ``Q' w`` (all non-zero)
+    sigma: float  #: ``S(m) = S0 + m sigma w w'``
+    Bq: np.ndarray  #: (n, p) ``Q' diag(s) B``
+    Mq: np.ndarray  #: (n, p) ``Q' diag(s) M`` (``B(m) = B + m M``)
 
 
 @njit(cache=True, error_model="numpy")
@@ -220,32 +231,16 @@ def _weights(x: float, foh: bool) -> tuple[float, float, float]:
 
 @njit(cache=True, error_model="numpy")
 def simulate_rank_one_kernel(
-    d: np.ndarray,
-    z: np.ndarray,
-    r: int,
-    sigma: float,
-    Bq: np.ndarray,
-    Mq: np.ndarray,
-    t: np.ndarray,
-    m: np.ndarray,
-    u: np.ndarray,
-    xi0: np.ndarray,
-    foh: bool,
+    model: RankOneModel, t: np.ndarray, m: np.ndarray, u: np.ndarray, xi0: np.ndarray, foh: bool
 ) -> np.ndarray:
     """States ``xi = Q' diag(s) x`` at every sample.
 
     Parameters
     ----------
-    d : ndarray, shape (n,)
-        Eigenvalues of ``S0`` in the ``xi`` order: the ``r`` active ones ascending first, then
-        the deflated ones.
-    z : ndarray, shape (r,)
-        Active components of ``Q' w`` (all non-zero).
-    r : int
-    sigma : float
-        ``S(m) = S0 + m sigma w w'``.
-    Bq, Mq : ndarray, shape (n, p)
-        ``Q' diag(s) B`` and ``Q' diag(s) M`` (``B(m) = B + m M``).
+    model : RankOneModel
+        ``S0``'s eigenvalues ``d`` in the ``xi`` order (the ``r = len(z)`` active ones ascending
+        first, then the deflated ones), the active components ``z`` of ``Q' w``, ``sigma`` and the
+        input matrices ``Bq, Mq`` in these coordinates.
     t : ndarray, shape (N,)
     m : ndarray, shape (N,)
         Flow held from ``t[k]`` to ``t[k+1]``.
@@ -257,6 +252,8 @@ def simulate_rank_one_kernel(
     -------
     xi : ndarray, shape (N, n)
     """
+    d, z, sigma, Bq, Mq = model.d, model.z, model.sigma, model.Bq, model.Mq
+    r = z.shape[0]
     n = d.shape[0]
     N, p = u.shape
     # explicit loops throughout: array expressions and slice assignment cost seconds of compile time
@@ -396,13 +393,15 @@ def simulate_rank_one(
     hold : {"zoh", "foh"}
     """
     sQ = form.Q.T * form.scale[None, :]  # Q' diag(s)
-    xi = simulate_rank_one_kernel(
+    model = RankOneModel(
         np.ascontiguousarray(form.d),
         np.ascontiguousarray(form.z),
-        form.r,
-        form.sigma,
+        float(form.sigma),
         np.ascontiguousarray(sQ @ B),
         np.ascontiguousarray(sQ @ M),
+    )
+    xi = simulate_rank_one_kernel(
+        model,
         np.ascontiguousarray(t, dtype=np.float64),
         np.ascontiguousarray(m, dtype=np.float64),
         np.ascontiguousarray(u, dtype=np.float64),
