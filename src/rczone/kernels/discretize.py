@@ -950,7 +950,7 @@ def _symmetrize(X: np.ndarray) -> None:
             X[j, i] = v
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _key_matrices(mod: Assembled, key: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``A0 + sum m_f N_f`` and ``B0 + sum m_f M_f`` for ``key = (dt, m_1, ...)``."""
     N, M = mod.N, mod.M
@@ -967,27 +967,33 @@ def _key_matrices(mod: Assembled, key: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return A, B
 
 
-@njit(cache=True, error_model="numpy")
-def _rc_interval(step: Interval, how: Discretization, out: Dynamics) -> None:
-    """One interval of an RC network: the closed 2-state form or the spectral formulas."""
+@njit(cache=True, error_model="numpy", inline="always")
+def _rc_interval(step: Interval, how: Discretization, out: Dynamics, k: int) -> None:
+    """Interval ``k`` of an RC network into the stacks ``out``: the closed 2-state form or the spectral formulas.
+
+    The closed form writes its few numbers in place (no views of the stacks per interval: with
+    thousands of distinct intervals their reference counts are a tenth of the 2-state cost).
+    """
     A, B, qc, h = step
     scale = how.scale
+    if scale.shape[0] != 2:
+        spectral_discretize(step, how, Dynamics(out.Phi[k], out.G0[k], out.G1[k], out.Qd[k]))
+        return
     Phi, G0, G1, Qd = out
-    p = B.shape[1]
-    if scale.shape[0] == 2:
-        model = Rc2Model(
-            A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1]
-        )
-        m = rc2_discretize(model, h, qc[0], qc[1], how.foh)
-        Phi[0, 0], Phi[0, 1], Phi[1, 0], Phi[1, 1] = m.phi00, m.phi01, m.phi10, m.phi11
-        Qd[0, 0], Qd[0, 1], Qd[1, 0], Qd[1, 1] = m.qd00, m.qd01, m.qd01, m.qd11
-        for j in range(p):
-            G0[0, j] = m.h0_00 * B[0, j] + m.h0_01 * B[1, j]
-            G0[1, j] = m.h0_10 * B[0, j] + m.h0_11 * B[1, j]
-            G1[0, j] = m.h1_00 * B[0, j] + m.h1_01 * B[1, j]
-            G1[1, j] = m.h1_10 * B[0, j] + m.h1_11 * B[1, j]
-    else:
-        spectral_discretize(step, how, out)
+    m = rc2_discretize(
+        Rc2Model(A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1]),
+        h,
+        qc[0],
+        qc[1],
+        how.foh,
+    )
+    Phi[k, 0, 0], Phi[k, 0, 1], Phi[k, 1, 0], Phi[k, 1, 1] = m.phi00, m.phi01, m.phi10, m.phi11
+    Qd[k, 0, 0], Qd[k, 0, 1], Qd[k, 1, 0], Qd[k, 1, 1] = m.qd00, m.qd01, m.qd01, m.qd11
+    for j in range(B.shape[1]):
+        G0[k, 0, j] = m.h0_00 * B[0, j] + m.h0_01 * B[1, j]
+        G0[k, 1, j] = m.h0_10 * B[0, j] + m.h0_11 * B[1, j]
+        G1[k, 0, j] = m.h1_00 * B[0, j] + m.h1_01 * B[1, j]
+        G1[k, 1, j] = m.h1_10 * B[0, j] + m.h1_11 * B[1, j]
 
 
 @njit(cache=True, error_model="numpy")
@@ -1014,9 +1020,7 @@ def rc_interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
     qc = mod.qc if how.noise else np.zeros(n)
     for k in range(K):
         A, B = _key_matrices(mod, keys[k])
-        _rc_interval(
-            Interval(A, B, qc, keys[k, 0]), how, Dynamics(out.Phi[k], out.G0[k], out.G1[k], out.Qd[k])
-        )
+        _rc_interval(Interval(A, B, qc, keys[k, 0]), how, out, k)
     return out
 
 
