@@ -29,16 +29,15 @@ MOST = 4
 MOST_POSITIONAL = 8
 
 #: Kernel functions with more positional parameters, not folded yet (file relative to ``src``: names).
-#: ``kalman.py`` and ``adjoint.py`` are other engineers' modules. The other three cost time as named
-#: tuples (measured against the positional form, interleaved, issue 20): numba's dispatcher types a
-#: ``NamedTuple`` argument in Python, about 0.7 us each against 0.1 us for an array, and
+#: ``kalman.py`` and ``adjoint.py`` are other engineers' modules. The two of ``rc2.py`` cost time as
+#: named tuples (measured against the positional form, interleaved, issue 20): numba's dispatcher
+#: types a ``NamedTuple`` argument in Python, about 0.7 us each against 0.1 us for an array, and
 #: ``nll_rc2`` (through ``estimation.kalman.kalman_nll_rc2``) and ``simulate_rc2`` are called from
-#: Python per evaluation (11.7 -> 14.1 us, 49 -> 52 us); ``_eigen`` runs once per change of the
-#: flow inside the rank-one simulation, where tuples of its 12 arrays cost 8 % of ``simulate_13state``.
+#: Python per evaluation (11.7 -> 14.1 us, 49 -> 52 us). Binding their callers to the compiled
+#: specialization once (as ``kernels.problem.value_kernel`` does) would remove that.
 NOT_YET = {
     "rczone/kernels/adjoint.py": {"nll_rc2_adjoint"},
     "rczone/kernels/kalman.py": {"predict_covariance"},
-    "rczone/kernels/rankone.py": {"_eigen"},
     "rczone/kernels/rc2.py": {"nll_rc2", "simulate_rc2"},
 }
 

@@ -41,6 +41,33 @@ from rczone.kernels.discretize import phi1, phi2
 _EPS = float(np.finfo(float).eps)
 
 
+class Secular(NamedTuple):
+    """A rank-one-modified eigenproblem ``diag(d) + rho z z'`` (``rho > 0``, ``d`` ascending and distinct)."""
+
+    d: np.ndarray  #: (r,)
+    z: np.ndarray  #: (r,)
+    z2: np.ndarray  #: (r,) ``z * z``
+    inv_dd: np.ndarray  #: (r, r) ``1 / (d_i - d_j)`` off the diagonal
+
+
+class SecularRoots(NamedTuple):
+    """The roots of the previous calls, from which the next call of :func:`_eigen` starts."""
+
+    org: np.ndarray  #: (r,) int64, the nearer pole of each root (-1: no previous call)
+    tau: np.ndarray  #: (r,) each root's offset from its pole
+    track: np.ndarray  #: (3, r) ``d lam / d rho`` of the last call, and the roots of the last two
+    rho_prev: np.ndarray  #: (3,) ``(rho_1, rho_2, calls)``
+
+
+class Eigen(NamedTuple):
+    """What :func:`_eigen` writes: eigenvalues, eigenvectors, and its workspace."""
+
+    lam: np.ndarray  #: (n,) eigenvalues (the first r written)
+    U: np.ndarray  #: (r, r) eigenvectors, in columns
+    zh: np.ndarray  #: (r,) workspace: the Gu-Eisenstat ``z``
+    Qinv: np.ndarray  #: (r, r) workspace: ``1 / (d_j - lam_i)``
+
+
 class RankOneModel(NamedTuple):
     """A model with a rank-one flow term in the coordinates ``xi = Q' diag(s) x`` of :func:`simulate_rank_one_kernel`."""
 
@@ -154,33 +181,20 @@ def _secular_roots(
         q[o] = -1.0 / tau[i]
 
 
-@njit(cache=True, error_model="numpy")
-def _eigen(
-    d: np.ndarray,
-    z: np.ndarray,
-    z2: np.ndarray,
-    rho: float,
-    org: np.ndarray,
-    tau: np.ndarray,
-    inv_dd: np.ndarray,
-    lam: np.ndarray,
-    U: np.ndarray,
-    zh: np.ndarray,
-    track: np.ndarray,
-    rho_prev: np.ndarray,
-    Qinv: np.ndarray,
-) -> None:
+@njit(cache=True, error_model="numpy", inline="always")
+def _eigen(problem: Secular, rho: float, roots: SecularRoots, out: Eigen) -> None:
     """Eigenvalues ``lam`` and orthonormal eigenvectors (columns of ``U``) of ``diag(d) + rho z z'``.
 
-    ``rho > 0``; ``z2 = z * z``; ``inv_dd[i, j] = 1/(d_i - d_j)``; ``zh`` and ``Qinv`` (r, r) are
-    workspace.
-    ``org, tau, track, rho_prev`` carry the previous calls' roots: ``track[0]`` their
-    derivatives ``d lam_i / d rho = (u_i' z)^2``, ``track[1]`` and ``track[2]`` the roots of the
-    last two calls, ``rho_prev = (rho_1, rho_2, calls)``. The next call starts from the
-    first-order prediction plus the curvature fitted to the older root (a quadratic through
-    both, with the last slope), so Newton needs about two iterations per root (2.5 with the
-    first-order prediction alone).
+    ``rho > 0``. ``roots`` carries the previous calls' roots: ``track[0]`` their derivatives
+    ``d lam_i / d rho = (u_i' z)^2``, ``track[1]`` and ``track[2]`` the roots of the last two
+    calls, ``rho_prev = (rho_1, rho_2, calls)``. The next call starts from the first-order
+    prediction plus the curvature fitted to the older root (a quadratic through both, with the
+    last slope), so Newton needs about two iterations per root (2.5 with the first-order
+    prediction alone).
     """
+    d, z, z2, inv_dd = problem
+    org, tau, track, rho_prev = roots
+    lam, U, zh, Qinv = out
     r = d.shape[0]
     if org[0] >= 0:
         step = rho - rho_prev[0]
@@ -309,9 +323,19 @@ def simulate_rank_one_kernel(
         if mk != last_m or h != last_h:
             rho = mk * sigma
             if rho > 0.0 and r > 0:
-                _eigen(da, za, za2, rho, org_a, tau_a, inv_a, lam, U, zh, track_a, rho_a, Qinv)
+                _eigen(
+                    Secular(da, za, za2, inv_a),
+                    rho,
+                    SecularRoots(org_a, tau_a, track_a, rho_a),
+                    Eigen(lam, U, zh, Qinv),
+                )
             elif rho < 0.0 and r > 0:
-                _eigen(dr, zr, zr2, -rho, org_r, tau_r, inv_r, lam, Ut, zh, track_r, rho_r, Qinv)
+                _eigen(
+                    Secular(dr, zr, zr2, inv_r),
+                    -rho,
+                    SecularRoots(org_r, tau_r, track_r, rho_r),
+                    Eigen(lam, Ut, zh, Qinv),
+                )
                 for i in range(r):
                     lam[i] = -lam[i]
                     for j in range(r):
