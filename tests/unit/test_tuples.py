@@ -29,7 +29,7 @@ MOST = 4
 MOST_POSITIONAL = 8
 
 #: Kernel functions with more positional parameters, not folded yet (file relative to ``src``: names).
-#: ``kalman.py`` and ``adjoint.py`` are other engineers' modules. The two of ``rc2.py`` cost time as
+#: ``adjoint.py`` is another engineer's module. The two of ``rc2.py`` cost time as
 #: named tuples (measured against the positional form, interleaved, issue 20): numba's dispatcher
 #: types a ``NamedTuple`` argument in Python, about 0.7 us each against 0.1 us for an array, and
 #: ``nll_rc2`` (through ``estimation.kalman.kalman_nll_rc2``) and ``simulate_rc2`` are called from
@@ -37,7 +37,6 @@ MOST_POSITIONAL = 8
 #: specialization once (as ``kernels.problem.value_kernel`` does) would remove that.
 NOT_YET = {
     "rczone/kernels/adjoint.py": {"nll_rc2_adjoint"},
-    "rczone/kernels/kalman.py": {"predict_covariance"},
     "rczone/kernels/rc2.py": {"nll_rc2", "simulate_rc2"},
 }
 

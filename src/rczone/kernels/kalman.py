@@ -7,18 +7,21 @@ decomposition [1]_ with the outputs of a sample processed one at a time (sequent
 processing, exact for diagonal ``R`` [2]_): each observed output is a scalar update, a missing
 output (NaN) is skipped on its own, and no matrix is inverted.
 
-The steps that cost ``O(n^2)`` to ``O(n^3)`` per sample are short functions: :func:`predict_covariance`
-(``P = Phi P Phi' + Qd`` and its derivatives), :func:`stationary` (the steady-state test),
-:func:`keep_prediction` (what the trace keeps), :func:`change_basis` (modal coordinates). They are compiled with ``inline="always"``: numba
-inlines them into the sample loop at its own intermediate representation, so no call remains.
-Each array argument still becomes a new variable there, with a reference count taken and
-dropped at every call, which numba does not prune across the loops of a step. For the steps
-that cost ``O(n)`` per output (the innovation, the scalar update of the gain and covariance, the
-state's correction) and for the mean's prediction, run ``ny`` times or on every sample of a
-steady state, those counts cost more than the arithmetic (written as functions they made
-``nll_4zone`` 2.0x and ``nll_13state`` 1.15x slower, bit-identical values; ``bench`` notes in
-``docs/architecture.md``), so they are written in place in the loop, marked by comments; so are the
-``O(n^2)`` time update in modal coordinates and the ``O(n)`` test of the covariance's diagonal.
+The filter is written as short step functions, compiled with ``inline="always"`` (numba inlines
+them into the sample loop at its own intermediate representation, so no call remains):
+:func:`innovation`, :func:`correct` (the state's correction by one output), :func:`drive` and
+:func:`advance` (the mean's prediction), :func:`predict_covariance`, :func:`stationary`,
+:func:`keep_prediction`, :func:`change_basis`, and the derivatives' steps
+(:func:`innovation_derivatives`, :func:`gain_derivatives`, :func:`score`,
+:func:`predict_mean_derivatives`), which take the filter's named groups (:class:`Moments`,
+:class:`Gains`, :class:`Work`, :class:`Moved`). The reverse pass (:mod:`rczone.kernels.reverse`)
+runs the same value steps. Four pieces stay written in place in the loop, marked by comments,
+because as calls they measurably cost (interleaved runs with fresh compilation caches, 2026-11-26):
+the scalar update of gain and covariance (``s = c'Pc + r``, ``k = Pc/s``, ``P -= k (Pc)'``; as a call
+``nll_4zone`` took 1.2x), the value steps of modal coordinates (taking the :class:`Dynamics` group,
+1.15-1.3x), the ``O(n)`` test of the covariance's diagonal and the covariance copies of the steady
+state. Passing a named group into a step of the ``O(n)`` value path costs reference counts of every
+array in it at each call; the derivative steps, ``O(q n^2)`` and more, do not notice them.
 
 Modal coordinates: for an RC model (``diag(c) A`` symmetric) whose flows change the matrices
 only now and then, the same filter runs in the eigen-coordinates of each interval's state
@@ -122,11 +125,41 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> Filt
 
 
 class Moved(NamedTuple):
-    """Which parameter directions move what (the terms of the others are skipped)."""
+    """The derivatives of the discrete matrices, and which parameter directions move what (the terms of the others are skipped)."""
 
+    ddyn: DynamicsDerivatives
     dynamics: np.ndarray  #: (q,) bool: the direction moves ``Phi``, ``G0`` or ``G1``
     C: bool  #: a direction moves ``C``
     D: bool  #: a direction moves ``D``
+
+
+class Moments(NamedTuple):
+    """What the filter carries from step to step: the state's mean and covariance, and their derivatives."""
+
+    x: np.ndarray  #: (n,)
+    P: np.ndarray  #: (n, n)
+    dx: np.ndarray  #: (q, n)
+    dP: np.ndarray  #: (q, n, n)
+
+
+class Gains(NamedTuple):
+    """Each output's gain and the derivatives of gain and innovation variance (kept for the steady state)."""
+
+    kg: np.ndarray  #: (ny, n)
+    dkg: np.ndarray  #: (ny, q, n)
+    dsg: np.ndarray  #: (ny, q)
+
+
+class Work(NamedTuple):
+    """Work space of the steps."""
+
+    pc: np.ndarray  #: (n,) ``P c``
+    dpc: np.ndarray  #: (q, n) its derivatives
+    de: np.ndarray  #: (q,) the innovation's derivatives
+    xn: np.ndarray  #: (n,)
+    T: np.ndarray  #: (n, n)
+    X: np.ndarray  #: (n, n)
+    Y: np.ndarray  #: (n, n)
 
 
 @njit(cache=True, error_model="numpy")
@@ -150,7 +183,166 @@ def _moved(ddyn: DynamicsDerivatives, dC: np.ndarray, dD: np.ndarray) -> Moved:
                 has_dc = has_dc or dC[j, d, i] != 0.0
             for i in range(p):
                 has_dd = has_dd or dD[j, d, i] != 0.0
-    return Moved(dyn, has_dc, has_dd)
+    return Moved(ddyn, dyn, has_dc, has_dd)
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def innovation(
+    k: int, o: int, y: np.ndarray, u: np.ndarray, D: np.ndarray, C: np.ndarray, x: np.ndarray
+) -> float:
+    """``e = y[k, o] - D[o] u[k] - C[o] x``: the innovation of output ``o`` (its error in open loop)."""
+    e = y[k, o]
+    for i in range(u.shape[1]):
+        e -= D[o, i] * u[k, i]
+    for i in range(x.shape[0]):
+        e -= C[o, i] * x[i]
+    return e
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def correct(o: int, e: float, kg: np.ndarray, x: np.ndarray) -> None:
+    """``x += kg[o] e``: the state's correction by output ``o``."""
+    for i in range(x.shape[0]):
+        x[i] += kg[o, i] * e
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def drive(w: int, k: int, G0: np.ndarray, G1: np.ndarray, u: np.ndarray, foh: bool, out: np.ndarray) -> None:
+    """``out = G0[w] u[k] (+ G1[w] u[k + 1] with a first-order hold)``: the inputs' part of the mean's prediction."""
+    p = u.shape[1]
+    for i in range(out.shape[0]):
+        acc = 0.0
+        for j in range(p):
+            acc += G0[w, i, j] * u[k, j]
+        if foh:
+            for j in range(p):
+                acc += G1[w, i, j] * u[k + 1, j]
+        out[i] = acc
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def advance(w: int, Phi: np.ndarray, x: np.ndarray, drv: np.ndarray) -> None:
+    """``x = Phi[w] x + drv``: the mean's prediction; ``drv`` (of :func:`drive`) is overwritten."""
+    n = x.shape[0]
+    for i in range(n):
+        acc = drv[i]
+        for j in range(n):
+            acc += Phi[w, i, j] * x[j]
+        drv[i] = acc
+    for i in range(n):
+        x[i] = drv[i]
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def innovation_derivatives(
+    k: int, o: int, u: np.ndarray, m: Moments, obs: Observation, moved: Moved, de: np.ndarray
+) -> None:
+    """``de[d] = -dD[o, d] u[k] - dC[o, d] x - C[o] dx[d]`` along each direction (before the update)."""
+    C, dC, dD = obs.C, obs.dC, obs.dD
+    x, dx = m.x, m.dx
+    n = x.shape[0]
+    p = u.shape[1]
+    for d in range(de.shape[0]):
+        ed = 0.0
+        if moved.D:
+            for i in range(p):
+                ed -= dD[o, d, i] * u[k, i]
+        for i in range(n):
+            ed -= C[o, i] * dx[d, i]
+        if moved.C:
+            for i in range(n):
+                ed -= dC[o, d, i] * x[i]
+        de[d] = ed
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def gain_derivatives(
+    o: int, s: float, m: Moments, obs: Observation, moved: Moved, gains: Gains, work: Work
+) -> None:
+    """The derivatives of the gain and of the covariance's downdate along each direction (``P`` before it).
+
+    ``dpc = dP c + P dc``, ``ds = c'dpc + dc'pc + dr``, ``dk = (dpc - k ds) / s``,
+    ``dP -= dk pc' + k dpc'`` (exactly symmetric); ``pc = P c`` and ``k`` of the update in ``work.pc``
+    and ``gains.kg[o]``.
+    """
+    C, dC, dr = obs.C, obs.dC, obs.dr
+    P, dP = m.P, m.dP
+    kg, dkg, dsg = gains
+    pc, dpc = work.pc, work.dpc
+    n = P.shape[0]
+    inv = 1.0 / s
+    for d in range(dP.shape[0]):
+        sd = dr[o, d]
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += dP[d, i, j] * C[o, j]
+            if moved.C:
+                for j in range(n):
+                    acc += P[i, j] * dC[o, d, j]
+                sd += dC[o, d, i] * pc[i]
+            dpc[d, i] = acc
+            sd += C[o, i] * acc
+        dsg[o, d] = sd
+        for i in range(n):
+            dkg[o, d, i] = (dpc[d, i] - kg[o, i] * sd) * inv
+        for i in range(n):
+            dki = dkg[o, d, i]  # locals: the stores into dP could alias them
+            ki = kg[o, i]
+            for j in range(i, n):
+                v = dP[d, i, j] - dki * pc[j] - ki * dpc[d, j]
+                dP[d, i, j] = v
+                dP[d, j, i] = v
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def score(
+    o: int, e: float, s: float, gains: Gains, work: Work, m: Moments, grad: np.ndarray, fim: np.ndarray
+) -> None:
+    """The gradient and Fisher terms of output ``o``'s ``0.5 (log s + e^2/s)``, and ``dx += dk e + k de``."""
+    kg, dkg, dsg = gains
+    de = work.de
+    dx = m.dx
+    inv = 1.0 / s
+    n = dx.shape[1]
+    for d in range(de.shape[0]):
+        sd = dsg[o, d]
+        ed = de[d]
+        grad[d] += 0.5 * sd * inv + e * ed * inv - 0.5 * e * e * sd * inv * inv
+        fim[d] += ed * ed * inv + 0.5 * sd * sd * inv * inv
+        for i in range(n):
+            dx[d, i] += dkg[o, d, i] * e + kg[o, i] * ed
+
+
+@njit(error_model="numpy", fastmath=FAST, inline="always")
+def predict_mean_derivatives(
+    w: int, k: int, m: Moments, dyn: Dynamics, moved: Moved, u: np.ndarray, foh: bool, xn: np.ndarray
+) -> None:
+    """``dx[d] = Phi dx[d] + dPhi[d] x + dG0[d] u[k] (+ dG1[d] u[k + 1])`` (``x`` before :func:`predict_mean`).
+
+    The ``dPhi``, ``dG0``, ``dG1`` terms are skipped for directions that leave the dynamics unchanged.
+    """
+    Phi = dyn.Phi
+    dPhi, dG0, dG1 = moved.ddyn.dPhi, moved.ddyn.dG0, moved.ddyn.dG1
+    x, dx = m.x, m.dx
+    n = x.shape[0]
+    p = u.shape[1]
+    for d in range(dx.shape[0]):
+        for i in range(n):
+            acc = 0.0
+            for j in range(n):
+                acc += Phi[w, i, j] * dx[d, j]
+            if moved.dynamics[d]:
+                for j in range(n):
+                    acc += dPhi[w, d, i, j] * x[j]
+                for j in range(p):
+                    acc += dG0[w, d, i, j] * u[k, j]
+                if foh:
+                    for j in range(p):
+                        acc += dG1[w, d, i, j] * u[k + 1, j]
+            xn[i] = acc
+        for i in range(n):
+            dx[d, i] = xn[i]
 
 
 @njit(error_model="numpy", fastmath=FAST, inline="always")
@@ -183,15 +375,16 @@ def keep_prediction(
 
 
 @njit(error_model="numpy", fastmath=FAST, inline="always")
-def predict_covariance(
-    w: int, P: np.ndarray, dP: np.ndarray, Phi: np.ndarray, Qd: np.ndarray, dPhi: np.ndarray, dQd: np.ndarray,
-    moved: np.ndarray, T: np.ndarray, X: np.ndarray, Y: np.ndarray,
-) -> None:  # fmt: skip
+def predict_covariance(w: int, m: Moments, dyn: Dynamics, moved: Moved, work: Work) -> None:
     """``P = Phi P Phi' + Qd``; ``dP = dPhi P Phi' + Phi P dPhi' + Phi dP Phi' + dQd`` (exactly symmetric)."""
+    P, dP = m.P, m.dP
+    Phi, Qd = dyn.Phi, dyn.Qd
+    dPhi, dQd = moved.ddyn.dPhi, moved.ddyn.dQd
+    T, X, Y = work.T, work.X, work.Y
     n = P.shape[0]
     phi_times(w, Phi, P, T)
     for d in range(dP.shape[0]):
-        if moved[d]:
+        if moved.dynamics[d]:
             for i in range(n):
                 for j in range(n):
                     acc = 0.0
@@ -210,7 +403,7 @@ def predict_covariance(
                 acc = dQd[w, d, i, j]
                 for a in range(n):
                     acc += Y[i, a] * Phi[w, j, a]
-                if moved[d]:
+                if moved.dynamics[d]:
                     acc += X[i, j] + X[j, i]
                 dP[d, i, j] = acc
                 dP[d, j, i] = acc
@@ -410,9 +603,7 @@ def kalman_filter(
     for directions that leave the dynamics unchanged).
     """
     Phi, G0, G1, Qd = dyn
-    dPhi, dG0, dG1, dQd = ddyn
     D, r = obs.D, obs.r
-    dC, dD, dr = obs.dC, obs.dD, obs.dr
     u, y, which = series
     foh, open_loop, steady_rtol = opts
     N, ny = y.shape
@@ -420,8 +611,7 @@ def kalman_filter(
     q = prior.dx0.shape[0]
     if basis is not None:
         q = 0  # a constant: the compiler drops every derivative loop of this specialization
-    moved, has_dc, has_dd = _moved(ddyn, dC, dD)
-    p = u.shape[1]
+    moved = _moved(ddyn, obs.dC, obs.dD)
     # one definition each (no reassignment): numba then keeps their reference counts out of the loop
     x = prior.x0.copy()
     P = prior.P0.copy()
@@ -448,7 +638,7 @@ def kalman_filter(
     dpc = np.empty((q, n))
     de = np.empty(q)
     xn = np.empty(n)
-    drive = np.empty(n)
+    diag = np.empty(n)  # Phi's diagonal in modal coordinates
     T = np.empty((n, n))
     X = np.empty((n, n))
     Y = np.empty((n, n))
@@ -459,6 +649,10 @@ def kalman_filter(
     sg = np.ones(ny)
     lg = np.zeros(ny)
     dsg = np.zeros((ny, q))
+    # the same arrays by name, for the steps of the derivatives and of the covariance (O(q n^2) and more)
+    m = Moments(x, P, dx, dP)
+    gains = Gains(kg, dkg, dsg)
+    work = Work(pc, dpc, de, xn, T, X, Y)
     # the covariances the steady state compares with (the last prediction) and returns to (the last
     # filtered): copied in full only while armed, i.e. once the diagonal has repeated (repeats_diagonal)
     armed = False
@@ -488,23 +682,12 @@ def kalman_filter(
         if keep_e:
             for j in range(ny):
                 if mask & (1 << j):
-                    acc = y[k, j]
-                    for i in range(p):
-                        acc -= D[j, i] * u[k, i]
-                    for i in range(n):
-                        acc -= C[j, i] * x[i]
-                    trace.e[k, j] = acc
+                    trace.e[k, j] = innovation(k, j, y, u, D, C, x)
         if open_loop:
             if keep_de:
                 for j in range(ny):
                     if mask & (1 << j):
-                        for d in range(q):
-                            acc = 0.0
-                            for i in range(n):
-                                acc -= dC[j, d, i] * x[i] + C[j, i] * dx[d, i]
-                            for i in range(p):
-                                acc -= dD[j, d, i] * u[k, i]
-                            trace.de[k, j, d] = acc
+                        innovation_derivatives(k, j, u, m, obs, moved, trace.de[k, j])
         else:
             if steady and mask != steady_mask:
                 steady = False
@@ -517,25 +700,12 @@ def kalman_filter(
             for o in range(ny):
                 if not mask & (1 << o):
                     continue
-                e = y[k, o]
-                for i in range(p):
-                    e -= D[o, i] * u[k, i]
-                for i in range(n):
-                    e -= C[o, i] * x[i]
-                # de = -dd'u - dc'x - c'dx (at the values before this update)
-                for d in range(q):
-                    ed = 0.0
-                    if has_dd:
-                        for i in range(p):
-                            ed -= dD[o, d, i] * u[k, i]
-                    for i in range(n):
-                        ed -= C[o, i] * dx[d, i]
-                    if has_dc:
-                        for i in range(n):
-                            ed -= dC[o, d, i] * x[i]
-                    de[d] = ed
+                e = innovation(k, o, y, u, D, C, x)
+                if q > 0:
+                    innovation_derivatives(k, o, u, m, obs, moved, de)
                 if not steady:
-                    # ---- update_step: s = c'Pc + r, k = Pc/s, and the derivatives
+                    # gain() and downdate() written in place: as calls they made nll_4zone 1.2x slower
+                    # (interleaved runs, fresh caches; the other steps are free as calls)
                     s = r[o]
                     for i in range(n):
                         acc = 0.0
@@ -548,29 +718,8 @@ def kalman_filter(
                     inv = 1.0 / s
                     for i in range(n):
                         kg[o, i] = pc[i] * inv
-                    for d in range(q):
-                        # dPc = dP c + P dc, ds = c'dPc + dc'Pc + dr
-                        sd = dr[o, d]
-                        for i in range(n):
-                            acc = 0.0
-                            for j in range(n):
-                                acc += dP[d, i, j] * C[o, j]
-                            if has_dc:
-                                for j in range(n):
-                                    acc += P[i, j] * dC[o, d, j]
-                                sd += dC[o, d, i] * pc[i]
-                            dpc[d, i] = acc
-                            sd += C[o, i] * acc
-                        dsg[o, d] = sd
-                        for i in range(n):
-                            dkg[o, d, i] = (dpc[d, i] - kg[o, i] * sd) * inv
-                        for i in range(n):
-                            dki = dkg[o, d, i]  # locals: the stores into dP could alias them
-                            ki = kg[o, i]
-                            for j in range(i, n):
-                                v = dP[d, i, j] - dki * pc[j] - ki * dpc[d, j]
-                                dP[d, i, j] = v
-                                dP[d, j, i] = v
+                    if q > 0:
+                        gain_derivatives(o, s, m, obs, moved, gains, work)
                     for i in range(n):
                         ki = kg[o, i]
                         for j in range(i, n):
@@ -579,18 +728,12 @@ def kalman_filter(
                             P[j, i] = v
                     sg[o] = s
                     lg[o] = math.log(s)
-                # the state update, likelihood term and gradient (steady or not)
+                # the state's correction, likelihood term and gradient (steady or not)
                 s = sg[o]
+                if q > 0:
+                    score(o, e, s, gains, work, m, grad, fim)
+                correct(o, e, kg, x)
                 inv = 1.0 / s
-                for d in range(q):
-                    sd = dsg[o, d]
-                    ed = de[d]
-                    grad[d] += 0.5 * sd * inv + e * ed * inv - 0.5 * e * e * sd * inv * inv
-                    fim[d] += ed * ed * inv + 0.5 * sd * sd * inv * inv
-                    for i in range(n):
-                        dx[d, i] += dkg[o, d, i] * e + kg[o, i] * ed
-                for i in range(n):
-                    x[i] += kg[o, i] * e
                 nll += 0.5 * (lg[o] + e * e * inv)
                 n_obs += 1
             if not steady and (armed or keep_Pf):
@@ -625,50 +768,17 @@ def kalman_filter(
                 for o in range(ny):
                     for i in range(n):
                         C[o, i] = Cm[w, o, i]
-            # ---- predict_step in modal coordinates: Phi diagonal, no derivatives
+            # ---- the mean's prediction in modal coordinates, Phi diagonal (in the loop, see above)
+            drive(w, k, G0, G1, u, foh, xn)
             for i in range(n):
-                drive[i] = Phi[w, i, i]  # contiguous, so the loops below vectorize
+                diag[i] = Phi[w, i, i]  # contiguous, so the loops below vectorize
             for i in range(n):
-                acc = drive[i] * x[i]
-                for j in range(p):
-                    acc += G0[w, i, j] * u[k, j]
-                if foh:
-                    for j in range(p):
-                        acc += G1[w, i, j] * u[k + 1, j]
-                x[i] = acc
+                x[i] = diag[i] * x[i] + xn[i]
         else:
-            # ---- predict_step: the means
-            for i in range(n):
-                acc = 0.0
-                for j in range(p):
-                    acc += G0[w, i, j] * u[k, j]
-                if foh:
-                    for j in range(p):
-                        acc += G1[w, i, j] * u[k + 1, j]
-                drive[i] = acc
-            for d in range(q):
-                for i in range(n):
-                    acc = 0.0
-                    for j in range(n):
-                        acc += Phi[w, i, j] * dx[d, j]
-                    if moved[d]:
-                        for j in range(n):
-                            acc += dPhi[w, d, i, j] * x[j]
-                        for j in range(p):
-                            acc += dG0[w, d, i, j] * u[k, j]
-                        if foh:
-                            for j in range(p):
-                                acc += dG1[w, d, i, j] * u[k + 1, j]
-                    xn[i] = acc
-                for i in range(n):
-                    dx[d, i] = xn[i]
-            for i in range(n):
-                acc = drive[i]
-                for j in range(n):
-                    acc += Phi[w, i, j] * x[j]
-                xn[i] = acc
-            for i in range(n):
-                x[i] = xn[i]
+            if q > 0:
+                predict_mean_derivatives(w, k, m, dyn, moved, u, foh, xn)
+            drive(w, k, G0, G1, u, foh, xn)
+            advance(w, Phi, x, xn)
         if open_loop:
             continue
         if steady:
@@ -676,15 +786,15 @@ def kalman_filter(
             prev_mask = mask
             continue
         if basis is not None:
-            # ---- predict_step in modal coordinates: P_ij e_i e_j + Qd_ij, O(n^2) (in the loop, see above)
+            # ---- the covariance's prediction in modal coordinates: P_ij e_i e_j + Qd_ij, O(n^2) (in the loop)
             for i in range(n):
-                ei = drive[i]
+                ei = diag[i]
                 for j in range(i, n):
-                    v = P[i, j] * ei * drive[j] + Qd[w, i, j]
+                    v = P[i, j] * ei * diag[j] + Qd[w, i, j]
                     P[i, j] = v
                     P[j, i] = v
         else:
-            predict_covariance(w, P, dP, Phi, Qd, dPhi, dQd, moved, T, X, Y)
+            predict_covariance(w, m, dyn, moved, work)
         # the steady state: the same interval and observed outputs as before, and P repeats. First the
         # diagonal repeats the last prediction's (O(n), in the loop): necessary for the stationary test of a
         # covariance, whose largest entry lies on its diagonal; the full matrices are kept for it from then on

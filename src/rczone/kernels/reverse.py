@@ -63,7 +63,16 @@ from rczone.kernels.arrays import (
     Prior,
     Series,
 )
-from rczone.kernels.kalman import FAST, phi_times, stationary, times_phi_plus
+from rczone.kernels.kalman import (
+    FAST,
+    advance,
+    correct,
+    drive,
+    innovation,
+    phi_times,
+    stationary,
+    times_phi_plus,
+)
 
 
 class Adjoints(NamedTuple):
@@ -146,7 +155,6 @@ def nll_reverse(
     foh, steady_rtol = opts.foh, opts.steady_rtol
     N, ny = y.shape
     n = prior.x0.shape[0]
-    p = u.shape[1]
     tape = _Tape(np.empty((N, n)), np.empty((N, ny, n)), np.empty((N, 2 * ny)), np.empty((N, n, n)))
     flags = np.zeros(N, dtype=np.int64)
     src = np.full(N, -1, dtype=np.int64)  # a steady sample: the stretch's first sample, whose gains it uses
@@ -186,12 +194,9 @@ def nll_reverse(
         for o in range(ny):
             if not mask & (1 << o):
                 continue
-            e = y[k, o]
-            for i in range(p):
-                e -= D[o, i] * u[k, i]
-            for i in range(n):
-                e -= C[o, i] * x[i]
+            e = innovation(k, o, y, u, D, C, x)
             if not steady:
+                # the scalar update of kalman_filter (written in place there too: as a call it costs)
                 s = r[o]
                 for i in range(n):
                     acc = 0.0
@@ -206,16 +211,16 @@ def nll_reverse(
                     kg[o, i] = pc[i] * inv
                     tape.g[k, o, i] = pc[i]
                 for i in range(n):
+                    ki = kg[o, i]
                     for j in range(i, n):
-                        v = P[i, j] - kg[o, i] * pc[j]
+                        v = P[i, j] - ki * pc[j]
                         P[i, j] = v
                         P[j, i] = v
                 sg[o] = s
                 lg[o] = math.log(s)
             s = sg[o]
+            correct(o, e, kg, x)
             inv = 1.0 / s
-            for i in range(n):
-                x[i] += kg[o, i] * e
             nll += 0.5 * (lg[o] + e * e * inv)
             n_obs += 1
             tape.es[k, 2 * o] = e
@@ -229,18 +234,8 @@ def nll_reverse(
         if k == N - 1:
             break
         w = which[k]
-        for i in range(n):
-            acc = 0.0
-            for j in range(p):
-                acc += G0[w, i, j] * u[k, j]
-            if foh:
-                for j in range(p):
-                    acc += G1[w, i, j] * u[k + 1, j]
-            for j in range(n):
-                acc += Phi[w, i, j] * x[j]
-            xn[i] = acc
-        for i in range(n):
-            x[i] = xn[i]
+        drive(w, k, G0, G1, u, foh, xn)
+        advance(w, Phi, x, xn)
         if steady and w != steady_key:
             # leave the steady state from the filtered covariance of the stretch's first sample
             steady = False
