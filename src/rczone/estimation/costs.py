@@ -67,7 +67,7 @@ from rczone.estimation.methods import METHODS as _REGISTERED
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec, make_spec
 from rczone.estimation.priors import LogPrior, log_prior
-from rczone.kernels.adjoint import gradient_fused, gradient_general
+from rczone.kernels.adjoint import gradient_kernel
 from rczone.kernels.arrays import Problem
 from rczone.kernels.problem import cost_and_gradient, value_kernel
 from rczone.network import RCNetwork
@@ -307,6 +307,11 @@ class Objective:
         object.__setattr__(self, "_adjoint", engine == "rc2-fused" and method_of(self.method).kernel != "ls")
         # the reverse pass of the general filter for the other compiled likelihoods (rczone.kernels.reverse)
         object.__setattr__(self, "_reverse", engine == "compiled" and method_of(self.method).kernel != "ls")
+        # either bound once to the packed problem (rczone.kernels.adjoint.gradient_kernel)
+        gradient = self._adjoint or self._reverse
+        object.__setattr__(
+            self, "_gradient", gradient_kernel(self._packed, fused=self._adjoint) if gradient else None
+        )
 
     @property
     def compiled(self) -> Problem | None:
@@ -418,7 +423,7 @@ class Objective:
         theta = self.spec.to_theta(eta)
         if self._adjoint or self._reverse:
             theta = np.asarray(theta, dtype=np.float64)
-            j, g = (gradient_fused if self._adjoint else gradient_general)(theta, self._packed)
+            j, g = self._gradient(theta, self._packed)
             j, g, _ = self._with_declared_prior(theta, j, g, np.zeros(theta.size))
         else:
             j, g, _ = self.theta_value_and_gradient(theta)
@@ -434,7 +439,7 @@ class Objective:
         """
         if not self._adjoint:
             raise ParameterError("innovations come from the adjoint kernel of a 2-state likelihood only")
-        gradient_fused(np.asarray(self.spec.to_theta(eta), dtype=np.float64), self._packed)
+        self._gradient(np.asarray(self.spec.to_theta(eta), dtype=np.float64), self._packed)
         return self._packed.scratch.copy()
 
     def curvature(self, eta: np.ndarray) -> np.ndarray:

@@ -644,11 +644,8 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
 def value_kernel(prob):
     """The compiled cost of a packed problem's values: :func:`value_fused` or :func:`value_general`.
 
-    Returned as a callable ``(theta, prob)`` bound to this problem's compiled specialization:
-    a numba dispatcher types a named tuple argument in Python at every call (about 5 us for the
-    40 arrays of a :class:`rczone.kernels.arrays.Problem`, a quarter of a 2-state likelihood),
-    so the specialization is resolved once here and called directly for a float64 ``theta``
-    and this same problem; any other argument goes through the dispatcher.
+    Returned as a callable ``(theta, prob)`` bound to this problem's compiled specialization
+    (:func:`bound_kernel`).
 
     Parameters
     ----------
@@ -660,10 +657,34 @@ def value_kernel(prob):
     callable
         ``value(theta, prob) -> float``, as the kernel.
     """
-    kernel = value_fused if prob.consts.fused else value_general
-    entry = None  # resolved at the first call: a problem whose values are never asked compiles nothing
+    return bound_kernel(value_fused if prob.consts.fused else value_general, prob)
 
-    def value(theta: np.ndarray, problem) -> float:
+
+def bound_kernel(kernel, prob):
+    """``kernel(theta, prob)`` bound to its compiled specialization for this problem.
+
+    A numba dispatcher types a named tuple argument in Python at every call (about 5 us for the
+    40 arrays of a :class:`rczone.kernels.arrays.Problem`, a quarter of a 2-state likelihood),
+    so the specialization is resolved once (at the first call: a problem whose kernel is never
+    called compiles nothing) and called directly for a float64 ``theta`` and this same problem;
+    any other argument goes through the dispatcher. :func:`value_kernel` binds the value kernels,
+    :func:`rczone.kernels.adjoint.gradient_kernel` the gradient kernels.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        A compiled entry point taking ``(theta, prob)``.
+    prob : rczone.kernels.arrays.Problem
+        The packed problem.
+
+    Returns
+    -------
+    callable
+        ``kernel(theta, prob)``, as the kernel returns it.
+    """
+    entry = None
+
+    def call(theta: np.ndarray, problem):
         nonlocal entry
         if (
             problem is prob
@@ -677,7 +698,7 @@ def value_kernel(prob):
             return entry(theta, prob)
         return kernel(theta, problem)
 
-    return value
+    return call
 
 
 def cost(theta: np.ndarray, prob) -> float:
