@@ -429,7 +429,7 @@ class Objective:
             j, g, _ = self.theta_value_and_gradient(theta)
         if not math.isfinite(j):
             return math.inf, np.zeros(eta.size)
-        return j, g * self.spec.jacobian(eta)
+        return j, g * np.where(self.spec.log, theta, 1.0)  # spec.jacobian(eta), theta known
 
     def innovations(self, eta: np.ndarray) -> np.ndarray:
         """One-step-ahead prediction errors at ``eta`` (NaN where missing), from the adjoint kernel's filter.
