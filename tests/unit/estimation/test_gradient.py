@@ -87,7 +87,7 @@ def test_the_bound_gradient_kernel_takes_any_theta_and_problem(fused: bool) -> N
     ``theta`` and that same problem; a strided ``theta`` and another problem go through the
     dispatcher. Every answer is checked against the forward sensitivities of that problem."""
     from rczone.kernels.adjoint import gradient_kernel
-    from rczone.kernels.problem import value_and_gradient
+    from rczone.kernels.problem import _SPECIALIZATIONS, value_and_gradient
 
     free = ["Cr", "Cw", "Rw", "Rwin", "sigma_v", "sigma_w_Ti"]
     spec = make_spec(NET2, free)
@@ -107,6 +107,13 @@ def test_the_bound_gradient_kernel_takes_any_theta_and_problem(fused: bool) -> N
         assert j == pytest.approx(j_fwd, rel=1e-10)
         np.testing.assert_allclose(g, g_fwd, rtol=0, atol=1e-8 * np.linalg.norm(g_fwd))
     assert gradient(theta, other)[0] != pytest.approx(gradient(theta, prob)[0], rel=1e-6)
+    # a problem of the same structure finds the specialization again (no typing in Python)
+    known = len(_SPECIALIZATIONS)
+    j, g = gradient_kernel(other, fused=fused)(theta, other)
+    assert len(_SPECIALIZATIONS) == known
+    j_fwd, g_fwd, _ = value_and_gradient(theta, other)
+    assert j == pytest.approx(j_fwd, rel=1e-10)
+    np.testing.assert_allclose(g, g_fwd, rtol=0, atol=1e-8 * np.linalg.norm(g_fwd))
 
 
 @pytest.mark.parametrize("hold", ["zoh", "foh"])
