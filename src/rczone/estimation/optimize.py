@@ -365,6 +365,9 @@ def _lbfgs(
     eta = np.asarray(eta0, dtype=float)
     phases = (*(20 + 2 * d,) * LBFGS_RESCALES, None) if curvature is not None else (None,)
     for k, budget in enumerate(phases):
+        left = max_evals - counted.n
+        if left <= 0:  # before the curvature: d gradients for a phase that would not run
+            break
         if curvature is None:
             scale = np.ones(d)
         else:
@@ -385,9 +388,6 @@ def _lbfgs(
                 ge = central_gradient(counted, e, f0=fe)[0]
             return fe, ge / scale
 
-        left = max_evals - counted.n
-        if left <= 0:
-            break
         res = lbfgsb(
             fun,
             eta * scale,
