@@ -69,7 +69,7 @@ from rczone.estimation.parameters import ParameterSpec, make_spec
 from rczone.estimation.priors import LogPrior, log_prior
 from rczone.kernels.adjoint import gradient_kernel
 from rczone.kernels.arrays import Problem
-from rczone.kernels.problem import cost_and_gradient, value_kernel
+from rczone.kernels.problem import LS, cost_and_gradient, value_kernel
 from rczone.network import RCNetwork
 from rczone.network.stochastic import (
     initial_spread_names,
@@ -440,6 +440,18 @@ class Objective:
         if not self._adjoint:
             raise ParameterError("innovations come from the adjoint kernel of a 2-state likelihood only")
         self._gradient(np.asarray(self.spec.to_theta(eta), dtype=np.float64), self._packed)
+        return self._packed.scratch.copy()
+
+    def output_errors(self, eta: np.ndarray) -> np.ndarray | None:
+        """Open-loop output errors ``y - y_hat`` at ``eta`` (NaN where missing) from the fused value kernel, or None.
+
+        Only for least squares on the ``"rc2-fused"`` engine, whose value kernel leaves them in its
+        scratch buffer: a fit then computes its open-loop RMSE without a second simulation
+        (:func:`rczone.estimation.fit.rmse_of` is the general way).
+        """
+        if self._packed is None or not self._packed.consts.fused or self._packed.kind != LS:
+            return None
+        self.theta_cost(self.spec.to_theta(eta))
         return self._packed.scratch.copy()
 
     def curvature(self, eta: np.ndarray) -> np.ndarray:

@@ -155,3 +155,21 @@ def test_fit_rmse_from_the_adjoint_filter_equals_the_general_filters(method: str
     assert res.engine == "rc2-fused"
     general = rmse_of(NET2, {**res.estimates, **res.fixed}, data, method, hold)
     assert res.rmse_K == pytest.approx(general, rel=1e-10)
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+def test_least_squares_fit_rmse_from_the_fused_kernel_equals_the_simulations(hold: str) -> None:
+    """A 2-state least-squares fit takes its open-loop RMSE from the fused value kernel's errors: the
+    same as the general simulation's (missing samples, estimated x0)."""
+    from rczone.estimation import Dataset, fit
+    from rczone.estimation.fit import rmse_of
+
+    data = data2(noise=0.05, rng=np.random.default_rng(4))
+    y = data.y.copy()
+    y[[0, 17, 18, 90]] = np.nan
+    data = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+    free = ["Cr", "Cw", "Rw", "Rwin", "x0_Tw"]
+    res = fit(NET2, data, free, method="ls", hold=hold, n_starts=1, start={"x0_Tw": 21.0}, uncertainty=False)
+    assert res.engine == "rc2-fused" and res.optimizer == "gauss-newton"
+    general = rmse_of(NET2, {**res.estimates, **res.fixed}, data, "ls", hold)
+    assert res.rmse_K == pytest.approx(general, rel=1e-10)
