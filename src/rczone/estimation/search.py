@@ -414,7 +414,10 @@ def _polish(
     """
     i = optima[0].starts[0]
     out = outcomes[i]
-    more = minimize_from(cost, spec, out.end, "lbfgs", max_evals, ftol=FINAL_FTOL)
+    # where the search computed the Hessian at this end, its diagonal is the curvature that scales the
+    # search on (exact, where d + 1 gradients would estimate it)
+    curvature = None if out.hessian is None else np.diag(out.hessian)
+    more = minimize_from(cost, spec, out.end, "lbfgs", max_evals, ftol=FINAL_FTOL, curvature=curvature)
     if not more.cost < out.cost - COST_TIE * max(abs(out.cost), 1.0):
         outcomes[i] = replace(out, n_evals=out.n_evals + more.n_evals)
         return optima, tol
