@@ -94,13 +94,14 @@ def test_remembered_keeps_the_latest_points_and_hands_out_copies() -> None:
         ((0.3, 0.3, 0.3, 0.3), 200, 1e-15),
     ],
 )
-def test_the_lbfgsb_loop_takes_scipys_steps(start, maxfun: int, ftol: float) -> None:
+def test_the_lbfgsb_loop_takes_scipys_steps(start, maxfun: int, ftol: float, monkeypatch) -> None:
     """``optimize.lbfgsb`` against ``scipy.optimize.minimize(method="L-BFGS-B")`` on a 4-dimensional
     Rosenbrock function whose box holds the first coordinate off the global minimum (an active bound)
     or that ends in its local minimum:
     the same end point bit for bit, evaluations, message and verdict, also when stopped by ``maxfun``."""
     from scipy.optimize import minimize
 
+    from rczone.estimation import optimize
     from rczone.estimation.optimize import lbfgsb
 
     def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
@@ -117,5 +118,15 @@ def test_the_lbfgsb_loop_takes_scipys_steps(start, maxfun: int, ftol: float) -> 
     got = lbfgsb(fun, np.array(start), lo, hi, **opts)
     np.testing.assert_array_equal(got.x, want.x)
     assert (got.fun, got.nfev, got.success, got.message) == (want.fun, want.nfev, want.success, want.message)
+    # a SciPy whose setulb lbfgsb does not know: minimize itself, the same answer
+    monkeypatch.setattr(optimize, "_setulb", lambda: None)
+    again = lbfgsb(fun, np.array(start), lo, hi, **opts)
+    np.testing.assert_array_equal(again.x, want.x)
+    assert (again.fun, again.nfev, again.success, again.message) == (
+        got.fun,
+        got.nfev,
+        got.success,
+        got.message,
+    )
     if ftol == 1e-15:  # from there it goes to the bound, not to the local minimum near x0 = -0.78
         assert got.success and got.x[0] == 0.8
