@@ -203,6 +203,20 @@ def sample_points(spec: ParameterSpec, n: int, rng: np.random.Generator) -> np.n
     return spec.to_theta(lo + unit * (hi - lo))
 
 
+def _sampled_costs(cost: Callable[[np.ndarray], float], spec: ParameterSpec, pts: np.ndarray) -> np.ndarray:
+    """The cost at each sampled point (theta); ``inf`` where it is not finite.
+
+    An :class:`~rczone.estimation.costs.Objective` is asked at the physical values directly
+    (``theta_cost``, as :func:`rczone.estimation.leastsq.spread_starts` does), without the round
+    trip through ``eta`` (about 7 us of Python per point, as much as half a 2-state likelihood).
+    """
+    at_theta = getattr(cost, "theta_cost", None)
+    if at_theta is None:
+        return np.array([cost(spec.to_eta(p)) for p in pts])
+    vals = np.array([at_theta(p) for p in pts], dtype=float)
+    return np.where(np.isfinite(vals), vals, math.inf)
+
+
 def _unit(spec: ParameterSpec, theta: np.ndarray) -> np.ndarray:
     lo, hi = spec.eta_lower, spec.eta_upper
     return (spec.to_eta(theta) - lo) / (hi - lo)
@@ -532,7 +546,7 @@ def global_search(
     else:
         n_sample = n_sample or int(min(256, max(32, 16 * d)))
         pts = sample_points(spec, n_sample, rng)
-        vals = np.array([cost(spec.to_eta(p)) for p in pts])
+        vals = _sampled_costs(cost, spec, pts)
         n_sampled = n_sample
         adaptive = n_starts is None
         max_local = n_starts if n_starts is not None else min(MAX_AUTO_STARTS, 4 + d // 2)
