@@ -195,7 +195,10 @@ def _parquet_frame(parquet, path: Path) -> pd.DataFrame:
     table = parquet.read(use_threads=False, use_pandas_metadata=True)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", "make_block is deprecated")  # as read_parquet does
-        return arrow_table_to_pandas(table)
+        try:
+            return arrow_table_to_pandas(table)
+        except TypeError:  # a private function whose signature another pandas changed
+            return pd.read_parquet(path)
 
 
 def load_zone_data(
