@@ -589,15 +589,16 @@ def kalman_filter(
 
     Notes
     -----
-    ``update_step`` for output ``o`` with ``c = C[o]`` (in the loop): ``e = y - d'u - c'x``, ``s = c'Pc + r``,
-    ``k = Pc / s``, ``x += k e``, ``P -= k (Pc)'`` (kept exactly symmetric); along each
-    direction ``j``: ``de = -dd_j'u - dc_j'x - c'dx_j``, ``ds = c'dP_j c + 2 dc_j'Pc + dr_j``,
-    ``dk = (dPc - k ds)/s``, ``dx_j += dk e + k de``, ``dP_j -= dk (Pc)' + k (dPc)'``; the
-    gradient gains the derivative of ``0.5 (log s + e^2/s)``.
+    The update by output ``o`` with ``c = C[o]``: :func:`innovation` ``e = y - d'u - c'x``; the scalar
+    update in the loop ``s = c'Pc + r``, ``k = Pc / s``, ``P -= k (Pc)'`` (kept exactly symmetric);
+    :func:`correct` ``x += k e``. Along each direction ``j`` (:func:`innovation_derivatives`,
+    :func:`gain_derivatives`, :func:`score`): ``de = -dd_j'u - dc_j'x - c'dx_j``,
+    ``ds = c'dP_j c + 2 dc_j'Pc + dr_j``, ``dk = (dPc - k ds)/s``, ``dx_j += dk e + k de``,
+    ``dP_j -= dk (Pc)' + k (dPc)'``; the gradient gains the derivative of ``0.5 (log s + e^2/s)``.
 
-    ``predict_step`` with the matrices of interval ``w`` (the mean in the loop,
-    :func:`predict_covariance`; with a basis both in the loop, ``Phi`` diagonal, after
-    :func:`change_basis` where the interval changes): ``x = Phi x + drive``,
+    The prediction with the matrices of interval ``w`` (:func:`drive` and :func:`advance`,
+    :func:`predict_mean_derivatives`, :func:`predict_covariance`; with a basis the value steps in the
+    loop, ``Phi`` diagonal, after :func:`change_basis` where the interval changes): ``x = Phi x + drive``,
     ``P = Phi P Phi' + Qd``; ``dx_j = dPhi_j x + Phi dx_j + ddrive_j``,
     ``dP_j = dPhi_j P Phi' + Phi P dPhi_j' + Phi dP_j Phi' + dQd_j`` (the ``dPhi`` terms skipped
     for directions that leave the dynamics unchanged).
@@ -654,7 +655,7 @@ def kalman_filter(
     gains = Gains(kg, dkg, dsg)
     work = Work(pc, dpc, de, xn, T, X, Y)
     # the covariances the steady state compares with (the last prediction) and returns to (the last
-    # filtered): copied in full only while armed, i.e. once the diagonal has repeated (repeats_diagonal)
+    # filtered): copied in full only while armed, i.e. once the diagonal has repeated (the O(n) test in the loop)
     armed = False
     P_prev = np.empty((n, n))
     dP_prev = np.empty((q, n, n))
