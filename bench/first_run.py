@@ -3,6 +3,7 @@
 Usage (``make bench`` runs it first)::
 
     python bench/first_run.py            # writes bench/first_run.json
+    python bench/first_run.py --out F    # writes F instead
 
 numba compiles rczone's kernels on their first call and caches them on disk. This benchmark
 points ``NUMBA_CACHE_DIR`` at a new temporary folder, so the first run compiles everything the
@@ -15,6 +16,7 @@ at most 30 s of CPU for the first run (issue 19).
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import resource
@@ -53,7 +55,10 @@ def run_once(env: dict[str, str], cwd: Path) -> dict[str, object]:
     }
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=HERE / "first_run.json", help="the JSON file written")
+    args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="rczone-first-run-") as tmp:
         env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba-cache")}
         first = run_once(env, Path(tmp))
@@ -69,7 +74,7 @@ def main() -> int:
         "notice_only_on_first_run": bool(first["notice"] and not warm["notice"]),
         "load_average_1_5_15": [round(x, 2) for x in load],
     }
-    write_json_atomic(HERE / "first_run.json", res)
+    write_json_atomic(args.out, res)
     print(f"{res['command']} from an empty numba cache")
     for name in ("first", "warm"):
         r = res[name]

@@ -30,7 +30,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rczone.kernels.arrays import Discretization, dynamics_derivatives, dynamics_model
-from rczone.kernels.discretize import interval_derivatives
+from rczone.kernels.discretize import interval_derivatives, rc2_interval_derivatives
 from rczone.simulation import foh, zoh
 from rczone.simulation.discretize import process_noise_covariance, symmetrizing_scale
 from tests.netfactory import random_network
@@ -162,3 +162,77 @@ def test_spectral_derivatives_without_noise_or_directions():
             assert X.shape == Y.shape
             assert relerr(X, Y) <= RTOL or np.abs(Y).max() == 0.0 == np.abs(X).max()
         assert not np.any(mats[3]) and not np.any(dmats[3])
+
+
+def check_two_states(A, B, scale, qc, dts, hold, dA, dB, dqc, noise=True) -> None:
+    """The written-out 2-state route against the matrix-exponential route and the complex step."""
+    n, p = B.shape
+    q = dA.shape[0]
+    keys = np.asarray(dts, dtype=float)[:, None]
+    mod = dynamics_model(A, np.zeros((0, n, n)), B, np.zeros((0, n, p)), qc)
+    der = dynamics_derivatives(dA, np.zeros((q, 0, n, n)), dB, np.zeros((q, 0, n, p)), dqc)
+    how = Discretization(np.ascontiguousarray(keys), scale, hold == "foh", noise)
+    mats, dmats = rc2_interval_derivatives(mod, der, how)
+    assert np.array_equal(interval_derivatives(mod, der, how)[1].dPhi, dmats.dPhi)  # the RC route takes it
+    mats_x, dmats_x = interval_derivatives(mod, der, how._replace(scale=np.empty(0)))
+    for X, Y in zip(mats + dmats, mats_x + dmats_x):
+        assert X.shape == Y.shape
+        assert relerr(X, Y) <= RTOL or np.abs(Y).max() == 0.0 == np.abs(X).max()
+    if not noise:
+        return
+    for k, dt in enumerate(keys[:, 0]):
+        for d in range(q):
+            ref = complex_step(A, B, qc, dt, hold, dA[d], dB[d], dqc[d])
+            for dm, Y in zip(dmats, ref):
+                tol = RTOL * max(np.abs(Y).max(), 1e-3 * np.abs(dm[k]).max())
+                assert np.abs(dm[k, d] - Y).max() <= tol
+
+
+@SETTINGS
+@given(st.integers(0, 2**32 - 1), st.integers(1, 2), st.sampled_from(["zoh", "foh"]), st.booleans())
+def test_two_state_derivatives_of_rc_networks_equal_the_complex_step(seed, n_flows, hold, noise):
+    rng = np.random.default_rng(seed)
+    net = random_network(rng, 2, 0, 2, n_flows=n_flows)
+    theta = net.values()
+    ss = net.state_space(theta)
+    scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
+    m = rng.uniform(0.0, 0.4, n_flows)
+    A, B = ss.matrices(m)
+    assert A.shape == (2, 2)
+    names = list(net.free_parameter_names)
+    ders = net.state_space_derivatives(theta, names, log=False)
+    q = len(names) + 2
+    dA, dB, dqc = np.zeros((q, 2, 2)), np.zeros((q, 2, B.shape[1])), np.zeros((q, 2))
+    for k, d in enumerate(ders):
+        dA[k] = d.dA + np.tensordot(m, d.dN, axes=1)
+        dB[k] = d.dB + np.tensordot(m, d.dM, axes=1)
+    dqc[-2] = rng.uniform(0.0, 1.0, 2)  # a process-noise direction; the last moves nothing
+    qc = rng.uniform(1e-4, 1e-2, 2)
+    check_two_states(A, B, scale, qc, [1.0, 60.0, 3600.0], hold, dA, dB, dqc, noise)
+
+
+@pytest.mark.parametrize("hold", ["zoh", "foh"])
+@pytest.mark.parametrize(
+    "lam",
+    [
+        [-1e-3, -1e-3],  # exactly repeated: the rotation is the identity
+        [-1e-3, -1e-3 * (1 + 1e-9)],  # nearly repeated
+        [-0.02, 0.0],  # a zero eigenvalue
+        [-5.0, -1e-4],  # stiff
+        [-5.0, -5.0 * (1 + 1e-6)],  # stiff and nearly repeated
+    ],
+)
+def test_two_state_derivatives_with_repeated_eigenvalues_equal_the_complex_step(lam, hold):
+    rng = np.random.default_rng(int(1e6 * abs(lam[1])) + 3)
+    A, scale = symmetrizable(rng, np.array(lam))
+    p, q = 3, 4
+    B = rng.standard_normal((2, p))
+    dA = rng.standard_normal((q, 2, 2)) * np.abs(A).max()
+    dB = rng.standard_normal((q, 2, p))
+    dqc = rng.uniform(0.0, 1.0, (q, 2))
+    dA[1], dB[2], dqc[0] = 0.0, 0.0, 0.0
+    qc = rng.uniform(0.1, 1.0, 2)
+    check_two_states(A, B, scale, qc, [0.5, 60.0, 900.0], hold, dA, dB, dqc)
+    # a diagonal matrix (b = 0, the rotation skipped), in either order of its eigenvalues
+    for diag in ([-1e-3, -0.2], [-0.2, -1e-3]):
+        check_two_states(np.diag(diag), B, np.ones(2), qc, [60.0], hold, dA, dB, dqc)

@@ -8,8 +8,9 @@ steps backward with the adjoints ``x_bar = dJ/dx`` and ``P_bar = dJ/dP``, accumu
 adjoints of the discrete matrices of each distinct interval (``Phi, G0, G1, Qd``), of the
 measurement variance and of the prior. The gradient in the parameters is then their contraction
 with the derivatives of those few matrices (:func:`rczone.kernels.discretize.rc_interval_derivatives`, the spectral
-formulas of :func:`rczone.kernels.discretize.spectral_derivatives` once per distinct interval) and of the prior, so it costs about three likelihoods for any
-number of parameters.
+formulas of :func:`rczone.kernels.discretize.spectral_derivatives` once per distinct interval; for two states
+the same formulas written out, :func:`rczone.kernels.discretize.spectral_derivatives2`) and of the prior, so it
+costs about three likelihoods for any number of parameters.
 
 The backward step of one sample, for a scalar output ``y = c'x`` with ``e = y - c'x-``,
 ``s = c'P-c + r``, ``g = P-c``, ``x+ = x- + g e/s``, ``P+ = P- - g g'/s`` and the term
@@ -56,7 +57,7 @@ from rczone.kernels.arrays import (
     Prior,
     Series,
 )
-from rczone.kernels.discretize import rc_interval_derivatives
+from rczone.kernels.discretize import rc2_interval_derivatives, rc_interval_derivatives
 from rczone.kernels.problem import LS, MAP, assembled, bound_kernel, with_prior
 from rczone.kernels.reverse import Adjoints, contract, nll_reverse, zero_adjoints
 
@@ -266,7 +267,7 @@ def gradient_fused(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
         return math.inf, grad
     u, y, keys, which = prob.data.u, prob.data.y, prob.data.keys, prob.data.which
     foh = prob.consts.foh
-    mats, dmats = _discretized(mod, der, keys, foh)
+    mats, dmats = rc2_interval_derivatives(mod, der, Discretization(keys, np.sqrt(mod.cap), foh, True))
     Phi, G0, G1, Qd = mats
     bars = zero_adjoints(keys.shape[0], 2, mod.B0.shape[1], 1)
     nll, n_obs = nll_rc2_adjoint(

@@ -138,6 +138,17 @@ class Discretization(NamedTuple):
     noise: bool  #: compute ``Qd`` and its derivatives (zero otherwise)
 
 
+class Eigen2(NamedTuple):
+    """The eigenvalues ``lam0 <= lam1`` of a symmetric 2-by-2 matrix and its orthogonal eigenvectors ``V``, by rows."""
+
+    lam0: float
+    lam1: float
+    v00: float
+    v01: float
+    v10: float
+    v11: float
+
+
 class Interval(NamedTuple):
     """The continuous model over one interval: ``dx = (A x + B u) dt + dw``, ``cov(dw) = diag(qc) dt``."""
 

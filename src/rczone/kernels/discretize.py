@@ -17,7 +17,8 @@ process-noise intensity ``Qc = diag(qc)``:
 * their derivatives along directions ``(dA, dB, dqc)`` for RC networks from the same
   decomposition (:func:`spectral_derivatives`): the Daleckii-Krein theorem with divided
   differences of ``exp`` (:func:`_dd2`, :func:`_dd3`, :func:`_dd4`), and for ``Qd`` a
-  three-index closed form, all directions of an interval in a few stacked products;
+  three-index closed form, all directions of an interval in a few stacked products; for two
+  states the same formulas written out in scalars (:func:`spectral_derivatives2`);
 * otherwise from matrix exponentials (:func:`expm_discretize`): the hold matrices from one
   block exponential, ``Qd`` by Van Loan's block exponential on a step short enough that
   ``e^{-A h}`` is harmless, then exact doubling. The derivatives are the Fréchet derivatives
@@ -47,6 +48,7 @@ from rczone.kernels.arrays import (
     Discretization,
     Dynamics,
     DynamicsDerivatives,
+    Eigen2,
     Interval,
     IntervalDirections,
     ModalBasis,
@@ -80,6 +82,22 @@ def phi2(x: float, em1: float) -> float:
             w = w * x + c[k]
         return w
     return (em1 - x) / (x * x)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def jacobi_tangent(a: float, b: float, d: float) -> float:
+    """``t = tan(theta)`` of the Jacobi rotation ``[[c, s], [-s, c]]`` that diagonalizes ``[[a, b], [b, d]]`` [2]_.
+
+    ``c = 1/sqrt(1 + t^2)``, ``s = t c``; the eigenvalues are ``a - t b`` and ``d + t b``, without
+    cancellation when they nearly coincide. ``0`` when ``b = 0``.
+    """
+    if b == 0.0:
+        return 0.0
+    tau = (d - a) / (2.0 * b)
+    at = abs(tau)
+    # sqrt(1 + tau^2) without overflow for |tau| > 1e150
+    root = at * math.sqrt(1.0 + (1.0 / at) ** 2) if at > 1e150 else math.sqrt(1.0 + at * at)
+    return math.copysign(1.0, tau) / (at + root)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -117,14 +135,7 @@ def rc2_discretize(model: Rc2Model, h: float, q0: float, q1: float, foh: bool) -
     s0, s1, is0, is1 = model.s0, model.s1, model.is0, model.is1
     # symmetric S and its rotation [[cs, sn], [-sn, cs]]
     b = 0.5 * (a01 * s0 * is1 + a10 * s1 * is0)
-    if b == 0.0:
-        tn = 0.0
-    else:
-        tau = (d - a) / (2.0 * b)
-        at = abs(tau)
-        # sqrt(1 + tau^2) without overflow for |tau| > 1e150
-        root = at * math.sqrt(1.0 + (1.0 / at) ** 2) if at > 1e150 else math.sqrt(1.0 + at * at)
-        tn = math.copysign(1.0, tau) / (at + root)
+    tn = jacobi_tangent(a, b, d)
     cs = 1.0 / math.sqrt(1.0 + tn * tn)
     sn = tn * cs
     # T = diag(s)^-1 V, U = T^-1 = V' diag(s)
@@ -795,7 +806,7 @@ def spectral_derivatives(
             for j in range(n):
                 Ph[i, a * n + j] = F0[i, j] * Eh[i, a * n + j]
     # (a BLAS product with an empty side is not defined: each kind only when it has directions)
-    Pv = np.dot(_h2v(np.dot(T, Ph), qa), Ti) if qa else np.empty((0, n))
+    Pv = _dot(_h2v(_dot(T, Ph), qa), Ti) if qa else np.empty((0, n))
     _unstack(Pv, sA, dPhi)
     # dG_d = T ((Fg o E_d) T^-1 B + diag(wg) T^-1 dB_d)
     TdB = _sandwich(Ti, dB, np.eye(p), sG, qg)
@@ -810,13 +821,13 @@ def spectral_derivatives(
                 for i in range(n):
                     for j in range(n):
                         Gv[g * n + i, j] = Fg[i, j] * Eh[i, a * n + j]
-        Mv = np.dot(Gv, TiB) if qg and p else np.zeros((qg * n, p))
+        Mv = _dot(Gv, TiB) if qg and p else np.zeros((qg * n, p))
         Mh = np.empty((n, qg * p))
         for g in range(qg):
             for i in range(n):
                 for j in range(p):
                     Mh[i, g * p + j] = Mv[g * n + i, j] + wg[i] * TdB[i, g * p + j]
-        Gv = _h2v(np.dot(T, Mh), qg) if qg and p else np.zeros((qg * n, p))
+        Gv = _h2v(_dot(T, Mh), qg) if qg and p else np.zeros((qg * n, p))
         _unstack(Gv, sG, dG0 if hold == 0 else dG1)
     # dQd_d = T (X_d + X_d' + (T^-1 diag(dqc_d) T^-T) o Om) T' with X_d[i, l] = sum_j E_d[i, j] W_jl Y_ijl
     Zh = np.zeros((n, qq * n))
@@ -845,7 +856,7 @@ def spectral_derivatives(
                     for i in range(n):
                         for j in range(n):
                             Zh[i, c0 + j] += c * Ti[i, k] * Ti[j, k] * Om[i, j]
-    Qv = np.dot(_h2v(np.dot(T, Zh), qq), np.ascontiguousarray(T.T)) if qq else np.empty((0, n))
+    Qv = _dot(_h2v(_dot(T, Zh), qq), np.ascontiguousarray(T.T)) if qq else np.empty((0, n))
     for g in range(qq):
         for i in range(n):
             for j in range(i + 1, n):
@@ -853,6 +864,220 @@ def spectral_derivatives(
                 Qv[g * n + i, j] = v
                 Qv[g * n + j, i] = v
     _unstack(Qv, sQ, dQd)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _eig2(a: float, b: float, d: float) -> Eigen2:
+    """The eigen-decomposition of the symmetric ``[[a, b], [b, d]]`` by one Jacobi rotation (:func:`jacobi_tangent`).
+
+    Backward stable, as LAPACK's solver is; the eigenvalues ascending, as LAPACK's.
+    """
+    t = jacobi_tangent(a, b, d)
+    c = 1.0 / math.sqrt(1.0 + t * t)
+    s = t * c
+    l0 = a - t * b
+    l1 = d + t * b
+    if l0 <= l1:
+        return Eigen2(l0, l1, c, s, -s, c)
+    return Eigen2(l1, l0, s, c, c, -s)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _y2(a: float, b: float, ea: float, eb: float, om: float, emf0: float, h: float) -> float:
+    """``h^2 exp[0, a, b]`` with ``a = x_i + x_m``, ``b = x_j + x_m`` of :func:`spectral_derivatives`.
+
+    ``ea, eb`` their exponentials; ``om = Om[argmax(x_i, x_j), m]`` and ``emf0 = e^{x_m} F0_ij``
+    for the recurrence taken when both nodes are negative and apart.
+    """
+    lo = min(a, b)
+    if max(a, b) <= 0.0 and lo <= -SERIES_LIMIT:
+        return h * (om - emf0) / (-lo)
+    return h * h * _dd3_sorted(0.0, a, b, 1.0, ea, eb)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def spectral_derivatives2(
+    step: Interval, dstep: IntervalDirections, how: Discretization, out: Dynamics, dout: DynamicsDerivatives
+) -> None:
+    """:func:`spectral_derivatives` of a 2-state RC model, written out in scalars.
+
+    The same Daleckii-Krein formulas, with the eigen-decomposition of the symmetrized 2-by-2
+    matrix by one Jacobi rotation (Golub and Van Loan [1]_, Algorithm 8.5.1) and no work arrays: a 2-state model's
+    gradient discretizes and differentiates every distinct interval at each evaluation, and the
+    general function's LAPACK call, BLAS products and some fifty small arrays were most of that.
+    Written for the fused 2-state adjoint (:mod:`rczone.kernels.adjoint`); the tests compare it
+    with the complex step through ``scipy.linalg.expm``.
+
+    Parameters
+    ----------
+    step, dstep, how, out, dout
+        As :func:`spectral_derivatives`, with two states.
+
+    References
+    ----------
+    .. [1] G. H. Golub, C. F. Van Loan, *Matrix Computations*, 4th ed., Johns Hopkins, 2013.
+    """
+    A, B, qc, h = step
+    dA, dB, dqc = dstep
+    scale, foh, noise = how.scale, how.foh, how.noise
+    Phi, G0, G1, Qd = out
+    dPhi, dG0, dG1, dQd = dout
+    p = B.shape[1]
+    q = dA.shape[0]
+    s0, s1 = scale[0], scale[1]
+    b = 0.5 * (s0 * A[0, 1] / s1 + s1 * A[1, 0] / s0)
+    eig = _eig2(A[0, 0], b, A[1, 1])
+    l0, l1, v00, v01, v10, v11 = eig.lam0, eig.lam1, eig.v00, eig.v01, eig.v10, eig.v11
+    # T = diag(scale)^-1 V, T^-1 = V' diag(scale)
+    t00, t01, t10, t11 = v00 / s0, v01 / s0, v10 / s1, v11 / s1
+    i00, i01, i10, i11 = v00 * s0, v10 * s1, v01 * s0, v11 * s1
+    h2 = h * h
+    x0 = l0 * h
+    x1 = l1 * h
+    em0 = math.expm1(x0)
+    em1 = math.expm1(x1)
+    e0 = math.exp(x0)
+    e1 = math.exp(x1)
+    g10 = phi2(x0, em0) * h if foh else 0.0
+    g11 = phi2(x1, em1) * h if foh else 0.0
+    g00 = phi1(x0, em0) * h - g10
+    g01 = phi1(x1, em1) * h - g11
+    # divided-difference kernels (symmetric): F0 of Phi, Fg0 and Fg1 of the hold matrices
+    f00 = h * _dd2(x0, x0, e0, e0)
+    f01 = h * _dd2(x0, x1, e0, e1)
+    f11 = h * _dd2(x1, x1, e1, e1)
+    k00 = h2 * _dd4_00(x0, x0, e0, e0) if foh else 0.0
+    k01 = h2 * _dd4_00(x0, x1, e0, e1) if foh else 0.0
+    k11 = h2 * _dd4_00(x1, x1, e1, e1) if foh else 0.0
+    j00 = h2 * _dd3_sorted(0.0, x0, x0, 1.0, e0, e0) - k00
+    j01 = h2 * _dd3_sorted(0.0, x0, x1, 1.0, e0, e1) - k01
+    j11 = h2 * _dd3_sorted(0.0, x1, x1, 1.0, e1, e1) - k11
+    # Phi = T diag(e) T^-1; G = T diag(g) T^-1 B
+    Phi[0, 0] = t00 * e0 * i00 + t01 * e1 * i10
+    Phi[0, 1] = t00 * e0 * i01 + t01 * e1 * i11
+    Phi[1, 0] = t10 * e0 * i00 + t11 * e1 * i10
+    Phi[1, 1] = t10 * e0 * i01 + t11 * e1 * i11
+    for c in range(p):
+        u0 = i00 * B[0, c] + i01 * B[1, c]
+        u1 = i10 * B[0, c] + i11 * B[1, c]
+        G0[0, c] = t00 * g00 * u0 + t01 * g01 * u1
+        G0[1, c] = t10 * g00 * u0 + t11 * g01 * u1
+        if foh:
+            G1[0, c] = t00 * g10 * u0 + t01 * g11 * u1
+            G1[1, c] = t10 * g10 * u0 + t11 * g11 * u1
+    # noise: W = T^-1 Qc T^-T, Om_il = h exp[0, x_i + x_l], Qd = T (W o Om) T'
+    w00 = w01 = w11 = o00 = o01 = o11 = 0.0
+    y000 = y001 = y010 = y011 = y100 = y101 = y110 = y111 = 0.0  # W_jm Y_ijm at y_ijm
+    if noise:
+        w00 = i00 * qc[0] * i00 + i01 * qc[1] * i01
+        w01 = i00 * qc[0] * i10 + i01 * qc[1] * i11
+        w11 = i10 * qc[0] * i10 + i11 * qc[1] * i11
+        o00 = phi1(2.0 * x0, math.expm1(2.0 * x0)) * h
+        o01 = phi1(x0 + x1, math.expm1(x0 + x1)) * h
+        o11 = phi1(2.0 * x1, math.expm1(2.0 * x1)) * h
+        # Om[argmax(x_i, x_j), m]: x0 <= x1, so the pair (0, 1) takes row 1
+        v = _y2(2.0 * x0, 2.0 * x0, e0 * e0, e0 * e0, o00, e0 * f00, h)
+        y000 = v * w00
+        v = _y2(x0 + x1, x0 + x1, e0 * e1, e0 * e1, o01, e1 * f00, h)
+        y001 = v * w01
+        v = _y2(x0 + x0, x1 + x0, e0 * e0, e1 * e0, o01, e0 * f01, h)
+        y010 = v * w01
+        y100 = v * w00
+        v = _y2(x0 + x1, x1 + x1, e0 * e1, e1 * e1, o11, e1 * f01, h)
+        y011 = v * w11
+        y101 = v * w01
+        v = _y2(x1 + x0, x1 + x0, e1 * e0, e1 * e0, o01, e0 * f11, h)
+        y110 = v * w01
+        v = _y2(2.0 * x1, 2.0 * x1, e1 * e1, e1 * e1, o11, e1 * f11, h)
+        y111 = v * w11
+        z00, z01, z11 = w00 * o00, w01 * o01, w11 * o11
+        a00 = t00 * z00 + t01 * z01
+        a01 = t00 * z01 + t01 * z11
+        a10 = t10 * z00 + t11 * z01
+        a11 = t10 * z01 + t11 * z11
+        Qd[0, 0] = a00 * t00 + a01 * t01
+        Qd[0, 1] = a00 * t10 + a01 * t11
+        Qd[1, 0] = Qd[0, 1]
+        Qd[1, 1] = a10 * t10 + a11 * t11
+    else:
+        Qd[0, 0] = Qd[0, 1] = Qd[1, 0] = Qd[1, 1] = 0.0
+    for d in range(q):
+        movA = dA[d, 0, 0] != 0.0 or dA[d, 0, 1] != 0.0 or dA[d, 1, 0] != 0.0 or dA[d, 1, 1] != 0.0
+        movB = False
+        for c in range(p):
+            movB = movB or dB[d, 0, c] != 0.0 or dB[d, 1, c] != 0.0
+        movq = noise and (dqc[d, 0] != 0.0 or dqc[d, 1] != 0.0)
+        # E = T^-1 dA T
+        r00 = dA[d, 0, 0] * t00 + dA[d, 0, 1] * t10
+        r01 = dA[d, 0, 0] * t01 + dA[d, 0, 1] * t11
+        r10 = dA[d, 1, 0] * t00 + dA[d, 1, 1] * t10
+        r11 = dA[d, 1, 0] * t01 + dA[d, 1, 1] * t11
+        E00 = i00 * r00 + i01 * r10
+        E01 = i00 * r01 + i01 * r11
+        E10 = i10 * r00 + i11 * r10
+        E11 = i10 * r01 + i11 * r11
+        # dPhi = T (F0 o E) T^-1
+        m00, m01, m10, m11 = f00 * E00, f01 * E01, f01 * E10, f11 * E11
+        n00 = t00 * m00 + t01 * m10
+        n01 = t00 * m01 + t01 * m11
+        n10 = t10 * m00 + t11 * m10
+        n11 = t10 * m01 + t11 * m11
+        dPhi[d, 0, 0] = n00 * i00 + n01 * i10
+        dPhi[d, 0, 1] = n00 * i01 + n01 * i11
+        dPhi[d, 1, 0] = n10 * i00 + n11 * i10
+        dPhi[d, 1, 1] = n10 * i01 + n11 * i11
+        # dG = T ((Fg o E) T^-1 B + diag(g) T^-1 dB)
+        for c in range(p):
+            if not (movA or movB):
+                dG0[d, 0, c] = dG0[d, 1, c] = 0.0
+                continue
+            u0 = i00 * B[0, c] + i01 * B[1, c]
+            u1 = i10 * B[0, c] + i11 * B[1, c]
+            du0 = i00 * dB[d, 0, c] + i01 * dB[d, 1, c]
+            du1 = i10 * dB[d, 0, c] + i11 * dB[d, 1, c]
+            a0 = j00 * E00 * u0 + j01 * E01 * u1 + g00 * du0
+            a1 = j01 * E10 * u0 + j11 * E11 * u1 + g01 * du1
+            dG0[d, 0, c] = t00 * a0 + t01 * a1
+            dG0[d, 1, c] = t10 * a0 + t11 * a1
+            if foh:
+                a0 = k00 * E00 * u0 + k01 * E01 * u1 + g10 * du0
+                a1 = k01 * E10 * u0 + k11 * E11 * u1 + g11 * du1
+                dG1[d, 0, c] = t00 * a0 + t01 * a1
+                dG1[d, 1, c] = t10 * a0 + t11 * a1
+        # dQd = T (X + X' + (T^-1 diag(dqc) T^-T) o Om) T' with X_il = sum_j E_ij W_jl Y_ijl
+        if not (noise and (movA or movq)):
+            dQd[d, 0, 0] = dQd[d, 0, 1] = dQd[d, 1, 0] = dQd[d, 1, 1] = 0.0
+            continue
+        X00 = E00 * y000 + E01 * y010
+        X01 = E00 * y001 + E01 * y011
+        X10 = E10 * y100 + E11 * y110
+        X11 = E10 * y101 + E11 * y111
+        z00 = 2.0 * X00
+        z01 = X01 + X10
+        z11 = 2.0 * X11
+        if movq:
+            q0, q1 = dqc[d, 0], dqc[d, 1]
+            z00 += (i00 * q0 * i00 + i01 * q1 * i01) * o00
+            z01 += (i00 * q0 * i10 + i01 * q1 * i11) * o01
+            z11 += (i10 * q0 * i10 + i11 * q1 * i11) * o11
+        a00 = t00 * z00 + t01 * z01
+        a01 = t00 * z01 + t01 * z11
+        a10 = t10 * z00 + t11 * z01
+        a11 = t10 * z01 + t11 * z11
+        dQd[d, 0, 0] = a00 * t00 + a01 * t01
+        dQd[d, 0, 1] = 0.5 * ((a00 * t10 + a01 * t11) + (a10 * t00 + a11 * t01))
+        dQd[d, 1, 0] = dQd[d, 0, 1]
+        dQd[d, 1, 1] = a10 * t10 + a11 * t11
+
+
+@njit(cache=True, error_model="numpy")
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``a @ b`` for contiguous matrices: written out for a few states (a BLAS call costs more there), BLAS beyond."""
+    if a.shape[1] > 4:
+        return np.dot(a, b)
+    out = np.empty((a.shape[0], b.shape[1]))
+    matmul(a, b, out)
+    return out
 
 
 @njit(cache=True, error_model="numpy")
@@ -1117,7 +1342,7 @@ def _interval(
 def rc_interval_derivatives(
     mod: Assembled, der: AssembledDerivatives, how: Discretization
 ) -> tuple[Dynamics, DynamicsDerivatives]:
-    """:func:`interval_derivatives` of an RC network, by the spectral formulas only.
+    """:func:`interval_derivatives` of an RC network, by the spectral formulas only (written out for two states).
 
     An RC network's ``diag(scale) A diag(scale)^-1`` is symmetric; a caller that knows its model is
     one (the fused 2-state adjoint, :mod:`rczone.kernels.adjoint`) calls this and does not compile
@@ -1136,9 +1361,29 @@ def rc_interval_derivatives(
     DynamicsDerivatives
     """
     mats, dmats = _stacks(mod, der, how.keys.shape[0])
+    two = mod.A0.shape[0] == 2
     for k in range(how.keys.shape[0]):
         step, dstep, out, dout = _interval(mod, der, how.keys[k], mats, dmats, k)
-        spectral_derivatives(step, dstep, how, out, dout)
+        if two:
+            spectral_derivatives2(step, dstep, how, out, dout)
+        else:
+            spectral_derivatives(step, dstep, how, out, dout)
+    return mats, dmats
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def rc2_interval_derivatives(
+    mod: Assembled, der: AssembledDerivatives, how: Discretization
+) -> tuple[Dynamics, DynamicsDerivatives]:
+    """:func:`rc_interval_derivatives` of a 2-state RC network, by :func:`spectral_derivatives2`.
+
+    The fused 2-state adjoint calls it and compiles no general eigen-solver or BLAS route.
+    Inlined into its callers.
+    """
+    mats, dmats = _stacks(mod, der, how.keys.shape[0])
+    for k in range(how.keys.shape[0]):
+        step, dstep, out, dout = _interval(mod, der, how.keys[k], mats, dmats, k)
+        spectral_derivatives2(step, dstep, how, out, dout)
     return mats, dmats
 
 
