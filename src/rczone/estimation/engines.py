@@ -62,6 +62,7 @@ from rczone.kernels.discretize import (
     interval_derivatives,
     interval_matrices,
     modal_matrices,
+    rc2_interval_matrices,
     rc_interval_matrices,
 )
 from rczone.kernels.kalman import (
@@ -399,7 +400,9 @@ def general_cost(
                     "an innovation variance is not positive: the noise model is invalid"
                 )
             return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
-        kernel = interval_matrices if scale is None else rc_interval_matrices  # see interval_discretization
+        kernel = (
+            interval_matrices if scale is None else rc2_interval_matrices if n == 2 else rc_interval_matrices
+        )
         mats = kernel(mod, how)
         dmats = no_sensitivities(keys.shape[0], n, p)
     # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization

@@ -1199,11 +1199,17 @@ def _rc_interval(step: Interval, how: Discretization, out: Dynamics, k: int) -> 
     The closed form writes its few numbers in place (no views of the stacks per interval: with
     thousands of distinct intervals their reference counts are a tenth of the 2-state cost).
     """
-    A, B, qc, h = step
-    scale = how.scale
-    if scale.shape[0] != 2:
+    if how.scale.shape[0] != 2:
         spectral_discretize(step, how, Dynamics(out.Phi[k], out.G0[k], out.G1[k], out.Qd[k]))
         return
+    _rc2_interval(step, how, out, k)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _rc2_interval(step: Interval, how: Discretization, out: Dynamics, k: int) -> None:
+    """Interval ``k`` of a 2-state RC network into the stacks ``out``, by :func:`rc2_discretize`."""
+    A, B, qc, h = step
+    scale = how.scale
     Phi, G0, G1, Qd = out
     m = rc2_discretize(
         Rc2Model(A[0, 0], A[0, 1], A[1, 0], A[1, 1], scale[0], scale[1], 1.0 / scale[0], 1.0 / scale[1]),
@@ -1238,15 +1244,35 @@ def rc_interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
     Dynamics
     """
     keys = how.keys
-    n = mod.A0.shape[0]
-    p = mod.B0.shape[1]
-    K = keys.shape[0]
-    out = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.zeros((K, n, n)))
-    qc = mod.qc if how.noise else np.zeros(n)
-    for k in range(K):
+    out, qc = _matrix_stacks(mod, how)
+    for k in range(keys.shape[0]):
         A, B = _key_matrices(mod, keys[k])
         _rc_interval(Interval(A, B, qc, keys[k, 0]), how, out, k)
     return out
+
+
+@njit(cache=True, error_model="numpy")
+def rc2_interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
+    """:func:`rc_interval_matrices` of a 2-state RC network: the closed form only.
+
+    Called for two states, it compiles no eigen-solver (a first run's compile time).
+    """
+    keys = how.keys
+    out, qc = _matrix_stacks(mod, how)
+    for k in range(keys.shape[0]):
+        A, B = _key_matrices(mod, keys[k])
+        _rc2_interval(Interval(A, B, qc, keys[k, 0]), how, out, k)
+    return out
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _matrix_stacks(mod: Assembled, how: Discretization) -> tuple[Dynamics, np.ndarray]:
+    """Room for the matrices of every interval (``G1``, ``Qd`` zero), and the noise intensities (zero without noise)."""
+    n = mod.A0.shape[0]
+    p = mod.B0.shape[1]
+    K = how.keys.shape[0]
+    out = Dynamics(np.empty((K, n, n)), np.empty((K, n, p)), np.zeros((K, n, p)), np.zeros((K, n, n)))
+    return out, mod.qc if how.noise else np.zeros(n)
 
 
 @njit(cache=True, error_model="numpy")
