@@ -806,7 +806,7 @@ def spectral_derivatives(
             for j in range(n):
                 Ph[i, a * n + j] = F0[i, j] * Eh[i, a * n + j]
     # (a BLAS product with an empty side is not defined: each kind only when it has directions)
-    Pv = _dot(_h2v(_dot(T, Ph), qa), Ti) if qa else np.empty((0, n))
+    Pv = np.dot(_h2v(np.dot(T, Ph), qa), Ti) if qa else np.empty((0, n))
     _unstack(Pv, sA, dPhi)
     # dG_d = T ((Fg o E_d) T^-1 B + diag(wg) T^-1 dB_d)
     TdB = _sandwich(Ti, dB, np.eye(p), sG, qg)
@@ -821,13 +821,13 @@ def spectral_derivatives(
                 for i in range(n):
                     for j in range(n):
                         Gv[g * n + i, j] = Fg[i, j] * Eh[i, a * n + j]
-        Mv = _dot(Gv, TiB) if qg and p else np.zeros((qg * n, p))
+        Mv = np.dot(Gv, TiB) if qg and p else np.zeros((qg * n, p))
         Mh = np.empty((n, qg * p))
         for g in range(qg):
             for i in range(n):
                 for j in range(p):
                     Mh[i, g * p + j] = Mv[g * n + i, j] + wg[i] * TdB[i, g * p + j]
-        Gv = _h2v(_dot(T, Mh), qg) if qg and p else np.zeros((qg * n, p))
+        Gv = _h2v(np.dot(T, Mh), qg) if qg and p else np.zeros((qg * n, p))
         _unstack(Gv, sG, dG0 if hold == 0 else dG1)
     # dQd_d = T (X_d + X_d' + (T^-1 diag(dqc_d) T^-T) o Om) T' with X_d[i, l] = sum_j E_d[i, j] W_jl Y_ijl
     Zh = np.zeros((n, qq * n))
@@ -856,7 +856,7 @@ def spectral_derivatives(
                     for i in range(n):
                         for j in range(n):
                             Zh[i, c0 + j] += c * Ti[i, k] * Ti[j, k] * Om[i, j]
-    Qv = _dot(_h2v(_dot(T, Zh), qq), np.ascontiguousarray(T.T)) if qq else np.empty((0, n))
+    Qv = np.dot(_h2v(np.dot(T, Zh), qq), np.ascontiguousarray(T.T)) if qq else np.empty((0, n))
     for g in range(qq):
         for i in range(n):
             for j in range(i + 1, n):
@@ -1068,16 +1068,6 @@ def spectral_derivatives2(
         dQd[d, 0, 1] = 0.5 * ((a00 * t10 + a01 * t11) + (a10 * t00 + a11 * t01))
         dQd[d, 1, 0] = dQd[d, 0, 1]
         dQd[d, 1, 1] = a10 * t10 + a11 * t11
-
-
-@njit(cache=True, error_model="numpy")
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``a @ b`` for contiguous matrices: written out for a few states (a BLAS call costs more there), BLAS beyond."""
-    if a.shape[1] > 4:
-        return np.dot(a, b)
-    out = np.empty((a.shape[0], b.shape[1]))
-    matmul(a, b, out)
-    return out
 
 
 @njit(cache=True, error_model="numpy")
