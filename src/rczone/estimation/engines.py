@@ -60,10 +60,8 @@ from rczone.kernels.arrays import (
 )
 from rczone.kernels.discretize import (
     interval_derivatives,
-    interval_matrices,
+    matrices_kernel,
     modal_matrices,
-    rc2_interval_matrices,
-    rc_interval_matrices,
 )
 from rczone.kernels.kalman import (
     STEADY_RTOL,
@@ -400,10 +398,7 @@ def general_cost(
                     "an innovation variance is not positive: the noise model is invalid"
                 )
             return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
-        kernel = (
-            interval_matrices if scale is None else rc2_interval_matrices if n == 2 else rc_interval_matrices
-        )
-        mats = kernel(mod, how)
+        mats = matrices_kernel(n, scale is not None)(mod, how)
         dmats = no_sensitivities(keys.shape[0], n, p)
     # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization
     y = np.require(data.y, np.float64, "CW")

@@ -1255,6 +1255,18 @@ def rc2_interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
     return out
 
 
+def matrices_kernel(n: int, rc: bool):
+    """The compiled function that discretizes every interval of an ``n``-state model, called from Python.
+
+    :func:`rc2_interval_matrices` for a 2-state RC network, :func:`rc_interval_matrices` for a
+    larger one (``rc``: its ``scale`` symmetrizes ``A``), :func:`interval_matrices` otherwise: each
+    compiles only the route it runs (a first run's time).
+    """
+    if not rc:
+        return interval_matrices
+    return rc2_interval_matrices if n == 2 else rc_interval_matrices
+
+
 @njit(cache=True, error_model="numpy", inline="always")
 def _matrix_stacks(mod: Assembled, how: Discretization) -> tuple[Dynamics, np.ndarray]:
     """Room for the matrices of every interval (``G1``, ``Qd`` zero), and the noise intensities (zero without noise)."""

@@ -421,18 +421,10 @@ def interval_discretization(
     qc = _diagonal_intensity(Qc, A.shape[0])
     if qc is not None and not any(np.iscomplexobj(a) for a in (A, N, B, M)):
         from rczone.kernels.arrays import Discretization, dynamics_model
-        from rczone.kernels.discretize import interval_matrices, rc2_interval_matrices, rc_interval_matrices
+        from rczone.kernels.discretize import matrices_kernel
 
         scale = symmetrizing_scale(A, N, capacities)
-        # an RC network's route does not compile the matrix exponentials, a 2-state one no eigen-solver
-        # (a first run's time)
-        kernel = (
-            interval_matrices
-            if scale is None
-            else rc2_interval_matrices
-            if A.shape[0] == 2
-            else rc_interval_matrices
-        )
+        kernel = matrices_kernel(A.shape[0], scale is not None)
         how = Discretization(
             np.require(keys, np.float64, "CW"),
             np.empty(0) if scale is None else scale,
