@@ -7,9 +7,14 @@ exit code 2, never a traceback.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import signal
 import sys
+import threading
 import warnings
-from contextlib import nullcontext
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager, nullcontext
 
 import typer
 
@@ -102,15 +107,22 @@ def main(argv: list[str] | None = None) -> int:
     no traceback), 3 a fit flagged untrustworthy, 4 ``fit-many`` stored failed zones, 5
     ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
     """
+    argv = sys.argv[1:] if argv is None else list(argv)
+    with _noting_ctrl_c() as ctrl_c:
+        return _run(argv, ctrl_c)
+
+
+def _run(argv: list[str], ctrl_c: Callable[[], bool]) -> int:
     from rczone.files.atomic import all_or_nothing
 
-    argv = sys.argv[1:] if argv is None else list(argv)
     try:
         # every output of a command appears only if it succeeds (exit 0, or 3..5 that still write
         # them): a failing --report leaves no --json behind (fit-many keeps its results as they come)
         with warnings.catch_warnings(), _notice_for(argv), all_or_nothing(_writes_outputs):
             warnings.showwarning = _show_warning
             code = app(args=argv, standalone_mode=False)  # returns typer.Exit's code in this mode
+            if ctrl_c():  # a Ctrl-C that Python dropped on the way: the command was interrupted
+                raise KeyboardInterrupt
     except RczoneError as exc:
         return _error(exc)
     except FileNotFoundError as exc:
@@ -138,11 +150,49 @@ def main(argv: list[str] | None = None) -> int:
         if hasattr(exc, "show") and isinstance(getattr(exc, "exit_code", None), int):
             exc.show()
             return exc.exit_code
-        if _interrupted(exc):
+        if _interrupted(exc) or ctrl_c():
             typer.echo("aborted", err=True)
             return 130
         raise
     return code if isinstance(code, int) else 0
+
+
+#: After a Ctrl-C, the seconds a command has to wind down before its process ends at once (exit 130).
+CTRL_C_GRACE_S = 30.0
+
+
+@contextmanager
+def _noting_ctrl_c() -> Iterator[Callable[[], bool]]:
+    """Note every Ctrl-C as it arrives, then raise ``KeyboardInterrupt`` as Python's own handler does.
+
+    Yields whether one arrived. A Ctrl-C that lands in a finalizer is printed and dropped by
+    Python, and one that lands while numba compiles can leave a kernel half built, whose next
+    use fails with an error that does not carry the interrupt (``no compiled object yet``): an
+    error after a Ctrl-C is the interruption's, not a bug to show with a traceback, and a command
+    that goes on as if nothing happened is stopped :data:`CTRL_C_GRACE_S` later
+    (:func:`_end_now`). Only where Python's default handler is in place, in the main thread;
+    restored on the way out.
+    """
+    if threading.current_thread() is not threading.main_thread() or (
+        signal.getsignal(signal.SIGINT) is not signal.default_int_handler
+    ):
+        yield lambda: False
+        return
+    seen: list[bool] = []
+
+    def on_ctrl_c(signum, frame):
+        if not seen:
+            timer = threading.Timer(CTRL_C_GRACE_S, _end_now)
+            timer.daemon = True  # a command that ends in time ends the process as usual
+            timer.start()
+        seen.append(True)
+        signal.default_int_handler(signum, frame)
+
+    signal.signal(signal.SIGINT, on_ctrl_c)
+    try:
+        yield lambda: bool(seen)
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _interrupted(exc: BaseException) -> bool:
@@ -154,6 +204,20 @@ def _interrupted(exc: BaseException) -> bool:
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
     return False
+
+
+def _end_now() -> None:  # pragma: no cover - runs in a subprocess of the tests
+    """End the process now, as interrupted: a Ctrl-C the command did not end on in time."""
+    import multiprocessing
+
+    from rczone.cli import INTERRUPTED
+
+    with contextlib.suppress(OSError, ValueError):
+        sys.stderr.write("aborted\n")
+        sys.stderr.flush()
+    for child in multiprocessing.active_children():  # a worker pool's processes end with us
+        child.terminate()
+    os._exit(INTERRUPTED)
 
 
 if __name__ == "__main__":  # pragma: no cover

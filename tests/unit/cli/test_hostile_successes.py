@@ -236,8 +236,10 @@ def test_ctrl_c_in_fit_exits_130_and_writes_nothing(tmp_path):
 
 @pytest.mark.skipif(os.name == "nt", reason="process groups")
 def test_ctrl_c_in_fit_many_exits_130(tmp_path):
+    # 100 zones: about 6 s of fitting on one worker, so the interrupt half a second after the run
+    # starts lands mid-run (31 zones took 2 s, which a fast moment could finish first)
     (tmp_path / "m.toml").write_text(
-        'methods = ["ls"]\nn_starts = 1\ndiagnose = false\n[[generate]]\nseasons = ["autumn"]\nseeds = "0..30"\n'
+        'methods = ["ls"]\nn_starts = 1\ndiagnose = false\n[[generate]]\nseasons = ["autumn"]\nseeds = "0..99"\n'
     )
     code, err = _interrupt(
         [
@@ -269,6 +271,70 @@ def test_an_interrupt_wrapped_by_a_library_is_still_ctrl_c(monkeypatch, capsys):
     monkeypatch.setattr(cli_main, "app", wrapped)
     assert cli_main.main(["models"]) == 130
     assert "aborted" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_an_error_after_a_dropped_ctrl_c_is_still_ctrl_c(monkeypatch, capsys):
+    """A Ctrl-C that Python drops (raised in a finalizer) can leave numba a half-built kernel, whose
+    next use fails with an error that does not carry the interrupt: exit 130, no traceback."""
+    import rczone.cli.main as cli_main
+
+    def dropped(**kwargs):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)  # the handler runs here and raises
+        except KeyboardInterrupt:
+            pass  # as Python does with an exception raised in __del__
+        raise RuntimeError("no compiled object yet for <Library 'spectral_modal'>")
+
+    monkeypatch.setattr(cli_main, "app", dropped)
+    assert cli_main.main(["models"]) == 130
+    assert "aborted" in capsys.readouterr().err
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+
+
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_a_command_that_ends_well_after_a_dropped_ctrl_c_is_interrupted(monkeypatch, capsys, tmp_path):
+    """The command went on and finished: its outputs do not appear, and it exits 130."""
+    import rczone.cli.main as cli_main
+    from rczone.files.atomic import write_text_atomic
+
+    out = tmp_path / "out.txt"
+
+    def finishes(**kwargs):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        except KeyboardInterrupt:
+            pass
+        write_text_atomic(out, "a result\n")
+        return 0
+
+    monkeypatch.setattr(cli_main, "app", finishes)
+    monkeypatch.setattr(cli_main, "CTRL_C_GRACE_S", 60.0)
+    assert cli_main.main(["models"]) == 130
+    assert not out.exists()
+
+
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_a_command_that_goes_on_after_a_dropped_ctrl_c_is_ended(tmp_path):
+    """The command neither fails nor finishes: the process ends, exit 130, after the grace time."""
+    script = (
+        "import os, signal, time\n"
+        "import rczone.cli.main as m\n"
+        "m.CTRL_C_GRACE_S = 0.5\n"
+        "with m._noting_ctrl_c():\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        time.sleep(5)\n"
+        "    except KeyboardInterrupt:\n"
+        "        pass\n"
+        "    time.sleep(60)\n"
+    )
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130 and "aborted" in proc.stderr, proc.stderr
+    assert time.monotonic() - t0 < 30
 
 
 def test_an_unrelated_error_is_not_taken_for_ctrl_c(monkeypatch):
