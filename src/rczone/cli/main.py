@@ -179,11 +179,13 @@ def _noting_ctrl_c() -> Iterator[Callable[[], bool]]:
         yield lambda: False
         return
     seen: list[bool] = []
+    timers: list[threading.Timer] = []
 
     def on_ctrl_c(signum, frame):
         if not seen:
             timer = threading.Timer(CTRL_C_GRACE_S, _end_now)
-            timer.daemon = True  # a command that ends in time ends the process as usual
+            timer.daemon = True
+            timers.append(timer)
             timer.start()
         seen.append(True)
         signal.default_int_handler(signum, frame)
@@ -193,6 +195,9 @@ def _noting_ctrl_c() -> Iterator[Callable[[], bool]]:
         yield lambda: bool(seen)
     finally:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+        for timer in timers:  # the command ended: nothing is left to end (nor a caller's process)
+            timer.cancel()
+            timer.join(timeout=5)
 
 
 def _interrupted(exc: BaseException) -> bool:

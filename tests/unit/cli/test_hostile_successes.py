@@ -11,6 +11,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -288,9 +289,13 @@ def test_an_error_after_a_dropped_ctrl_c_is_still_ctrl_c(monkeypatch, capsys):
         raise RuntimeError("no compiled object yet for <Library 'spectral_modal'>")
 
     monkeypatch.setattr(cli_main, "app", dropped)
+    before = set(threading.enumerate())
     assert cli_main.main(["models"]) == 130
     assert "aborted" in capsys.readouterr().err
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    # the timer that would end a command going on is gone with the command: called in a process
+    # that lives on (these tests), it must not end that process later
+    assert not [t for t in set(threading.enumerate()) - before if isinstance(t, threading.Timer)]
 
 
 @pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
