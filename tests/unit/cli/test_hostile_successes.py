@@ -274,8 +274,16 @@ def test_an_interrupt_wrapped_by_a_library_is_still_ctrl_c(monkeypatch, capsys):
     assert "aborted" in capsys.readouterr().err
 
 
+@pytest.fixture
+def python_ctrl_c():
+    """Python's own Ctrl-C handler in place, as in a terminal (a background job may inherit SIGINT ignored)."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
+
+
 @pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
-def test_an_error_after_a_dropped_ctrl_c_is_still_ctrl_c(monkeypatch, capsys):
+def test_an_error_after_a_dropped_ctrl_c_is_still_ctrl_c(monkeypatch, capsys, python_ctrl_c):
     """A Ctrl-C that Python drops (raised in a finalizer) can leave numba a half-built kernel, whose
     next use fails with an error that does not carry the interrupt: exit 130, no traceback."""
     import rczone.cli.main as cli_main
@@ -299,7 +307,9 @@ def test_an_error_after_a_dropped_ctrl_c_is_still_ctrl_c(monkeypatch, capsys):
 
 
 @pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
-def test_a_command_that_ends_well_after_a_dropped_ctrl_c_is_interrupted(monkeypatch, capsys, tmp_path):
+def test_a_command_that_ends_well_after_a_dropped_ctrl_c_is_interrupted(
+    monkeypatch, capsys, tmp_path, python_ctrl_c
+):
     """The command went on and finished: its outputs do not appear, and it exits 130."""
     import rczone.cli.main as cli_main
     from rczone.files.atomic import write_text_atomic
@@ -326,6 +336,7 @@ def test_a_command_that_goes_on_after_a_dropped_ctrl_c_is_ended(tmp_path):
     """The command neither fails nor finishes: the process ends, exit 130, after the grace time."""
     script = (
         "import os, signal, time\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         "import rczone.cli.main as m\n"
         "m.CTRL_C_GRACE_S = 0.5\n"
         "with m._noting_ctrl_c():\n"
