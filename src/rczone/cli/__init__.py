@@ -28,11 +28,17 @@ def run() -> int:
     """
     for var in BLAS_THREADS:
         os.environ.setdefault(var, "1")
-    try:
-        from rczone.cli.main import main
-    except KeyboardInterrupt:
-        return INTERRUPTED
-    code = main()
+    from rczone.cli.interrupt import noting_ctrl_c
+
+    with noting_ctrl_c() as ctrl_c:  # from here on, a Ctrl-C that Python drops still counts
+        try:
+            from rczone.cli.main import main
+
+            code = INTERRUPTED if ctrl_c() else main()
+        except KeyboardInterrupt:
+            code = INTERRUPTED
+        if ctrl_c():  # dropped on the way, and the command ended as if not
+            code = INTERRUPTED
     if code == INTERRUPTED:
         import multiprocessing
 

@@ -7,17 +7,14 @@ exit code 2, never a traceback.
 
 from __future__ import annotations
 
-import contextlib
-import os
-import signal
 import sys
-import threading
 import warnings
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager, nullcontext
+from collections.abc import Callable
+from contextlib import nullcontext
 
 import typer
 
+from rczone.cli.interrupt import noting_ctrl_c
 from rczone.errors import RczoneError
 
 app = typer.Typer(
@@ -108,7 +105,7 @@ def main(argv: list[str] | None = None) -> int:
     ``fit-many`` could not run some tasks (retried by the next run), 130 interrupted (Ctrl-C).
     """
     argv = sys.argv[1:] if argv is None else list(argv)
-    with _noting_ctrl_c() as ctrl_c:
+    with noting_ctrl_c() as ctrl_c:
         return _run(argv, ctrl_c)
 
 
@@ -157,49 +154,6 @@ def _run(argv: list[str], ctrl_c: Callable[[], bool]) -> int:
     return code if isinstance(code, int) else 0
 
 
-#: After a Ctrl-C, the seconds a command has to wind down before its process ends at once (exit 130).
-CTRL_C_GRACE_S = 30.0
-
-
-@contextmanager
-def _noting_ctrl_c() -> Iterator[Callable[[], bool]]:
-    """Note every Ctrl-C as it arrives, then raise ``KeyboardInterrupt`` as Python's own handler does.
-
-    Yields whether one arrived. A Ctrl-C that lands in a finalizer is printed and dropped by
-    Python, and one that lands while numba compiles can leave a kernel half built, whose next
-    use fails with an error that does not carry the interrupt (``no compiled object yet``): an
-    error after a Ctrl-C is the interruption's, not a bug to show with a traceback, and a command
-    that goes on as if nothing happened is stopped :data:`CTRL_C_GRACE_S` later
-    (:func:`_end_now`). Only where Python's default handler is in place, in the main thread;
-    restored on the way out.
-    """
-    if threading.current_thread() is not threading.main_thread() or (
-        signal.getsignal(signal.SIGINT) is not signal.default_int_handler
-    ):
-        yield lambda: False
-        return
-    seen: list[bool] = []
-    timers: list[threading.Timer] = []
-
-    def on_ctrl_c(signum, frame):
-        if not seen:
-            timer = threading.Timer(CTRL_C_GRACE_S, _end_now)
-            timer.daemon = True
-            timers.append(timer)
-            timer.start()
-        seen.append(True)
-        signal.default_int_handler(signum, frame)
-
-    signal.signal(signal.SIGINT, on_ctrl_c)
-    try:
-        yield lambda: bool(seen)
-    finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        for timer in timers:  # the command ended: nothing is left to end (nor a caller's process)
-            timer.cancel()
-            timer.join(timeout=5)
-
-
 def _interrupted(exc: BaseException) -> bool:
     """Whether ``exc`` was caused by Ctrl-C: libraries (numba loading its cache, for one) wrap it."""
     seen = set()
@@ -209,20 +163,6 @@ def _interrupted(exc: BaseException) -> bool:
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
     return False
-
-
-def _end_now() -> None:  # pragma: no cover - runs in a subprocess of the tests
-    """End the process now, as interrupted: a Ctrl-C the command did not end on in time."""
-    import multiprocessing
-
-    from rczone.cli import INTERRUPTED
-
-    with contextlib.suppress(OSError, ValueError):
-        sys.stderr.write("aborted\n")
-        sys.stderr.flush()
-    for child in multiprocessing.active_children():  # a worker pool's processes end with us
-        child.terminate()
-    os._exit(INTERRUPTED)
 
 
 if __name__ == "__main__":  # pragma: no cover

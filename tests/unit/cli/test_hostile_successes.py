@@ -326,7 +326,7 @@ def test_a_command_that_ends_well_after_a_dropped_ctrl_c_is_interrupted(
         return 0
 
     monkeypatch.setattr(cli_main, "app", finishes)
-    monkeypatch.setattr(cli_main, "CTRL_C_GRACE_S", 60.0)
+    monkeypatch.setattr("rczone.cli.interrupt.CTRL_C_GRACE_S", 60.0)
     assert cli_main.main(["models"]) == 130
     assert not out.exists()
 
@@ -337,9 +337,9 @@ def test_a_command_that_goes_on_after_a_dropped_ctrl_c_is_ended(tmp_path):
     script = (
         "import os, signal, time\n"
         "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
-        "import rczone.cli.main as m\n"
+        "import rczone.cli.interrupt as m\n"
         "m.CTRL_C_GRACE_S = 0.5\n"
-        "with m._noting_ctrl_c():\n"
+        "with m.noting_ctrl_c():\n"
         "    try:\n"
         "        os.kill(os.getpid(), signal.SIGINT)\n"
         "        time.sleep(5)\n"
@@ -351,6 +351,28 @@ def test_a_command_that_goes_on_after_a_dropped_ctrl_c_is_ended(tmp_path):
     proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
     assert proc.returncode == 130 and "aborted" in proc.stderr, proc.stderr
     assert time.monotonic() - t0 < 30
+
+
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_the_console_script_notes_a_ctrl_c_from_its_first_line():
+    """A Ctrl-C dropped outside main() (as while the command modules import) still ends in 130."""
+    script = (
+        "import os, signal, sys, time\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "import rczone.cli as cli\n"
+        "import rczone.cli.main as m\n"
+        "def dropped():\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        time.sleep(5)\n"
+        "    except KeyboardInterrupt:\n"
+        "        pass\n"
+        "    return 0\n"
+        "m.main = dropped\n"
+        "sys.exit(cli.run())\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 130, proc.stderr
 
 
 def test_an_unrelated_error_is_not_taken_for_ctrl_c(monkeypatch):
