@@ -15,6 +15,7 @@ References
 from __future__ import annotations
 
 import os
+import signal
 import time
 from collections import Counter, deque
 from collections.abc import Callable, Iterator
@@ -206,6 +207,22 @@ def _dask_results(
             yield rows
 
 
+def _leave_ctrl_c_to_the_parent() -> None:
+    """A local worker process ignores Ctrl-C: the coordinating process stops the run and ends it.
+
+    The terminal's Ctrl-C reaches every process of the group; a worker that raised it would print
+    its own traceback beside the command's one line (the console script ends the workers,
+    :func:`rczone.cli.run`; a caller of :func:`run_batch` gets ``KeyboardInterrupt`` and the
+    workers stop after their zone).
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _executor() -> ProcessPoolExecutor:
+    """A one-process executor whose process leaves Ctrl-C to this one."""
+    return ProcessPoolExecutor(max_workers=1, initializer=_leave_ctrl_c_to_the_parent)
+
+
 def _process_results(groups: list[list[Task]], workers: int, retries: int) -> Iterator[list[dict] | Lost]:
     """Run the groups on ``workers`` single-process executors, one zone at a time each.
 
@@ -219,13 +236,13 @@ def _process_results(groups: list[list[Task]], workers: int, retries: int) -> It
     try:
         while queue or running:
             while queue and len(running) < workers:
-                ex = idle.pop() if idle else ProcessPoolExecutor(max_workers=1)
+                ex = idle.pop() if idle else _executor()
                 i = queue.popleft()
                 try:
                     fut = ex.submit(run_tasks, groups[i])
                 except BrokenExecutor:  # an idle worker died between zones: a fresh one takes the zone
                     ex.shutdown(wait=False, cancel_futures=True)
-                    ex = ProcessPoolExecutor(max_workers=1)
+                    ex = _executor()
                     fut = ex.submit(run_tasks, groups[i])
                 running[fut] = (ex, i)
             finished, _ = wait(running, return_when=FIRST_COMPLETED)
