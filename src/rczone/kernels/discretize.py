@@ -1373,8 +1373,9 @@ def rc_interval_derivatives(
     """:func:`interval_derivatives` of an RC network, by the spectral formulas only (written out for two states).
 
     An RC network's ``diag(scale) A diag(scale)^-1`` is symmetric; a caller that knows its model is
-    one (the fused 2-state adjoint, :mod:`rczone.kernels.adjoint`) calls this and does not compile
-    the matrix exponentials' Fréchet derivatives it never runs (a first fit's compile time).
+    one (the general adjoint, :func:`rczone.kernels.adjoint.gradient_general`) calls this and does
+    not compile the matrix exponentials' Fréchet derivatives it never runs (a first fit's compile
+    time); two states go to :func:`rc2_interval_derivatives`.
     :func:`interval_derivatives` calls it for such models too. Inlined into its callers: no
     separate machine code of its own.
 
@@ -1388,14 +1389,12 @@ def rc_interval_derivatives(
     Dynamics
     DynamicsDerivatives
     """
+    if mod.A0.shape[0] == 2:
+        return rc2_interval_derivatives(mod, der, how)
     mats, dmats = _stacks(mod, der, how.keys.shape[0])
-    two = mod.A0.shape[0] == 2
     for k in range(how.keys.shape[0]):
         step, dstep, out, dout = _interval(mod, der, how.keys[k], mats, dmats, k)
-        if two:
-            spectral_derivatives2(step, dstep, how, out, dout)
-        else:
-            spectral_derivatives(step, dstep, how, out, dout)
+        spectral_derivatives(step, dstep, how, out, dout)
     return mats, dmats
 
 
