@@ -42,8 +42,9 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import problems  # noqa: E402
 from rczone.estimation import Objective, fit, make_spec  # noqa: E402
+from rczone.estimation.methods.mcmc import McmcOptions  # noqa: E402
 from rczone.estimation.optimize import minimize_from  # noqa: E402
-from rczone.estimation.sampling import SamplerSettings, over_dispersed_starts, posterior_of, sample  # noqa: E402
+from rczone.estimation.sampling import over_dispersed_starts, posterior_of, sample  # noqa: E402
 from rczone.files.atomic import write_json_atomic  # noqa: E402
 
 FREE = ["Ro", "Ri", "Cw", "Ci", "sigma_w_Tw", "sigma_v"]
@@ -161,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--chains", type=int, default=4)
     ap.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "rczone-bench-sampling.json")
     args = ap.parse_args(argv)
-    settings = SamplerSettings(args.draws, args.tune, args.chains)
+    settings = McmcOptions(draws=args.draws, tune=args.tune, chains=args.chains)
     net, data, logp = task()
     spec = logp.objective.spec
     logp(logp.to_z(spec.start))  # compile the kernels before any clock runs

@@ -37,7 +37,8 @@ _EXPORTS = {
     "load_data": "rczone.workflow.api",
     "fit": "rczone.workflow.api",
     "predict": "rczone.workflow.api",
-    "FitSettings": "rczone.workflow.settings",
+    "score_horizons": "rczone.workflow.api",
+    "FitSettings": "rczone.estimation.settings",
     "TrendLog": "rczone.workflow.datasource",
     "BuiltinNight": "rczone.workflow.datasource",
     "VirtualNight": "rczone.workflow.datasource",
@@ -46,6 +47,12 @@ _EXPORTS = {
     "design_test": "rczone.workflow.api",
     "select_models": "rczone.workflow.api",
     "smooth": "rczone.workflow.smoothing",
+    # plug-ins: estimation methods (rczone.methods entry points)
+    "Method": "rczone.estimation.methods",
+    "MethodOptions": "rczone.estimation.methods",
+    "FitProblem": "rczone.estimation.methods",
+    "register_method": "rczone.estimation.methods",
+    "method_names": "rczone.estimation.methods",
     # results
     "Calibration": "rczone.calibration",
     "Prediction": "rczone.calibration",

@@ -23,7 +23,7 @@ import pytest
 from scipy.linalg import expm
 
 from rczone.estimation import Dataset, Objective, fit, make_spec
-from rczone.estimation.sampling import SamplerSettings
+from rczone.estimation.methods.mcmc import McmcOptions
 from rczone.estimation.uncertainty import profile
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
 
@@ -79,9 +79,7 @@ def test_posterior_recovers_the_truth_and_matches_the_profile_likelihood() -> No
     free = [*RC, "x0_Tw", "sigma_w_Ti", "sigma_v"]
     common = {"fixed": {"sigma_x0_Tw": 1.0, "sigma_x0_Ti": 0.1}, "free": free}
     ml = fit(NET, data, method="ml", n_starts=2, **common)
-    post_fit = fit(
-        NET, data, method="mcmc", sampler=SamplerSettings(draws=1000, tune=1000, chains=4), **common
-    )
+    post_fit = fit(NET, data, method="mcmc", options=McmcOptions(draws=1000, tune=1000, chains=4), **common)
     post = post_fit.posterior
     assert not post_fit.issues, post_fit.flags
     assert post.divergences == 0

@@ -12,7 +12,8 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
     # noise = "measured"             # ML and MAP: process noise on the measured states, or "all"
     diagnose = true                  # identifiability verdicts per zone
     # free = ["Cr", "Rw"]            # default: the method's usual set for the model
-    # sampler = { draws = 1000, tune = 1000, chains = 4 }   # method "mcmc": its SamplerSettings
+    # sampler = { draws = 1000, tune = 1000, chains = 4 }   # the options of a sampling method ("mcmc")
+    # options = { map = { prior_spread = 0.5 } }             # any method's own options, by method
     # columns = "maps/bms.toml"      # default column map for data files
     # constants = { Q = 50.0 }       # inputs held constant when the data lack them
 
@@ -34,14 +35,15 @@ A manifest is a small TOML file. Top-level keys are defaults for every zone; eac
 
 ``model`` is a built-in name or a model file (``.toml``, or ``.json`` saved by ``rczone fit
 --save-model``) relative to the manifest's folder. The fit options of a zone become the one
-settings object of a fit, :class:`~rczone.workflow.settings.FitSettings` (the command line's and
+settings object of a fit, :class:`~rczone.estimation.settings.FitSettings` (the command line's and
 the Python API's), and its data a :class:`~rczone.workflow.datasource.DataSource`: a task carries
 paths and seeds, never frames, so a worker reads its zone's data where it runs.
 
 The search keys apply to the methods that search and ``sampler`` to those that sample (``"mcmc"``),
-so one table can list both kinds of method; a ``sampler`` table of a zone replaces the top-level
-one, and keys it leaves out take the defaults of :class:`~rczone.estimation.sampling.SamplerSettings`
-(as ``rczone fit --draws/--tune/--chains`` do).
+so one table can list both kinds of method; ``options`` holds a table of each method's own options
+(:attr:`rczone.estimation.methods.Method.options`, ``rczone fit --option NAME=VALUE``), by method
+name. A ``sampler`` or ``options`` table of a zone replaces the top-level one, and keys it leaves
+out take the method's defaults.
 
 Unknown keys, duplicate zone ids, unknown methods or models are errors naming the place in
 the file, with a suggestion where one is close. A manifest that would expand into more than
@@ -62,20 +64,17 @@ from functools import lru_cache
 from pathlib import Path
 
 from rczone.errors import DataError, RczoneError, did_you_mean
-from rczone.estimation.methods import METHODS as REGISTERED_METHODS
-from rczone.estimation.methods import method_of
+from rczone.estimation.methods import method_names, method_of
 from rczone.estimation.optimize import OPTIMIZERS as LOCAL_OPTIMIZERS
-from rczone.estimation.sampling import SamplerSettings
+from rczone.estimation.settings import NOISE_PLACEMENTS, FitSettings
 from rczone.files.text import nfkc, read_toml, regular_file
 from rczone.workflow.datasource import BuiltinNight, DataSource, TrendLog, VirtualNight
-from rczone.workflow.settings import NOISE_PLACEMENTS, FitSettings
 
 MAX_TASKS = 200_000
 """Most calibrations (zones x methods) one manifest may ask for."""
 MAX_STARTS = 1000
 """Most optimizer starts per calibration."""
 MODEL_FILE_SUFFIXES = (".toml", ".json")
-METHODS = REGISTERED_METHODS
 OPTIMIZERS = ("auto", *LOCAL_OPTIMIZERS)
 SEASONS = ("summer", "winter", "autumn")
 MODES = ("closed-loop", "forced")
@@ -91,6 +90,7 @@ SETTINGS = (
     "columns",
     "constants",
     "sampler",
+    "options",
 )
 ZONE_KEYS = ("id", "data", "virtual", *SETTINGS)
 GENERATE_KEYS = ("prefix", "seasons", "modes", "seeds", *SETTINGS)
@@ -107,6 +107,7 @@ DEFAULTS: dict[str, object] = {
     "columns": None,
     "constants": None,
     "sampler": None,
+    "options": None,
 }
 
 
@@ -227,10 +228,10 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
     if isinstance(methods, str):
         methods = [methods]
     if not isinstance(methods, (list, tuple)) or not methods:
-        raise _err(where, f"methods must be a list of {METHODS}, got {out['methods']!r}")
+        raise _err(where, f"methods must be a list of {method_names()}, got {out['methods']!r}")
     for m in methods:
-        if m not in METHODS:
-            raise _err(where, f"unknown method {m!r}; " + did_you_mean(str(m), METHODS))
+        if m not in method_names():
+            raise _err(where, f"unknown method {m!r}; " + did_you_mean(str(m), method_names()))
     if len(set(methods)) < len(methods):
         raise _err(where, f"methods lists a method twice: {methods!r}")
     out["methods"] = tuple(methods)
@@ -273,7 +274,7 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
         raise _err(where, f"constants must be a table of finite numbers, e.g. {{ Q = 50.0 }}, got {const!r}")
     if out["columns"] is not None:
         _text(out["columns"], "columns", where)
-    out["sampler"] = _sampler(out["sampler"], where)
+    out["sampler"], out["options"] = _method_options(out, where)
     out["model"] = _model(out["model"], folder, where)
     if const:
         spec = str(out["model"])
@@ -285,18 +286,33 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
     return out
 
 
-def _sampler(table: object, where: str) -> SamplerSettings:
-    """The ``sampler`` table (draws, tune, chains) as :class:`SamplerSettings`; absent keys take its defaults."""
-    if table is None or isinstance(table, SamplerSettings):
-        return table or SamplerSettings()
+def _method_options(out: Mapping[str, object], where: str) -> tuple[dict, dict]:
+    """The ``sampler`` table and the ``options`` tables (by method), each checked by its method's options."""
+    sampler, options = out["sampler"], out["options"]
     example = "{ draws = 1000, tune = 1000, chains = 4 }"
-    if not isinstance(table, dict):
-        raise _err(where, f"sampler must be a table like {example}, got {table!r}")
-    _check_keys(table, SamplerSettings._fields, f"{where}.sampler")
+    if sampler is not None and not isinstance(sampler, dict):
+        raise _err(where, f"sampler must be a table like {example}, got {sampler!r}")
+    if options is not None and not (
+        isinstance(options, dict) and all(isinstance(v, dict) for v in options.values())
+    ):
+        raise _err(
+            where,
+            f"options must be a table of tables by method, e.g. {{ map = {{ prior_spread = 0.5 }} }}, got {options!r}",
+        )
+    sampler, options = dict(sampler or {}), {str(k): dict(v) for k, v in (options or {}).items()}
     try:
-        return SamplerSettings(**table).checked()
+        for m in out["methods"]:
+            if method_of(str(m)).search == "sample":
+                method_of(str(m)).make_options(sampler)
     except RczoneError as exc:
-        raise _err(where, str(exc)) from None
+        raise _err(where + ".sampler", str(exc)) from None
+    try:
+        for name in dict.fromkeys([*map(str, out["methods"]), *options]):  # a default table may name a
+            meth = method_of(name)  # method only some zones run
+            meth.make_options({**(sampler if meth.search == "sample" else {}), **options.get(name, {})})
+    except RczoneError as exc:
+        raise _err(where + (".options" if options else ""), str(exc)) from None
+    return sampler, options
 
 
 def _resolve(path: Path, what: str, where: str) -> Path:
@@ -397,7 +413,8 @@ def _virtual(spec: object, where: str) -> VirtualNight:
 def _tasks(zone: str, source: DataSource, s: Mapping[str, object], where: str) -> list[Task]:
     """One task per method, each with the fit's settings (:class:`FitSettings`).
 
-    The search keys go to the methods that search, ``sampler`` to the ones that sample.
+    The search keys go to the methods that search, ``sampler`` to the ones that sample, ``options``
+    to the method it names.
     """
     tasks = []
     try:
@@ -413,7 +430,7 @@ def _tasks(zone: str, source: DataSource, s: Mapping[str, object], where: str) -
                 constants={k: float(v) for k, v in sorted((s["constants"] or {}).items())},
                 checks=False,  # the batch's own check is `diagnose`, once per zone
                 profiles=False,
-                sampler=s["sampler"] if samples else SamplerSettings(),
+                options={**(s["sampler"] if samples else {}), **s["options"].get(str(m), {})},
             )
             tasks.append(Task(zone, str(s["model"]), source, settings, bool(s["diagnose"])))
         return tasks

@@ -8,7 +8,7 @@ live in a new :class:`~rczone.models.zone.ZoneModel`.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,14 +24,13 @@ from rczone.calibration.dataset import (
     ignored_channels,
 )
 from rczone.estimation import Dataset, FitResult, fit
-from rczone.estimation.fit import default_free
 from rczone.estimation.innovations import (
     ResidualAnalysis,
     innovation_analysis,
     ljung_box_lags,
     open_loop_analysis,
 )
-from rczone.estimation.methods import DEFAULT_METHOD, method_of
+from rczone.estimation.methods import method_of
 from rczone.estimation.openloop import (
     INITIAL_STATE_PRIOR_K,
     OpenLoopError,
@@ -41,7 +40,7 @@ from rczone.estimation.openloop import (
     open_loop_error,
     per_output_errors,
 )
-from rczone.estimation.sampling import SamplerSettings
+from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.models.plausibility import Plausibility, operating_flow, plausibility
 from rczone.network.stochastic import (
@@ -87,6 +86,9 @@ class Calibration(Result):
     plausibility : Plausibility or None
         UA, time constants and solar aperture of the fitted model against the model's values
         before the fit, with warnings (:mod:`rczone.models.plausibility`); None when not made.
+    holdout : HorizonScores or None
+        The scores on data held out of the fit (``--holdout``,
+        :func:`rczone.workflow.holdout.score_held_out`); None without a held-out part.
     verdict : Verdict
         The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
@@ -100,6 +102,7 @@ class Calibration(Result):
     checks: dict | None = None
     identifiability: Any = None
     plausibility: Plausibility | None = None
+    holdout: Any = None
     verdict: Verdict = field(init=False)
 
     def __post_init__(self) -> None:
@@ -177,6 +180,8 @@ class Calibration(Result):
                 f"[red]result flagged[/] (exit code {EXIT_UNTRUSTED}): do not use these estimates without"
                 " checking the warnings above"
             )
+        if self.holdout is not None:
+            lines += self.holdout.summary_lines()
         return lines
 
     def to_dict(self) -> dict:
@@ -217,30 +222,23 @@ class Calibration(Result):
             verdict=self.verdict.to_dict(),
             exit_code=self.exit_code,
         )
+        if self.holdout is not None:
+            payload["holdout"] = self.holdout.to_dict()
         return payload
 
 
 def calibrate(
     model: ModelLike,
     frame: pd.DataFrame,
-    method: str = DEFAULT_METHOD,
-    free: Sequence[str] | None = None,
-    optimizer: str = "auto",
-    n_starts: int | None = None,
-    seed: int = 0,
-    constants: Mapping[str, float] | None = None,
+    settings: FitSettings | None = None,
+    *,
     provenance: Mapping[str, object] | None = None,
     uncertainty: bool = True,
-    bounds: Mapping[str, tuple[float, float]] | None = None,
-    noise: str = "measured",
-    sampler: SamplerSettings | None = None,
-    hold: str = "zoh",
-    fixed: Mapping[str, float | None] | None = None,
-    *,
     analyses: bool = True,
     data: Dataset | None = None,
+    **overrides: Any,
 ) -> Calibration:
-    """Fit ``model`` to ``frame`` and check the fitted model open loop.
+    """Fit ``model`` to ``frame`` with ``settings`` and check the fitted model open loop.
 
     Parameters
     ----------
@@ -249,35 +247,15 @@ def calibrate(
     frame : DataFrame
         ``time`` (s) or a DatetimeIndex, and a column per model input and output (by name; the
         model's conventions fill inputs the data lack).
-    method : {"ml", "ls", "map"}
-        A method of :data:`rczone.estimation.methods.REGISTRY`; default ML, as ``rczone fit``.
-    free : sequence of str, optional
-        Default :func:`rczone.estimation.fit.default_free`.
-    optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
-    n_starts : int, optional
-        Default: the global search (see :func:`rczone.estimation.fit`); 1: one local search.
-    seed : int
-        Seed of the global search.
-    constants : mapping, optional
-        Inputs held constant instead of read from the frame.
+    settings : FitSettings, optional
+        How to fit (:class:`~rczone.estimation.settings.FitSettings`), carried whole to the method;
+        default ``FitSettings()`` (ML, the global search), as ``rczone fit``. Its ``constants`` are
+        the inputs held constant instead of read from the frame, its ``fixed`` values with None
+        keep the model's value.
     provenance : mapping, optional
         Added to the fitted model's provenance.
     uncertainty : bool
         Standard errors from the Hessian.
-    bounds : mapping, optional
-        Search bounds overriding the declared ones.
-    noise : {"measured", "all"}
-        ML and MAP without ``free``: process noise on the measured states or on every state
-        (:func:`rczone.estimation.fit.default_free` says why the first is the default).
-    sampler : SamplerSettings, optional
-        Draws, warm-up and chains of a sampling method (``"mcmc"``); the fitted model keeps
-        :data:`~rczone.estimation.posterior.KEPT_DRAWS` posterior draws for :func:`prediction`.
-    hold : {"zoh", "foh"}
-        Inter-sample behaviour of the inputs (:func:`rczone.estimation.fit`); recorded in the
-        fitted model's provenance.
-    fixed : mapping, optional
-        Values of parameters that are not free (a noise level, an initial state, an R or C),
-        physical units; None keeps the model's value.
     analyses : bool
         Make the analyses a reader of the fit looks at: the whiteness of the innovations and of the
         open-loop error (:attr:`Calibration.innovations`, :attr:`Calibration.open_loop_residuals`),
@@ -286,9 +264,18 @@ def calibrate(
         open-loop errors only) skips them: the fit, its standard errors and the open-loop check
         are the same, the calibration's analyses are None.
     data : Dataset, optional
-        ``dataset(model, frame, constants)`` when the caller has built it already (the methods of
-        one zone in a batch share one); default built here.
+        ``dataset(model, frame, settings.constants)`` when the caller has built it already (the
+        methods of one zone in a batch share one); default built here.
+    **overrides
+        Fields of :class:`~rczone.estimation.settings.FitSettings` replacing those of ``settings``
+        (``method="ls"``, ``free=[...]``, ``n_starts=3``, ...).
+
+    Returns
+    -------
+    Calibration
     """
+    settings = FitSettings.of(settings, **overrides)
+    constants = settings.constants or None
     zm = as_model(model)
     net = zm.network
     ignored = ignored_channels(frame)
@@ -302,37 +289,31 @@ def calibrate(
         "start_s": float(data.t[0]),
         "end_s": float(data.t[-1]),
     }
-    free = tuple(free) if free else default_free(net, method, noise=noise)
+    free = settings.free_for(net)
     start = {k: v for k, v in {**zm.theta, **zm.noise}.items() if k in free}
     held = {k: v for k, v in zm.theta.items() if k not in free}
     known = {**zm.theta, **zm.noise}
-    held.update({k: (known.get(k) if v is None else v) for k, v in (fixed or {}).items()})
+    held.update({k: (known.get(k) if v is None else v) for k, v in settings.fixed.items()})
     res = fit(
         net,
         data,
         free,
-        method=method,
-        optimizer=optimizer,
-        n_starts=n_starts,
-        rng=np.random.default_rng(seed),
+        settings=settings,
         uncertainty=uncertainty,
         start=start,
         fixed={k: v for k, v in held.items() if v is not None},
-        bounds=bounds,
-        sampler=sampler,
-        hold=hold,
     )
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}
-    kind = method_of(method)
+    kind = method_of(settings.method)
     noise = {k: v for k, v in values.items() if is_noise_name(k)} if kind.stochastic else {}
     initial = {k: v for k, v in values.items() if kind_of(k) == INITIAL_STATE}
     band = calibrate_band(net, values, data, res.hold) if kind.stochastic and analyses else None
     fitted = zm.with_values(
         theta,
         noise,
-        method=method,
-        optimizer=optimizer,
+        method=settings.method,
+        optimizer=settings.optimizer,
         free=list(free),
         objective_value=res.objective_value,
         engine=res.engine,
@@ -347,13 +328,14 @@ def calibrate(
         band_scale=band.to_dict() if band is not None else None,
         baselines=baseline_models(data) if analyses else None,
         **({"posterior_draws": posterior_draws(res)} if res.posterior is not None else {}),
-        hold=hold,
+        hold=settings.hold,
+        **({"method_options": res.options} if res.options else {}),
         **({"ignored_channels": list(ignored)} if ignored else {}),
         **dict(provenance or {}),
     )
     if kind.stochastic:  # as LS estimates them: the unmeasured nodes start where the data say
         initial = estimated_start(fitted, values, data, has_noise=True).values
-    ol = open_loop_error(net, {**theta, **initial}, data, hold)
+    ol = open_loop_error(net, {**theta, **initial}, data, settings.hold)
     n_lags = ljung_box_lags(int(np.isfinite(ol.error[:, 0]).sum()))  # lags of what is measured
     inn = olr = plaus = None
     if analyses and np.isfinite(data.y).sum(axis=0).min() >= MIN_ANALYSIS_SAMPLES:

@@ -12,6 +12,7 @@ from rczone.cli.common import (
     BoundsOption,
     FixOption,
     HoldOption,
+    OptionsOption,
     bounds,
     check_seed,
     constants,
@@ -19,6 +20,7 @@ from rczone.cli.common import (
     esc,
     fixed,
     free_list,
+    method_options,
     model,
     out_console,
     parameter_kinds,
@@ -129,9 +131,16 @@ def fit(
             " next to persistence and ARX.",
         ),
     ] = None,
-    draws: Annotated[int, typer.Option(help="--method mcmc: draws kept per chain.")] = 1000,
-    tune: Annotated[int, typer.Option(help="--method mcmc: warm-up draws per chain (discarded).")] = 1000,
-    chains: Annotated[int, typer.Option(help="--method mcmc: independent chains (--seed seeds them).")] = 4,
+    option: OptionsOption = None,
+    draws: Annotated[
+        int | None, typer.Option(help="--method mcmc: draws kept per chain (default 1000; --option draws=N).")
+    ] = None,
+    tune: Annotated[
+        int | None, typer.Option(help="--method mcmc: warm-up draws per chain, discarded (default 1000).")
+    ] = None,
+    chains: Annotated[
+        int | None, typer.Option(help="--method mcmc: independent chains, --seed seeds them (default 4).")
+    ] = None,
 ) -> None:
     """Identify the model's parameters from DATA.
 
@@ -142,19 +151,15 @@ def fit(
     """
     from rich.console import Console
 
-    from rczone.estimation.sampling import SamplerSettings
     from rczone.workflow import FitSettings, fit_and_check
+    from rczone.workflow.holdout import before, split_time
 
     check_seed(seed)
     zm = model(model_name)
     n_starts = _starts(starts)
-    frame = read_frame(data, column_map, zm)
-    at = _split(frame, holdout, column_map, zm, warmup=False)
-    full = frame
-    if at is not None:
-        from rczone.calibration.holdout import split_frame
-
-        frame = split_frame(frame, at)[0]
+    full = read_frame(data, column_map, zm)
+    at = split_time(full, holdout, model=zm, columns=column_map)
+    frame = before(full, at)
     settings = FitSettings(
         method=method,
         free=free_list(free),
@@ -168,23 +173,25 @@ def fit(
         constants=constants(const) or {},
         checks=bool(report_dir or json_out),
         profiles=profiles,
-        sampler=SamplerSettings(draws=draws, tune=tune, chains=chains),
+        options=method_options(method, option, draws=draws, tune=tune, chains=chains),
     )
     others = {p: read_frame(Path(p), column_map, zm) for p in split(check_on) or []}
     label = data_label(data)
     with Console(stderr=True).status("fitting") as status:
         cal = fit_and_check(
-            zm, frame, settings, label=label, others=others, progress=lambda m: status.update(esc(m))
+            zm,
+            full,
+            settings,
+            label=label,
+            others=others,
+            progress=lambda m: status.update(esc(m)),
+            holdout=at,
         )
     out = out_console(json_out)
     for line in cal.summary_lines():
         out.print(line)
-    payload = cal.to_dict()
-    if at is not None:
-        held = _score_holdout(cal.model, full, at, const, label, out, report_dir)
-        payload["holdout"] = held.to_dict()
     if json_out:
-        write_json(json_out, payload)
+        write_json(json_out, cal.to_dict())
     if save_model:
         _save(cal.model, save_model)
         out.print(f"model written to [bold]{esc(save_model)}[/]")
@@ -193,38 +200,18 @@ def fit(
 
         fit_report(cal, frame, label, zm.label, cal.identifiability, cal.checks).write(report_dir)
         out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
+        if cal.holdout is not None:
+            held_out_report(cal.holdout, report_dir, out)
     if cal.exit_code:
         raise typer.Exit(cal.exit_code)
 
 
-def _score_holdout(fitted, full, at: float, const, label: str, out, report_dir: Path | None):
-    """``--holdout``: score the fitted model on the held-out part, print the table, write its report."""
-    from rczone.calibration.horizons import holdout_scores
+def held_out_report(held, report_dir: Path, out) -> None:
+    """``--holdout --report DIR``: the held-out scores' report in ``DIR/holdout``."""
+    from rczone.report.predict import horizons_report
 
-    held = holdout_scores(fitted, full, at, constants(const), label=f"{label} (held out)")
-    for line in held.summary_lines():
-        out.print(line)
-    if report_dir:
-        from rczone.report.predict import horizons_report
-
-        horizons_report(held).write(report_dir / "holdout")
-        out.print(f"held-out report written to [bold]{esc(report_dir / 'holdout' / 'report.html')}[/]")
-    return held
-
-
-def _split(frame, spec: str | None, column_map: Path | None, zm, *, warmup: bool) -> float | None:
-    """The time a ``--warmup`` ends or a ``--holdout`` starts, on the frame's time axis (None: not given)."""
-    if spec is None:
-        return None
-    from rczone.calibration.holdout import holdout_start, warmup_end
-
-    timezone = "UTC"
-    if column_map is not None:
-        from rczone.data.columnmap import read_column_map
-
-        timezone = read_column_map(column_map, zm.signal_quantities()).timezone
-    t = frame["time"].to_numpy(float)
-    return (warmup_end if warmup else holdout_start)(t, spec, timezone=timezone)
+    horizons_report(held).write(report_dir / "holdout")
+    out.print(f"held-out report written to [bold]{esc(report_dir / 'holdout' / 'report.html')}[/]")
 
 
 def _save(zm, path: Path) -> None:
@@ -340,7 +327,9 @@ def predict(
             " be predicted; give fewer steps"
         )
     label = data_label(data)
-    start = _split(frame, warmup, column_map, zm, warmup=True)
+    from rczone.workflow.holdout import split_time
+
+    start = split_time(frame, warmup, model=zm, columns=column_map, warmup=True)
     if horizons is not None or baselines:
         from rczone.calibration.horizons import horizon_scores, parse_horizons
         from rczone.report.predict import horizons_report

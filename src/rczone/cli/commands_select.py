@@ -118,7 +118,7 @@ def select(
     """
     import dataclasses
 
-    from rczone.cli.commands_fit import _save, _score_holdout, _split, _starts
+    from rczone.cli.commands_fit import _save, _starts, held_out_report
     from rczone.cli.common import check_seed
     from rczone.cli.console import console as make_console
     from rczone.errors import ParameterError
@@ -154,61 +154,50 @@ def select(
             out.print("candidates: " + ", ".join(esc(zm.label) for zm in zms))
     if len(zms) < 2:
         raise ParameterError("give at least two candidate models (--model A --model B ...)")
-    full = frame
-    at = _split(frame, holdout, column_map, zms[0], warmup=False)
-    if at is not None:
-        from rczone.calibration.holdout import split_frame
+    from rczone.estimation.settings import FitSettings
+    from rczone.workflow.holdout import before, score_held_out, split_time
 
-        frame = split_frame(frame, at)[0]
+    full = frame
+    at = split_time(frame, holdout, model=zms[0], columns=column_map)
+    frame = before(full, at)
     box = bounds(bound, parameter_kinds(*zms))
-    added, held = free_list(free), fixed(fix, parameter_kinds(*zms))
+    held = fixed(fix, parameter_kinds(*zms))
+    settings = FitSettings(
+        method="ml",
+        free=free_list(free),
+        fixed=held,
+        bounds=box,
+        hold=hold,
+        n_starts=n_starts,
+        seed=seed,
+        noise=noise.strip().lower(),
+        constants=constants(const) or {},
+    )
 
     def progress(name: str) -> None:
         console.print(f"fitting {esc(name)} (ML)")
 
     with console.status(f"selecting among {len(zms)} models on {esc(label)}"):
         sel = select_models(
-            zms,
-            frame,
-            constants(const),
-            rule=criterion,
-            forward=forward,
-            alpha=alpha,
-            n_starts=n_starts,
-            seed=seed,
-            progress=progress,
-            noise=noise.strip().lower(),
-            hold=hold,
-            bounds=box,
-            free=added,
-            fixed=held,
+            zms, frame, settings, rule=criterion, forward=forward, alpha=alpha, progress=progress
         )
+        if at is not None:
+            sel = dataclasses.replace(
+                sel, holdout=score_held_out(sel.best.calibration.model, full, at, settings.constants, label)
+            )
     sel = dataclasses.replace(
         sel,
         data_label=label,
         source=str(data),
         noise=noise.strip().lower(),
-        fit_args=fit_arguments(
-            sel,
-            columns=column_map,
-            constants=constants(const),
-            hold=hold,
-            n_starts=n_starts,
-            seed=seed,
-            bounds=box,
-            fixed=held,
-        ),
+        fit_args=fit_arguments(sel, settings, columns=column_map),
         model_specs=specs,
     )
     from rczone.results.protocol import print_lines
 
     print_lines(out, sel.summary_lines())  # the command to paste stays one line
-    payload = sel.to_dict()
     best = sel.best
-    if at is not None:
-        held = _score_holdout(best.calibration.model, full, at, const, label, out, report_dir)
-        payload["holdout"] = held.to_dict()
-    write_json(json_out, payload)
+    write_json(json_out, sel.to_dict())
     if save_model:
         _save(best.calibration.model, save_model)
         out.print(f"model written to [bold]{esc(save_model)}[/]")
@@ -217,5 +206,7 @@ def select(
 
         selection_report(sel, label).write(report_dir)
         out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
+        if sel.holdout is not None:
+            held_out_report(sel.holdout, report_dir, out)
     if sel.exit_code:
         raise typer.Exit(sel.exit_code)

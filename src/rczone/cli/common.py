@@ -68,6 +68,37 @@ FixOption = Annotated[
     ),
 ]
 
+OptionsOption = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--option",
+        metavar="NAME=VALUE",
+        help="An option of the method, repeatable, e.g. --option prior_spread=0.5 for --method map or"
+        " --option draws=500 for mcmc (`rczone methods` lists each method's options).",
+    ),
+]
+
+
+def method_options(method: str, items: list[str] | None, **shorthands: object):
+    """The options of ``method`` from ``--option NAME=VALUE`` and the shorthands given (``--draws``).
+
+    A shorthand left at None was not given; one given to a method without that option is refused
+    by the method (:meth:`rczone.estimation.methods.MethodOptions.of`), as is any unknown name.
+
+    Returns
+    -------
+    MethodOptions
+    """
+    from rczone.estimation.methods import method_of
+
+    meth = method_of(method)
+    picked = {k: v for k, v in shorthands.items() if v is not None}
+    if not items:
+        return meth.make_options(picked)
+    parsed = meth.options.parse(items, meth.name)
+    return meth.make_options({**{k: getattr(parsed, k) for k in parsed.names()}, **picked})
+
+
 MODEL_HELP = (
     "Model: a built-in name (`rczone models` lists them, e.g. second-order-paper, TiTe+heater+solar),"
     " a model file (.toml) or a model saved by --save-model (.json; its values are the start)."

@@ -58,6 +58,7 @@ from rczone.cli import (  # noqa: E402, F401
     commands_demo,
     commands_diagnose,
     commands_fit,
+    commands_methods,
     commands_models,
     commands_select,
     commands_validate,

@@ -62,6 +62,7 @@ from rczone.diagnostics.indicators import DataIndicators, data_indicators
 from rczone.errors import ParameterError, did_you_mean
 from rczone.estimation import Dataset
 from rczone.estimation.costs import initial_state
+from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.network import RCNetwork
 from rczone.network.parameters import expression_names
@@ -392,9 +393,8 @@ def choose_operating_point(
     model_error_K: float,
     offsets: Sequence[str],
     mode: str = "auto",
-    constants: Mapping[str, float] | None = None,
-    seed: int = 0,
-    hold: str = "zoh",
+    *,
+    settings: FitSettings,
 ) -> OperatingPoint:
     """The model's values if they reproduce the data, else a quick fit's estimates (see the module notes).
 
@@ -410,13 +410,11 @@ def choose_operating_point(
         Parameters diagnosed; the quick fit estimates these and the model's default free ones.
     mode : {"auto", "model", "fit"}
         ``"model"`` always uses the model's values, ``"fit"`` always fits first.
-    constants : mapping, optional
-        Inputs held constant (SI units), for the fit.
-    seed : int
-        Seed of the fit's global search.
-    hold : {"zoh", "foh"}
-        Inputs between samples, in the residuals and the fit.
+    settings : FitSettings
+        The quick fit's settings (least squares): its inputs held constant (SI units), the seed of
+        its global search, and its hold (inputs between samples), which the residuals use too.
     """
+    hold = settings.hold
     net = zm.network
     theta = dict(zm.theta)
     threshold = CONSISTENT_FACTOR * math.hypot(sigma_K, model_error_K)
@@ -434,9 +432,7 @@ def choose_operating_point(
     from rczone.estimation.fit import default_free
 
     fit_free = tuple(dict.fromkeys((*default_free(net, "ls"), *free)))
-    cal = calibrate(
-        zm, frame, "ls", free=fit_free, constants=constants, uncertainty=False, seed=seed, hold=hold
-    )
+    cal = calibrate(zm, frame, settings, free=fit_free, uncertainty=False)
     fitted = dict(cal.model.theta)
     x0_values = dict(cal.model.provenance.get("initial_state") or {})
     r_fit, x0 = _residual(net, fitted, x0_values, data, offsets, hold)
@@ -634,8 +630,9 @@ def diagnose(
                 raise ParameterError(
                     f"heat_input {h!r} is not an input of the model; " + did_you_mean(h, net.input_names)
                 )
+    quick = FitSettings(method="ls", seed=seed, hold=hold, constants=dict(constants or {}))
     op = choose_operating_point(
-        zm, frame, data, free, sigma_K, model_error_K, offsets, operating_point, constants, seed, hold
+        zm, frame, data, free, sigma_K, model_error_K, offsets, operating_point, settings=quick
     )
     check_free(net, free, op.theta)
     theta = op.theta

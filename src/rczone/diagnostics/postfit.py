@@ -32,7 +32,7 @@ from scipy.special import chdtri
 
 from rczone.errors import ParameterError
 from rczone.estimation import FitResult
-from rczone.estimation.costs import MAP_CORRELATION_TIME, Objective, auto_initial_state
+from rczone.estimation.costs import MAP_CORRELATION_TIME, PRIOR_SPREAD, Objective, auto_initial_state
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.uncertainty import profile
@@ -99,6 +99,11 @@ class Disagreement:
         return {k: v for k, v in vars(self).items() if k != "name"}
 
 
+def correlation_time(res: FitResult) -> float:
+    """The output error's correlation time the fit assumed, s (a MAP fit's option, else the default)."""
+    return float(res.options.get("correlation_time_s", MAP_CORRELATION_TIME))
+
+
 def _inside(value: float, lo: float, hi: float) -> float:
     """An estimate at (or, by rounding, just past) a bound, moved a hair inside it: a start must be."""
     eps = 1e-9 * (hi - lo)
@@ -126,9 +131,15 @@ def _objective(model, frame: pd.DataFrame, res: FitResult, constants) -> tuple[O
         x0_auto=x0_auto,
     )
     dt = float(np.median(np.diff(data.t)))
-    w = min(1.0, dt / MAP_CORRELATION_TIME)
+    w = min(1.0, dt / correlation_time(res))
     obj = Objective(
-        network, data, spec, res.method, res.hold, likelihood_weight=w if method_of(res.method).prior else 1.0
+        network,
+        data,
+        spec,
+        res.method,
+        res.hold,
+        prior_spread=float(res.options.get("prior_spread", PRIOR_SPREAD)),
+        likelihood_weight=w if method_of(res.method).prior else 1.0,
     )
     return obj, w
 
@@ -175,7 +186,7 @@ def profile_checks(
             if n in network.parameters and network.parameters[n].kind in ("resistance", "capacitance")
         ]
     theta_hat = np.array([res.estimates[n] for n in obj.spec.names])
-    n_eff = (obj.data.t[-1] - obj.data.t[0]) / MAP_CORRELATION_TIME
+    n_eff = (obj.data.t[-1] - obj.data.t[0]) / correlation_time(res)
     out = {}
     for name in names:
         est = res.estimates[name]

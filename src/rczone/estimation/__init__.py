@@ -16,18 +16,18 @@ References
 from rczone.estimation.costs import Objective, ls_cost, ml_cost
 from rczone.estimation.data import Dataset
 from rczone.estimation.fit import fit
+from rczone.estimation.methods.mcmc import McmcOptions
 from rczone.estimation.parameters import ParameterSpec, make_spec, noise_parameter_names
 from rczone.estimation.posterior import Posterior
 from rczone.estimation.result import FitResult
-from rczone.estimation.sampling import SamplerSettings
 
 __all__ = [
     "Dataset",
     "FitResult",
+    "McmcOptions",
     "Objective",
     "ParameterSpec",
     "Posterior",
-    "SamplerSettings",
     "fit",
     "ls_cost",
     "make_spec",

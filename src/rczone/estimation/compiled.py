@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rczone.estimation.methods import METHODS, method_of
+from rczone.estimation.methods import REGISTRY, method_of
 from rczone.estimation.priors import LogPrior
 from rczone.kernels.arrays import (
     ConductanceArrays,
@@ -107,7 +107,7 @@ def compiled_problem(objective) -> Problem | None:
     """The packed problem of an :class:`~rczone.estimation.costs.Objective` for :mod:`rczone.kernels.problem`, or None."""
     net, data, spec = objective.network, objective.data, objective.spec
     form = net.conductance_form
-    if objective.method not in METHODS or form is None or not _always_valid(objective):
+    if objective.method not in REGISTRY or form is None or not _always_valid(objective):
         return None
     states = net.state_names
     elements = []

@@ -63,7 +63,7 @@ from rczone.estimation.engines import (
     simulate_output,
     trapezoid_sse,
 )
-from rczone.estimation.methods import METHODS as _REGISTERED
+from rczone.estimation.methods import map as _map
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import ParameterSpec, make_spec
 from rczone.estimation.priors import LogPrior, log_prior
@@ -80,7 +80,6 @@ from rczone.network.stochastic import (
 
 __all__ = [
     "MAP_CORRELATION_TIME",
-    "METHODS",
     "PRIOR_SPREAD",
     "Objective",
     "auto_initial_state",
@@ -97,14 +96,12 @@ __all__ = [
     "trapezoid_sse",
 ]
 
-#: Default spread of the MAP log-normal prior: a factor 2 is one standard deviation.
-PRIOR_SPREAD = math.log(2.0)
-#: Correlation time of the output error assumed by MAP, s: the likelihood of N samples
+#: Default spread of the MAP log-normal prior (a factor 2 is one standard deviation), and the
+#: correlation time of the output error MAP assumes by default, s: the likelihood of N samples
 #: ``dt`` apart counts as that of ``N dt / MAP_CORRELATION_TIME`` independent ones, as in
-#: :func:`rczone.diagnostics.diagnose`.
-MAP_CORRELATION_TIME = 1800.0
-
-METHODS = _REGISTERED
+#: :func:`rczone.diagnostics.diagnose` (the options of :mod:`rczone.estimation.methods.map`).
+PRIOR_SPREAD = _map.PRIOR_SPREAD
+MAP_CORRELATION_TIME = _map.CORRELATION_TIME_S
 
 
 def ls_cost(network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh") -> float:

@@ -1,8 +1,8 @@
 """``fit``: estimate free parameters of an RC network from a data set.
 
-The top-level function ties the pieces together: default free set, parameter spec, cost, global
-search, uncertainty, the flags that say when a result should not be trusted, and the frozen
-:class:`~rczone.estimation.result.FitResult`. The network is never modified.
+The top-level function builds the problem once (default free set, bounds, start values, the
+parameter spec) and hands it to the method (:mod:`rczone.estimation.methods`), which returns the
+frozen :class:`~rczone.estimation.result.FitResult`. The network is never modified.
 
 References
 ----------
@@ -13,33 +13,21 @@ References
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
 from rczone.errors import ParameterError
-from rczone.estimation import leastsq
-from rczone.estimation.costs import (
-    MAP_CORRELATION_TIME,
-    PRIOR_SPREAD,
-    Objective,
-    auto_initial_state,
-    filter_arrays,
-    simulate_output,
-    trapezoid_sse,
-)
+from rczone.estimation.costs import auto_initial_state
 from rczone.estimation.data import Dataset
-from rczone.estimation.engines import general_cost
-from rczone.estimation.kalman import kalman_innovations_fast
-from rczone.estimation.methods import Method, method_of
-from rczone.estimation.optimize import OPTIMIZERS, StartOutcome
+from rczone.estimation.methods import FitProblem, method_of
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.resolution import noise_floor
 from rczone.estimation.result import FitResult
-from rczone.estimation.search import COST_TIE, global_search
-from rczone.estimation.uncertainty import covariance, hessian, hessian_from_gradient
+from rczone.estimation.settings import FitSettings
 from rczone.network import RCNetwork
 from rczone.network.stochastic import (
     KINDS,
@@ -51,21 +39,6 @@ from rczone.network.stochastic import (
     measurement_noise_names,
     process_noise_names,
 )
-from rczone.network.stochastic import unit_of as stochastic_unit
-from rczone.results import Estimate
-from rczone.simulation.simulate import HOLDS
-
-if TYPE_CHECKING:
-    from rczone.estimation.sampling import SamplerSettings
-
-
-def rmse_of(network: RCNetwork, values: Mapping[str, float], data: Dataset, method: str, hold: str) -> float:
-    """Open-loop RMSE (``"ls"``) or one-step-ahead RMSE (``"ml"``, ``"map"``), K."""
-    if method_of(method).kernel == "ls":
-        e = data.y - simulate_output(network, values, data, hold)[1]
-    else:
-        e = kalman_innovations_fast(filter_arrays(network, values, data, hold))
-    return float(np.sqrt(np.nanmean(e**2)))
 
 
 def measured_states(network: RCNetwork) -> tuple[str, ...]:
@@ -129,20 +102,14 @@ def fit(
     data: Dataset,
     free: Sequence[str] | None = None,
     *,
-    method: str = "ls",
-    optimizer: str = "auto",
-    n_starts: int | None = None,
-    bounds: Mapping[str, tuple[float, float]] | None = None,
+    settings: FitSettings | None = None,
     rng: np.random.Generator | None = None,
     start: Mapping[str, float] | None = None,
     fixed: Mapping[str, float] | None = None,
-    hold: str = "zoh",
-    prior_spread: float = PRIOR_SPREAD,
-    correlation_time_s: float = MAP_CORRELATION_TIME,
     uncertainty: bool = True,
     max_evals: int | None = None,
     initial_state: str = "estimate",
-    sampler: SamplerSettings | None = None,
+    **overrides: Any,
 ) -> FitResult:
     """Estimate the ``free`` parameters of ``network`` from ``data``.
 
@@ -162,36 +129,15 @@ def fit(
         Parameters to estimate (base network parameters, ``sigma_v`` (``sigma_v_<output>`` with
         several outputs), ``sigma_w_<state>``, ``x0_<state>``, ``sigma_x0_<state>``). Default
         :func:`default_free`.
-    method : {"ls", "ml", "map", "mcmc"}
-        Output-error least squares (Lin et al. 2012, eq. (8)), Kalman-filter maximum likelihood
-        (eq. 9), ML with a prior on the free R and C (declared, else log-normal around the
-        construction value), or posterior sampling (:mod:`rczone.estimation.sampling`; the
-        estimates are posterior means, the standard errors posterior standard deviations).
-    optimizer : {"auto", "nelder-mead", "powell", "lbfgs"}
-        The local method. ``"auto"``: L-BFGS with the exact gradient (one evaluation per step, a
-        gradient costing a few likelihoods: :meth:`~rczone.estimation.costs.Objective.value_and_gradient`);
-        the direct searches need tens of times more evaluations. For least squares on a problem
-        that packs into arrays, ``"auto"`` is Gauss-Newton on the residual Jacobian
-        (:mod:`rczone.estimation.leastsq`, recorded as ``"gauss-newton"``).
-    n_starts : int, optional
-        Local searches: default automatic (2 or more, see the search); ``1`` is one local search
-        from the start values (no global phase); ``k`` runs exactly ``k``.
-    bounds : mapping of name to (lower, upper), optional
-        Default: declared on the parameter, else a factor 1000 around its value; measurement
-        noise from the data (:func:`noise_bounds`).
+    settings : FitSettings, optional
+        How to fit (:class:`~rczone.estimation.settings.FitSettings`): the method and its options,
+        the search, the hold, the bounds; default ``FitSettings()`` (maximum likelihood, the global
+        search), as ``rczone fit``. Its ``fixed`` values apply where ``fixed`` gives none, its free
+        set (:meth:`~rczone.estimation.settings.FitSettings.free_for`) where ``free`` is not given.
     rng : numpy.random.Generator, optional
-        Draws the global phase; default ``numpy.random.default_rng(0)`` (reproducible).
+        Draws the global phase (or the sampler's starts); default one seeded by ``settings.seed``.
     start, fixed : mapping of name to float, optional
         Start values of free parameters; values of non-free ones.
-    hold : {"zoh", "foh"}
-        Inter-sample behaviour of the inputs.
-    prior_spread : float
-        Spread (log units) of the MAP prior.
-    correlation_time_s : float
-        MAP only: correlation time of the output error; the likelihood is weighted by
-        ``min(1, dt / correlation_time_s)`` (see :class:`~rczone.estimation.costs.Objective`),
-        so that a night of closed-loop data cannot overrule the construction values with
-        thousands of samples that carry the information of a few dozen.
     uncertainty : bool
         Compute the Hessian, standard errors and correlations.
     max_evals : int, optional
@@ -201,19 +147,17 @@ def fit(
         every unmeasured state in an LS fit; ``"steady"`` starts them in equilibrium with the first
         inputs and measurement, which biases the fit when the data do not start at rest. ML and
         MAP fits carry an initial-state uncertainty in the filter either way.
-    sampler : SamplerSettings, optional
-        Draws, warm-up and chains of a sampling method (``"mcmc"``,
-        :mod:`rczone.estimation.sampling`); default :class:`~rczone.estimation.sampling.SamplerSettings`.
+    **overrides
+        Fields of :class:`~rczone.estimation.settings.FitSettings` replacing those of ``settings``
+        (``method="ls"``, ``n_starts=1``, ``options={"draws": 500}``, ...), as
+        ``lmfit.minimize(..., method=...)`` takes them; any other name is refused.
 
     Returns
     -------
     FitResult
     """
-    meth = method_of(method)
-    if optimizer != "auto" and optimizer not in OPTIMIZERS:
-        raise ParameterError(f"optimizer must be 'auto' or one of {OPTIMIZERS}, got {optimizer!r}")
-    if hold not in HOLDS:
-        raise ParameterError(f"hold must be one of {HOLDS}, got {hold!r}")
+    settings = FitSettings.of(settings, exclude=("free", "fixed"), **overrides)
+    meth = method_of(settings.method)
     if initial_state not in ("estimate", "steady"):
         raise ParameterError(f"initial_state must be 'estimate' or 'steady', got {initial_state!r}")
     if not isinstance(data, Dataset):
@@ -221,14 +165,23 @@ def fit(
             f"data must be an rczone Dataset, got {type(data).__name__}; see Dataset.from_frame"
         )
     data.check_against(network)
-    free = tuple(free) if free else default_free(network, method, initial_state)
+    if free:
+        free = tuple(free)
+    elif settings.free is None and initial_state == "steady":
+        free = default_free(network, meth.name, initial_state, settings.noise)
+    else:
+        free = settings.free_for(network)
+    bounds = settings.bounds
+    if fixed is None:
+        fixed = {k: v for k, v in settings.fixed.items() if v is not None}
     if not meth.stochastic:
         noisy = [n for n in free if is_noise_name(n)]
         if noisy:
             raise ParameterError(
-                f"noise parameter(s) {noisy} cannot be estimated by least squares; use method='ml' or 'map'"
+                f"noise parameter(s) {noisy} cannot be estimated by {meth.title} (it has no noise model);"
+                " use method='ml' or 'map'"
             )
-    rng = np.random.default_rng(0) if rng is None else rng
+    rng = np.random.default_rng(settings.seed) if rng is None else rng
     ss0 = network.state_space()
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
     x0_auto = {initial_state_name(s): float(v) for s, v in zip(ss0.state_names, x0a)}
@@ -240,171 +193,18 @@ def fit(
             if not lo < v < hi:  # a coarse logger: start above its resolution
                 start[name] = math.sqrt(lo * hi) if hi < 100 * lo else 10.0 * lo
     spec = make_spec(network, free, bounds=all_bounds, start=start, fixed=fixed, x0_auto=x0_auto)
-    if not correlation_time_s > 0:
-        raise ParameterError(f"correlation_time_s must be > 0, got {correlation_time_s!r}")
-    weight = min(1.0, float(np.median(np.diff(data.t))) / correlation_time_s) if meth.prior else 1.0
-    objective = Objective(network, data, spec, method, hold, prior_spread, weight)
-    if meth.search == "sample":
-        from rczone.estimation.sampling import SamplerSettings, sample_fit
-
-        return sample_fit(objective, settings=sampler or SamplerSettings(), rng=rng)
-    scale = trapezoid_sse(data.t, data.y - np.nanmean(data.y, axis=0)) if meth.kernel == "ls" else 0.0
-    if optimizer == "auto" and leastsq.applies(objective):  # Gauss-Newton on the residual Jacobian
-        optimizer = leastsq.NAME
-        outcomes, search = leastsq.leastsq_search(objective, rng, n_starts, max_evals, scale)
-    else:
-        optimizer = "lbfgs" if optimizer == "auto" else optimizer  # every Objective has its exact gradient
-        outcomes, search = global_search(
-            objective, spec, method, rng, optimizer, n_starts, max_evals, scale=scale
-        )
-    best = winning_end(outcomes, search.optima[0].starts)
-    win = outcomes[best]
-    theta = win.end
-    names = spec.names
-    d = spec.n_free
-    flags: list[str] = []
-    notes: list[str] = []
-    issues: list[str] = []
-    positive_definite = True
-    near = spec.near_bound(theta)
-    if uncertainty:
-        if win.hessian is not None:  # the search computed it at this end (search.global_search)
-            H = win.hessian
-        elif objective.adjoint_gradient:
-            H = hessian_from_gradient(objective.value_and_gradient, spec.to_eta(theta))
-        else:
-            H = hessian(objective, spec.to_eta(theta))
-        scale = 1.0
-        if meth.kernel == "ls":
-            dt = np.diff(data.t)
-            obs = np.isfinite(data.y).all(axis=1)
-            tau = float(np.sum(dt[obs[:-1] & obs[1:]]))
-            scale = 2.0 * win.cost / tau * float(np.mean(dt)) if tau > 0 else math.nan
-        unc = covariance(spec, theta, H, scale, held=near)
-        se, corr = unc.std_error, unc.correlation
-        positive_definite = unc.positive_definite
-        if not positive_definite:
-            issues.append("hessian")
-            flags.append("Hessian not positive definite: the parameters are not identifiable from these data")
-        missing = [n for n, v, b in zip(names, se, near) if not math.isfinite(v) and not b]
-        if missing and positive_definite:
-            issues.append("std_error")
-            flags.append(f"no standard error for {', '.join(missing)}")
-    else:
-        se, corr = np.full(d, np.nan), np.full((d, d), np.nan)
-    lower_side = spec.to_eta(theta) - spec.eta_lower <= spec.eta_upper - spec.to_eta(theta)
-    for n, b, low, kind in zip(names, near, lower_side, spec.kinds):
-        if not b:
-            continue
-        if kind == "noise" and low:
-            notes.append(
-                f"{n} is at its lower bound {spec.lower[names.index(n)]:.3g}: that noise is negligible"
-            )
-        else:
-            issues.append("at_bound")
-            flags.append(f"{n} is at a bound")
-    if not search.converged:
-        issues.append("not_converged")
-        flags.append(f"not converged: {search.reason}")
-    for n, kind in zip(names, spec.kinds):
-        lo_v, hi_v = search.spread[n]
-        if kind in ("resistance", "capacitance", "gain") and search.n_best >= 2:
-            rel = (hi_v / lo_v if lo_v > 0 else math.inf) if kind != "gain" else abs(hi_v - lo_v)
-            wide = rel > 1.1 if kind != "gain" else rel > 0.1 * max(abs(hi_v), 1e-12)
-            if wide:
-                issues.append("starts_disagree")
-                flags.append(
-                    f"starts that reach the same cost disagree on {n} ({lo_v:.3g} to {hi_v:.3g}):"
-                    " the data do not determine it"
-                )
-    values = spec.values(theta)
-    units = [unit_of(network, n) for n in names]
-    parameters = {
-        n: Estimate(n, float(v), float(e), float(lo), float(hi), float(c), bool(b), u, k, bool(lg))
-        for n, v, e, lo, hi, c, b, u, k, lg in zip(
-            names, theta, se, spec.lower, spec.upper, spec.construction, near, units, spec.kinds, spec.log
-        )
-    }
-    return FitResult(
-        parameters=parameters,
-        correlation=corr,
-        objective_value=win.cost,
-        method=method,
-        engine=objective.engine,
-        optimizer=optimizer,
-        hold=hold,
-        converged=search.converged,
-        n_evals=search.n_sampled + sum(o.n_evals for o in outcomes),
-        starts=tuple(outcomes),
-        best_start=best,
-        rmse_K=_rmse(objective, theta, values),
-        rmse_kind=meth.rmse_kind,
-        llf=log_likelihood(network, values, data, meth, hold, win.cost),
-        nobs=int(np.isfinite(data.y).sum()),
-        fixed={k: v for k, v in values.items() if k not in names},
-        flags=tuple(flags),
-        search=search,
-        notes=tuple(notes),
-        issues=tuple(dict.fromkeys(issues)),
+    problem = FitProblem(
+        network,
+        data,
+        spec,
+        meth.name,
+        settings.hold,
+        settings.optimizer,
+        settings.n_starts,
+        max_evals,
+        uncertainty,
     )
-
-
-def _rmse(objective: Objective, theta: np.ndarray, values: Mapping[str, float]) -> float:
-    """The fit's RMSE (:func:`rmse_of`), from the compiled kernel's own errors where it keeps them.
-
-    A 2-state likelihood fit takes the one-step errors from the adjoint kernel's forward pass
-    (:meth:`~rczone.estimation.costs.Objective.innovations`), a 2-state least-squares fit the
-    open-loop errors from the fused value kernel (:meth:`~rczone.estimation.costs.Objective.output_errors`),
-    instead of a general filter or simulation (0.5 ms of a 4 ms least-squares fit).
-    """
-    eta = objective.spec.to_eta(theta)
-    e = objective.innovations(eta) if objective.adjoint_gradient else objective.output_errors(eta)
-    if e is None:
-        return rmse_of(objective.network, values, objective.data, objective.method, objective.hold)
-    return float(np.sqrt(np.nanmean(e**2)))
-
-
-def winning_end(outcomes: Sequence[StartOutcome], starts: Sequence[int]) -> int:
-    """The end of the best optimum that a fit reports: the lowest, or one tied with it that has its Hessian.
-
-    Among ends whose costs agree to :data:`COST_TIE`, the one whose Hessian the search computed
-    (:attr:`~rczone.estimation.optimize.StartOutcome.hessian`) is taken, so the standard errors
-    need no second Hessian.
-
-    Parameters
-    ----------
-    outcomes : sequence of StartOutcome
-        Every local search of the fit.
-    starts : sequence of int
-        Indices of the searches that reached the best optimum.
-
-    Returns
-    -------
-    int
-        An index of ``starts``' searches into ``outcomes``.
-    """
-    lowest = min(starts, key=lambda i: outcomes[i].cost)
-    floor = outcomes[lowest].cost
-    tied = [i for i in starts if outcomes[i].cost - floor <= COST_TIE * max(abs(floor), 1.0)]
-    return next((i for i in tied if outcomes[i].hessian is not None), lowest)
-
-
-def log_likelihood(
-    network: RCNetwork, values: Mapping[str, float], data: Dataset, kind: Method, hold: str, objective: float
-) -> float:
-    """The log-likelihood at the estimate: ``-objective`` for ML, recomputed without prior or tempering for MAP.
-
-    NaN for a method without a noise model (least squares has no likelihood of its own).
-    """
-    if not kind.stochastic:
-        return math.nan
-    if not kind.prior:
-        return -float(objective)
-    return -float(general_cost(network, values, data, hold, "ml", ())[0])
-
-
-def unit_of(network: RCNetwork, name: str) -> str:
-    """SI unit of a free parameter, for tables."""
-    if name in network.parameters:
-        return network.parameters[name].unit or ""
-    return stochastic_unit(name) or ""
+    result = meth.run(problem, settings.options, rng)
+    if not isinstance(result, FitResult):
+        raise ParameterError(f"method {meth.name!r} returned a {type(result).__name__}, not a FitResult")
+    return dataclasses.replace(result, method=meth.name, options=settings.options.to_dict())

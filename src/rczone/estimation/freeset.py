@@ -1,6 +1,6 @@
 """Which parameters a fit estimates: the default set, the names added to it and the names held.
 
-One rule for ``rczone fit`` (:meth:`rczone.workflow.settings.FitSettings.free_for`) and for every
+One rule for ``rczone fit`` (:meth:`rczone.estimation.settings.FitSettings.free_for`) and for every
 candidate of ``rczone select`` (:func:`rczone.selection.compare.candidate_settings`): the free
 parameters are the ones given, else the method's default set
 (:func:`rczone.estimation.fit.default_free`) plus the names written ``+NAME``, less the fixed
@@ -11,9 +11,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from rczone.errors import ParameterError
 from rczone.network import RCNetwork
+
+if TYPE_CHECKING:
+    from rczone.estimation.settings import FitSettings
 
 #: Start of a ``free`` entry that adds a parameter to the default free set (``"+sigma_w_Te"``).
 ADD = "+"
@@ -55,31 +59,18 @@ def check_free_and_fixed(free: Sequence[str] | None, fixed: Mapping[str, object]
         raise ParameterError(f"parameter {both[0]!r} is both free and fixed; choose one")
 
 
-def resolve_free(
-    network: RCNetwork,
-    method: str,
-    *,
-    noise: str = "measured",
-    free: Sequence[str] | None = None,
-    fixed: Mapping[str, object] | None = None,
-    bounds: Mapping[str, object] | None = None,
-) -> tuple[str, ...]:
+def resolve_free(network: RCNetwork, settings: FitSettings) -> tuple[str, ...]:
     """The free parameters of a fit of ``network``: ``free`` (or the default, with the ``+`` entries), less ``fixed``.
 
     Parameters
     ----------
     network : RCNetwork
         The model's network.
-    method : str
-        The fit's method (its default set: :func:`rczone.estimation.fit.default_free`).
-    noise : {"measured", "all"}
-        ML and MAP: process noise on the measured states or on every state.
-    free : sequence of str, optional
-        The free parameters, or ``"+NAME"`` entries added to the default set.
-    fixed : mapping, optional
-        Names held (their values are not used here).
-    bounds : mapping, optional
-        Names given search bounds: each must be free.
+    settings : FitSettings
+        Its method (the default set: :func:`rczone.estimation.fit.default_free`), its noise
+        placement, its ``free`` (the free parameters, or ``"+NAME"`` entries added to the default
+        set), its ``fixed`` (names held; their values are not used here) and its ``bounds`` (names
+        given search bounds: each must be free).
 
     Returns
     -------
@@ -94,12 +85,12 @@ def resolve_free(
     from rczone.estimation.fit import default_free
     from rczone.estimation.parameters import check_name
 
-    fixed, bounds = dict(fixed or {}), dict(bounds or {})
+    free, fixed, bounds = settings.free, dict(settings.fixed), dict(settings.bounds)
     given = [n for n in (free or ()) if not n.startswith(ADD)]
     added = [n[len(ADD) :] for n in (free or ()) if n.startswith(ADD)]
     for name in (*added, *fixed, *bounds):
         check_name(network, name)
-    base = list(given) if given else list(default_free(network, method, noise=noise))
+    base = list(given) if given else list(default_free(network, settings.method, noise=settings.noise))
     out = tuple(dict.fromkeys(n for n in (*base, *added) if n not in fixed))
     if not out:
         raise ParameterError("every parameter is fixed: leave at least one free")

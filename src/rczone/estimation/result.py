@@ -84,6 +84,8 @@ class FitResult(Result):
         A sampling method's draws and diagnostics (:mod:`rczone.estimation.posterior`); the
         estimates are then posterior means and the standard errors posterior standard
         deviations, and :meth:`conf_int` gives equal-tailed credible intervals.
+    options : dict
+        The method's own options the fit ran with (:attr:`rczone.estimation.methods.Method.options`).
     """
 
     parameters: Mapping[str, Estimate]
@@ -107,6 +109,7 @@ class FitResult(Result):
     notes: tuple[str, ...] = ()
     issues: tuple[str, ...] = ()
     posterior: Posterior | None = None
+    options: Mapping[str, Any] = field(default_factory=dict)
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -249,6 +252,7 @@ class FitResult(Result):
             "bic": json_number(self.bic),
             "nobs": self.nobs,
             "method": self.method,
+            **({"method_options": dict(self.options)} if self.options else {}),
             "engine": self.engine,
             "optimizer": self.optimizer,
             "hold": self.hold,

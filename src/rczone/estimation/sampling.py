@@ -45,46 +45,12 @@ import numpy as np
 
 from rczone.errors import ParameterError, RczoneError
 from rczone.estimation.costs import Objective
+from rczone.estimation.methods.mcmc import McmcOptions
 from rczone.estimation.optimize import StartOutcome, minimize_from
 from rczone.estimation.posterior import Posterior
 from rczone.estimation.priors import LogPrior, log_prior
 from rczone.estimation.result import FitResult
 from rczone.results import Estimate
-
-#: Smallest and largest value of each sampler setting.
-SAMPLER_LIMITS = {"draws": (10, 1_000_000), "tune": (0, 1_000_000), "chains": (1, 64)}
-
-
-class SamplerSettings(NamedTuple):
-    """How long to sample.
-
-    Attributes
-    ----------
-    draws : int
-        Draws kept per chain.
-    tune : int
-        Warm-up draws per chain (step size and mass matrix adaptation), discarded.
-    chains : int
-        Independent chains (R-hat needs at least two).
-    """
-
-    draws: int = 1000
-    tune: int = 1000
-    chains: int = 4
-
-    def checked(self) -> SamplerSettings:
-        """The settings, or a :class:`~rczone.errors.ParameterError` naming the bad one.
-
-        Each is an integer within :data:`SAMPLER_LIMITS` (a typo of a few zeros in a manifest
-        should not ask for days of sampling or the memory of a billion draws).
-        """
-        for name, (low, high) in SAMPLER_LIMITS.items():
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
-                raise ParameterError(
-                    f"sampler setting {name} must be an integer from {low} to {high:,}, got {v!r}"
-                )
-        return self
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,7 +150,7 @@ def _nutpie() -> Any:
     return nutpie, from_pyfunc
 
 
-def _run_nuts(logp: LogPosterior, starts: np.ndarray, settings: SamplerSettings, seed: int) -> _Run:
+def _run_nuts(logp: LogPosterior, starts: np.ndarray, settings: McmcOptions, seed: int) -> _Run:
     """NUTS (nutpie) from ``starts`` (one row of ``z`` per chain)."""
     nutpie, from_pyfunc = _nutpie()
     d = starts.shape[1]
@@ -263,14 +229,14 @@ class Sampled(NamedTuple):
     mode: StartOutcome
 
 
-def sample(logp: LogPosterior, *, settings: SamplerSettings, rng: np.random.Generator) -> Sampled:
+def sample(logp: LogPosterior, *, settings: McmcOptions, rng: np.random.Generator) -> Sampled:
     """Draw from ``logp``: one L-BFGS search for the mode, then NUTS chains around it.
 
     Parameters
     ----------
     logp : LogPosterior
         The log posterior (:func:`posterior_of`).
-    settings : SamplerSettings
+    settings : McmcOptions
         Draws, warm-up and chains.
     rng : numpy.random.Generator
         Draws the starts and the sampler's seed.
@@ -319,7 +285,7 @@ def sample(logp: LogPosterior, *, settings: SamplerSettings, rng: np.random.Gene
     return Sampled(posterior, mode)
 
 
-def sample_fit(objective: Objective, *, settings: SamplerSettings, rng: np.random.Generator) -> FitResult:
+def sample_fit(objective: Objective, *, settings: McmcOptions, rng: np.random.Generator) -> FitResult:
     """A :class:`~rczone.estimation.result.FitResult` of posterior means and standard deviations.
 
     Each :class:`~rczone.results.Estimate` holds the posterior mean (``value``) and standard
@@ -332,7 +298,7 @@ def sample_fit(objective: Objective, *, settings: SamplerSettings, rng: np.rando
     ----------
     objective : Objective
         The ML objective of the problem (:func:`posterior_of`).
-    settings : SamplerSettings
+    settings : McmcOptions
         Draws, warm-up and chains.
     rng : numpy.random.Generator
         Draws the starts and the sampler's seed.
@@ -341,8 +307,8 @@ def sample_fit(objective: Objective, *, settings: SamplerSettings, rng: np.rando
     -------
     FitResult
     """
-    from rczone.estimation.fit import log_likelihood, rmse_of, unit_of
     from rczone.estimation.methods import method_of
+    from rczone.estimation.minimize import log_likelihood, rmse_of, unit_of
 
     logp = posterior_of(objective)
     run = sample(logp, settings=settings, rng=rng)

@@ -49,7 +49,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -59,7 +59,8 @@ from rczone.calibration import Calibration, ModelLike, as_model, calibrate, comp
 from rczone.calibration.dataset import ignored_channels
 from rczone.errors import DataError, ParameterError, did_you_mean
 from rczone.estimation.fit import default_free
-from rczone.estimation.freeset import ADD, check_free_and_fixed, fixed_value, resolve_free
+from rczone.estimation.freeset import ADD, resolve_free
+from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.network.stochastic import MEASUREMENT_NOISE, PROCESS_NOISE, kind_of, process_noise_name, target_of
 from rczone.results import Result
@@ -280,6 +281,8 @@ class Selection(Result):
         (a model file).
     ignored_channels : tuple of str
         Channels the data's column map mapped that no candidate uses.
+    holdout : HorizonScores or None
+        The selected model's scores on data held out of the selection (``--holdout``); None without.
     """
 
     candidates: Mapping[str, Candidate]
@@ -300,6 +303,7 @@ class Selection(Result):
     fit_args: tuple[str, ...] = ()
     model_specs: Mapping[str, str] = field(default_factory=dict)
     ignored_channels: tuple[str, ...] = ()
+    holdout: Any = None
 
     @property
     def best(self) -> Candidate:
@@ -318,7 +322,8 @@ class Selection(Result):
         """What ``rczone select`` prints after fitting the candidates."""
         from rczone.selection.text import selection_lines
 
-        return selection_lines(self)
+        held = self.holdout.summary_lines() if self.holdout is not None else []
+        return [*selection_lines(self), *held]
 
     def table(self) -> list[dict]:
         """One row per fitted candidate: log L, k, AIC, BIC and their differences to the best, whiteness."""
@@ -371,6 +376,7 @@ class Selection(Result):
             else None,
             "exit_code": self.exit_code,
             "ignored_channels": list(self.ignored_channels),
+            **({"holdout": self.holdout.to_dict()} if self.holdout is not None else {}),
         }
 
 
@@ -422,10 +428,7 @@ class CandidateParameters(NamedTuple):
 
 
 def candidate_parameters(
-    models: Mapping[str, ZoneModel],
-    noise: str = "all",
-    free: Sequence[str] | None = None,
-    fixed: Mapping[str, float | None] | None = None,
+    models: Mapping[str, ZoneModel], settings: FitSettings
 ) -> dict[str, CandidateParameters]:
     """Each candidate's free and fixed parameters: its ML default set with ``noise``, the ``+NAME`` it has, less the fixed it has.
 
@@ -436,20 +439,16 @@ def candidate_parameters(
     ----------
     models : mapping of str to ZoneModel
         The candidates by name.
-    noise : {"all", "measured"}
-        Process noise on every state or on the measured ones.
-    free : sequence of str, optional
-        ``"+NAME"`` entries added to the default free sets.
-    fixed : mapping of str to float or None, optional
-        Parameters held at a value (None: the model's).
+    settings : FitSettings
+        Its ``noise`` (process noise on every state or on the measured ones), its ``free``
+        (``"+NAME"`` entries added to the default free sets) and its ``fixed`` (parameters held at
+        a value, None: the model's).
 
     Returns
     -------
     dict of str to CandidateParameters
     """
-    free = tuple(free or ())
-    fixed = {k: fixed_value(k, v) for k, v in dict(fixed or {}).items()}
-    check_free_and_fixed(free, fixed)
+    free, fixed, noise = tuple(settings.free or ()), dict(settings.fixed), settings.noise
     replaced = [n for n in free if not n.startswith(ADD)]
     if replaced:
         raise ParameterError(
@@ -465,7 +464,8 @@ def candidate_parameters(
     for c, zm in models.items():
         own = {k: v for k, v in fixed.items() if k in names[c]}
         added = [n for n in free if n[len(ADD) :] in names[c]]
-        out[c] = CandidateParameters(resolve_free(zm.network, "ml", noise=noise, free=added, fixed=own), own)
+        own_settings = FitSettings(method="ml", noise=noise, free=added or None, fixed=own)
+        out[c] = CandidateParameters(resolve_free(zm.network, own_settings), own)
     return out
 
 
@@ -503,18 +503,13 @@ def family_candidates(columns: Sequence[str], *, extended: bool = False) -> list
 def select_models(
     models: Sequence[ModelLike],
     frame: pd.DataFrame,
-    constants: Mapping[str, float] | None = None,
+    settings: FitSettings | None = None,
+    *,
     rule: str = "bic",
     forward: bool = False,
     alpha: float = 0.05,
-    n_starts: int | None = None,
-    seed: int = 0,
     progress: Callable[[str], None] | None = None,
-    noise: str = "all",
-    hold: str = "zoh",
-    bounds: Mapping[str, tuple[float, float]] | None = None,
-    free: Sequence[str] | None = None,
-    fixed: Mapping[str, float | None] | None = None,
+    **overrides: Any,
 ) -> Selection:
     """Fit the candidate ``models`` to ``frame`` by ML and choose one (see the module notes).
 
@@ -524,33 +519,31 @@ def select_models(
         At least two: built-in names, model files or :class:`~rczone.models.ZoneModel`.
     frame : DataFrame
         As for :func:`rczone.calibration.calibrate`.
-    constants : mapping, optional
-        Inputs held constant.
+    settings : FitSettings, optional
+        The fits' settings, carried whole to every candidate's fit by ML (its method is ML
+        whatever it says); default ``FitSettings(noise="all")``: process noise on every state, as
+        likelihood-ratio tests and information criteria need a well specified noise model
+        (Bacher & Madsen 2011). Its ``free`` entries are ``"+NAME"`` additions to every candidate
+        that has the parameter (a name no candidate has is an error), its ``fixed`` and ``bounds``
+        apply to the candidates that have the parameter (a name no candidate has is an error).
     rule : {"bic", "aic"}
         Information criterion (without ``forward``).
     forward : bool
         Forward selection by likelihood-ratio tests from the simplest candidate.
     alpha : float
         Level of the likelihood-ratio tests.
-    n_starts, seed
-        As for :func:`rczone.calibration.calibrate`.
     progress : callable, optional
         Called with the name of each model before it is fitted.
-    noise : {"all", "measured"}
-        Estimate the process noise of every state (default), or of the measured states only.
-    hold : {"zoh", "foh"}
-        Inter-sample behaviour of the inputs in every fit.
-    bounds : mapping of str to (float, float), optional
-        Search bounds (SI units), each applied to the candidates that have the parameter; a name no
-        candidate has is an error.
-    free : sequence of str, optional
-        Parameters added to every candidate's free set that has them, each written ``"+NAME"`` (a
-        noise level ``sigma_w_Te``, an initial state ``x0_Te``, a parameter the model declares
-        fixed), as ``rczone fit --free +NAME``; a name no candidate has is an error.
-    fixed : mapping of str to float or None, optional
-        Parameters held at a value (None: the model's) in every candidate that has them, as
-        ``rczone fit --fix``; a name no candidate has is an error.
+    **overrides
+        Fields of :class:`~rczone.estimation.settings.FitSettings` replacing those of ``settings``.
+
+    References
+    ----------
+    .. [1] P. Bacher, H. Madsen, "Identifying suitable models for the heat dynamics of buildings",
+       Energy and Buildings 43(7), 2011, 1511-1522.
     """
+    settings = FitSettings.of(settings or FitSettings(noise="all"), **overrides)
+    constants, noise = settings.constants or None, settings.noise
     if rule not in RULES:
         raise ParameterError(f"rule must be one of {RULES}, got {rule!r}")
     if not 0 < alpha < 1:
@@ -575,9 +568,9 @@ def select_models(
             )
         check_measured(by_name, frame_from(frame), constants, basis)
     frame = common_stretch(zms, frame_from(frame), constants)
-    own = candidate_parameters(by_name, noise, free, fixed)
+    own = candidate_parameters(by_name, settings)
     free = {n: own[n].free for n in by_name}
-    bounds = dict(bounds or {})
+    bounds = dict(settings.bounds)
     known = {p for names_ in free.values() for p in names_}
     for b in bounds:
         if b not in known:
@@ -596,16 +589,7 @@ def select_models(
         def run(zm: ZoneModel) -> Calibration:
             box = {k: v for k, v in bounds.items() if k in free[name]}
             return calibrate(
-                zm,
-                frame,
-                "ml",
-                free[name],
-                n_starts=n_starts,
-                seed=seed,
-                constants=constants,
-                hold=hold,
-                bounds=box or None,
-                fixed=own[name].fixed or None,
+                zm, frame, settings, method="ml", free=free[name], bounds=box, fixed=own[name].fixed or {}
             )
 
         cal = run(by_name[name])

@@ -166,30 +166,21 @@ def fit_command(sel) -> str:
     return shlex.join([*args, *sel.fit_args])
 
 
-def fit_arguments(
-    sel, *, columns=None, constants=None, hold="zoh", n_starts=None, seed=0, bounds=None, fixed=None
-):
+def fit_arguments(sel, settings, *, columns=None):
     """The ``rczone fit`` options that repeat the selected model's fit as ``select`` made it.
 
     Parameters
     ----------
     sel : Selection
         The selection (the selected fit's free parameters decide which bounds apply).
+    settings : FitSettings
+        The selection's settings: its constants (SI units), hold, starts (None: the global search,
+        the default of both commands), seed, bounds (those of parameters the selected fit
+        estimates are kept) and fixed parameters (None: the model's value; those the selected model
+        has are kept, and the parameters its fit estimated beyond ``rczone fit``'s default set are
+        freed with ``+NAME``).
     columns : str or path, optional
         The column map.
-    constants : mapping of str to float, optional
-        Inputs held constant (SI units).
-    hold : {"zoh", "foh"}
-        Inputs between samples.
-    n_starts : int, optional
-        Local searches (None: the global search, the default of both commands).
-    seed : int
-        Seed of the global search.
-    bounds : mapping of str to (float, float), optional
-        Search bounds; those of parameters the selected fit estimates are kept.
-    fixed : mapping of str to float or None, optional
-        Parameters held (None: the model's value); those the selected model has are kept, and the
-        parameters its fit estimated beyond ``rczone fit``'s default set are freed with ``+NAME``.
 
     Returns
     -------
@@ -199,22 +190,22 @@ def fit_arguments(
     args: list[str] = []
     if columns is not None:
         args += ["--columns", str(columns)]
-    for name, value in (constants or {}).items():
+    for name, value in settings.constants.items():
         args += ["--const", f"{name}={value!r}"]
-    if hold != "zoh":
-        args += ["--hold", hold]
-    if n_starts is not None:
-        args += ["--starts", str(n_starts)]
-    if seed:
-        args += ["--seed", str(seed)]
-    for name, (lo, hi) in (bounds or {}).items():
+    if settings.hold != "zoh":
+        args += ["--hold", settings.hold]
+    if settings.n_starts is not None:
+        args += ["--starts", str(settings.n_starts)]
+    if settings.seed:
+        args += ["--seed", str(settings.seed)]
+    for name, (lo, hi) in settings.bounds.items():
         if name in free:
             args += ["--bounds", f"{name}={lo!r},{hi!r}"]
     from rczone.estimation.fit import default_free
     from rczone.selection.compare import parameter_names
 
     net = sel.best.calibration.model.network
-    for name, value in (fixed or {}).items():
+    for name, value in settings.fixed.items():
         if name in parameter_names(net):
             args += ["--fix", name if value is None else f"{name}={value!r}"]
     default = set(default_free(net, "ml", noise=sel.noise))

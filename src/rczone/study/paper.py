@@ -253,7 +253,9 @@ def identification_study(
         preds: dict[str, dict[str, Any]] = {s: {} for s in (cal_set, *val_sets)}
         for meth in METHODS:
             progress(f"attempt {att}: calibrating on {cal_set} by {meth.upper()}")
-            cal = calibrate(net, frames[cal_set], meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const)
+            cal = calibrate(
+                net, frames[cal_set], method=meth, free=PAPER_FREE[meth], n_starts=3, seed=1, constants=const
+            )
             entry = {
                 "parameters": {
                     n: {
@@ -301,7 +303,14 @@ def _map_prior_study(
         for s in ("A", "B"):
             progress(f"MAP on {s} with {rule} construction values as prior")
             cal = calibrate(
-                n, frames[s], "map", PAPER_FREE["map"], n_starts=3, seed=1, constants=const, uncertainty=False
+                n,
+                frames[s],
+                method="map",
+                free=PAPER_FREE["map"],
+                n_starts=3,
+                seed=1,
+                constants=const,
+                uncertainty=False,
             )
             fits[s] = {
                 "Rw": cal.result.estimates["Rw"],
@@ -347,7 +356,14 @@ def closed_loop_study(progress: Callable[[str], None]) -> ClosedLoopStudy:
             fits = {}
             for s, f in frames.items():
                 cal = calibrate(
-                    net, f, meth, PAPER_FREE[meth], n_starts=3, seed=1, constants=const, uncertainty=False
+                    net,
+                    f,
+                    method=meth,
+                    free=PAPER_FREE[meth],
+                    n_starts=3,
+                    seed=1,
+                    constants=const,
+                    uncertainty=False,
                 )
                 other = "C" if s == "A" else "A"
                 fits[s] = {

@@ -4,7 +4,7 @@
 checks after the fit; :mod:`rczone.workflow.api` holds the functions :mod:`rczone` exports.
 """
 
+from rczone.estimation.settings import FitSettings
 from rczone.workflow.checks import check_fit, fit_and_check
-from rczone.workflow.settings import FitSettings
 
 __all__ = ["FitSettings", "check_fit", "fit_and_check"]

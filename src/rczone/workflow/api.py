@@ -1,7 +1,7 @@
 """The functions :mod:`rczone` exports: load, fit, predict, with the command line's defaults.
 
 Each takes the data first and its options by keyword only, builds the same settings as the
-command (:class:`~rczone.workflow.settings.FitSettings`) and returns a result that prints what the
+command (:class:`~rczone.estimation.settings.FitSettings`) and returns a result that prints what the
 command prints (``summary()``) and serializes to what its ``--json`` writes (``to_dict()``).
 """
 
@@ -11,18 +11,19 @@ import datetime
 import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
 from rczone.calibration import Calibration, Prediction, as_model, frame_from, prediction
 from rczone.calibration.dataset import time_index
 from rczone.errors import ParameterError
-from rczone.estimation.methods import DEFAULT_METHOD
-from rczone.estimation.sampling import SamplerSettings
+from rczone.estimation.methods import DEFAULT_METHOD, MethodOptions
+from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.workflow.checks import fit_and_check
 from rczone.workflow.datasource import DataSource, data_source, frame_and_label
-from rczone.workflow.settings import FitSettings
+from rczone.workflow.holdout import before, score_held_out, split_time
 
 PathLike = str | os.PathLike
 ModelLike = ZoneModel | PathLike
@@ -75,9 +76,8 @@ def fit(
     bounds: Mapping[str, tuple[float, float]] | None = None,
     fixed: Mapping[str, float | None] | None = None,
     label: str | None = None,
-    draws: int = 1000,
-    tune: int = 1000,
-    chains: int = 4,
+    options: MethodOptions | Mapping[str, Any] | None = None,
+    holdout: str | float | None = None,
 ) -> Calibration:
     """Fit a model to data: ``rczone fit`` in Python.
 
@@ -121,9 +121,15 @@ def fit(
         Parameters held at a value, None for the model's (``--fix NAME[=VALUE]``).
     label : str, optional
         The data's name in titles and the JSON; default the file name (or ``"data"``).
-    draws, tune, chains : int
-        ``method="mcmc"``: draws kept per chain, warm-up draws per chain, chains
-        (:class:`~rczone.estimation.sampling.SamplerSettings`; ``seed`` seeds the sampler).
+    options : MethodOptions or mapping, optional
+        The method's own options (``--option NAME=VALUE``): ``{"draws": 500, "tune": 500,
+        "chains": 4}`` for ``"mcmc"`` (``seed`` seeds the sampler), ``{"prior_spread": 0.5}`` for
+        ``"map"``; an option the method does not have is refused.
+    holdout : str or float, optional
+        Fit on the data before this time (``"2009-02-09T12:00"``, in the column map's time zone)
+        or all but this last fraction of the samples (``0.25``), then score the rest at one step,
+        1 h, 6 h, 24 h and open loop next to persistence and ARX (``--holdout``;
+        :attr:`Calibration.holdout`).
 
     Returns
     -------
@@ -141,7 +147,7 @@ def fit(
         constants=dict(constants or {}),
         checks=checks,
         profiles=profiles,
-        sampler=SamplerSettings(draws=draws, tune=tune, chains=chains),
+        options=options,
         hold=hold,
         bounds=dict(bounds or {}),
         fixed=dict(fixed or {}),
@@ -151,7 +157,11 @@ def fit(
     for k, other in enumerate(check_on):
         f, other_name = frame_and_label(other, columns, zm)
         others[other_name if other_name not in others and other_name != "data" else f"data {k + 1}"] = f
-    return fit_and_check(zm, frame, settings, label=label or name, others=others)
+    at = None
+    if holdout is not None:  # a split needs the time axis
+        frame = frame_from(frame)
+        at = split_time(frame, holdout, model=zm, columns=columns)
+    return fit_and_check(zm, frame, settings, label=label or name, others=others, holdout=at)
 
 
 def predict(
@@ -165,6 +175,7 @@ def predict(
     parameters: bool = True,
     label: str | None = None,
     hold: str | None = None,
+    warmup: str | None = None,
 ) -> Prediction:
     """Predict data with a model, open loop or ``steps`` ahead, with a 2-sigma band: ``rczone predict``.
 
@@ -189,6 +200,9 @@ def predict(
         The data's name in titles and the JSON.
     hold : {"zoh", "foh"}, optional
         Inputs between samples; default the one the model was fitted with.
+    warmup : str, optional
+        The first part of the data only warms the filter up and is not scored: a duration
+        (``"1d"``, ``"6h"``, ``"30min"``) or the time the scored part starts (``--warmup``).
 
     Returns
     -------
@@ -199,6 +213,10 @@ def predict(
         raise ParameterError(f"steps must be a positive integer, got {steps!r}")
     zm = as_model(model)
     frame, name = frame_and_label(data, columns, zm)
+    start = None
+    if warmup is not None:  # a split needs the time axis
+        frame = frame_from(frame)
+        start = split_time(frame, warmup, model=zm, columns=columns, warmup=True)
     return prediction(
         zm,
         frame,
@@ -206,6 +224,67 @@ def predict(
         steps=steps,
         parameters=parameters,
         initial_state=initial_state,
+        label=label or name,
+        hold=hold,
+        start=start,
+    )
+
+
+def score_horizons(
+    model: ModelLike,
+    data: pd.DataFrame | PathLike,
+    *,
+    horizons: Sequence[int | str] | str = "1,12,72,open",
+    baselines: bool = False,
+    warmup: str | None = None,
+    constants: Mapping[str, float] | None = None,
+    columns: PathLike | None = None,
+    label: str | None = None,
+    hold: str | None = None,
+):
+    """Score a model at several horizons at once, with baselines: ``rczone predict --horizons --baselines``.
+
+    Parameters
+    ----------
+    model : ZoneModel, str or path
+        A fitted model (a model fitted by ML for the k-step horizons).
+    data : DataFrame, str or path
+        As for :func:`fit`.
+    horizons : sequence or str
+        Steps ahead and ``"open"`` (open loop), e.g. ``[1, 12, 72, "open"]`` or ``"1,12,72,open"``.
+    baselines : bool
+        Score persistence and the ARX(2,2) model saved with the fitted model beside it.
+    warmup : str, optional
+        A duration (``"1d"``) or time: the data before it warm the filter up and are not scored.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+    columns : str or path, optional
+        A column map for ``data`` given as a file.
+    label : str, optional
+        The data's name in titles and the JSON.
+    hold : {"zoh", "foh"}, optional
+        Inputs between samples; default the one the model was fitted with.
+
+    Returns
+    -------
+    HorizonScores
+        ``summary()`` is what ``rczone predict --horizons`` prints, one row per horizon (RMSE,
+        MAE, bias and 2-sigma coverage).
+    """
+    from rczone.calibration.horizons import horizon_scores, parse_horizons
+
+    zm = as_model(model)
+    frame, name = frame_and_label(data, columns, zm)
+    frame = frame_from(frame)
+    start = split_time(frame, warmup, model=zm, columns=columns, warmup=True)
+    text = horizons if isinstance(horizons, str) else ",".join(str(h) for h in horizons)
+    return horizon_scores(
+        zm,
+        frame,
+        dict(constants) if constants else None,
+        horizons=parse_horizons(text),
+        baselines=baselines,
+        start=start,
         label=label or name,
         hold=hold,
     )
@@ -401,7 +480,10 @@ def select_models(
     columns: PathLike | None = None,
     hold: str = "zoh",
     bounds: Mapping[str, tuple[float, float]] | None = None,
+    free: Sequence[str] | None = None,
+    fixed: Mapping[str, float | None] | None = None,
     label: str | None = None,
+    holdout: str | float | None = None,
 ):
     """Fit candidate models to the same data by ML and choose one: ``rczone select`` in Python.
 
@@ -431,8 +513,15 @@ def select_models(
         Inputs between samples in every fit (``--hold``).
     bounds : mapping of str to (float, float), optional
         Search bounds (SI units) for the candidates that have the parameter (``--bounds``).
+    free : sequence of str, optional
+        ``"+NAME"`` entries added to every candidate's free set that has the parameter (``--free``).
+    fixed : mapping of str to float or None, optional
+        Parameters held at a value (None: the model's) in every candidate that has them (``--fix``).
     label : str, optional
         The data's name in titles and the JSON.
+    holdout : str or float, optional
+        Select on the data before this time or all but this last fraction, then score the selected
+        model on the rest (``--holdout``; :attr:`Selection.holdout`).
 
     Returns
     -------
@@ -449,23 +538,30 @@ def select_models(
         frame, name, source = data, str(data.attrs.get("name", "data")), ""
     else:
         frame, name, source = read_for_models(data, columns, zms), Path(str(data)).name, str(data)
-    sel = run(
-        zms,
-        frame,
-        dict(constants) if constants else None,
-        rule=criterion.strip().lower(),
-        forward=forward,
-        alpha=alpha,
+    settings = FitSettings(
+        method="ml",
+        free=free,
+        fixed=dict(fixed or {}),
+        bounds=dict(bounds or {}),
+        hold=hold,
         n_starts=n_starts,
         seed=seed,
         noise=noise,
-        hold=hold,
-        bounds=bounds,
+        constants=dict(constants or {}),
     )
-    args = fit_arguments(
-        sel, columns=columns, constants=constants, hold=hold, n_starts=n_starts, seed=seed, bounds=bounds
+    full, at = frame, None
+    if holdout is not None:  # a split needs the time axis
+        full = frame_from(frame)
+        at = split_time(full, holdout, model=zms[0], columns=columns)
+        frame = before(full, at)
+    sel = run(zms, frame, settings, rule=criterion.strip().lower(), forward=forward, alpha=alpha)
+    args = fit_arguments(sel, settings, columns=columns)
+    held = None
+    if at is not None:
+        held = score_held_out(sel.best.calibration.model, full, at, settings.constants, label or name)
+    return dataclasses.replace(
+        sel, data_label=label or name, source=source, noise=noise, fit_args=args, holdout=held
     )
-    return dataclasses.replace(sel, data_label=label or name, source=source, noise=noise, fit_args=args)
 
 
 def design_test(

@@ -16,8 +16,9 @@ import pandas as pd
 
 from rczone.calibration import Calibration, calibrate, predict
 from rczone.estimation import Dataset
+from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
-from rczone.workflow.settings import FitSettings
+from rczone.workflow.holdout import before, score_held_out
 
 
 def _quiet(_: str) -> None:
@@ -34,6 +35,7 @@ def fit_and_check(
     progress: Callable[[str], None] = _quiet,
     analyses: bool = True,
     data: Dataset | None = None,
+    holdout: float | None = None,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` with ``settings``, then (``settings.checks``) check the fit.
 
@@ -57,32 +59,32 @@ def fit_and_check(
     data : Dataset, optional
         The frame's data set with ``settings.constants`` when the caller has built it already
         (:func:`rczone.calibration.calibrate`).
+    holdout : float, optional
+        Where a held-out part of ``frame`` starts (:func:`rczone.workflow.holdout.split_time`): the
+        model is fitted and checked on the data before it and scored on the rest
+        (:attr:`Calibration.holdout`).
 
     Returns
     -------
     Calibration
     """
     progress(f"fitting {model.label} to {label} ({settings.method})")
+    full, frame = frame, before(frame, holdout)
     cal = calibrate(
         model,
         frame,
-        settings.method,
-        settings.free_for(model.network),
-        settings.optimizer,
-        settings.n_starts,
-        settings.seed,
-        constants=settings.constants or None,
+        settings,
         provenance={"data": label, "model": model.label},
-        noise=settings.noise,
-        sampler=settings.sampler,
-        hold=settings.hold,
-        bounds=settings.bounds or None,
-        fixed=settings.fixed,
         analyses=analyses,
         data=data,
     )
     if settings.checks or others:
         cal = check_fit(cal, frame, settings, others=others, progress=progress)
+    if holdout is not None:
+        progress("scoring the held-out data")
+        cal = dataclasses.replace(
+            cal, holdout=score_held_out(cal.model, full, holdout, settings.constants, label)
+        )
     return cal
 
 
@@ -129,19 +131,7 @@ def check_fit(
     validation = {}
     for name, f in (others or {}).items():
         progress(f"fitting {name} for comparison")
-        fits[name] = calibrate(
-            zm,
-            f,
-            settings.method,
-            settings.free_for(zm.network),
-            settings.optimizer,
-            constants=settings.constants or None,
-            noise=settings.noise,
-            sampler=settings.sampler,
-            hold=settings.hold,
-            bounds=settings.bounds or None,
-            fixed=settings.fixed,
-        ).result
+        fits[name] = calibrate(zm, f, settings).result
         ol = predict(zm, f, settings.constants or None)
         validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}
     checks = {

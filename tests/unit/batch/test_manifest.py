@@ -6,8 +6,8 @@ import pytest
 
 from rczone.batch.manifest import parse_manifest, read_manifest
 from rczone.errors import DataError
+from rczone.estimation.settings import FitSettings
 from rczone.workflow.datasource import BuiltinNight, TrendLog, VirtualNight
-from rczone.workflow.settings import FitSettings
 
 
 def parse(text, tmp_path):

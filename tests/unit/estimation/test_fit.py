@@ -49,7 +49,9 @@ def test_fit_result_to_dict_is_json_ready_and_complete() -> None:
 
 def test_multistart_keeps_every_start_and_reports_the_winner() -> None:
     data = data1()
-    res = fit(NET1, data, ["Cr", "R"], n_starts=4, rng=np.random.default_rng(42), uncertainty=False)
+    res = fit(
+        NET1, data, ["Cr", "R"], method="ls", n_starts=4, rng=np.random.default_rng(42), uncertainty=False
+    )
     assert len(res.starts) == 4 and res.search.n_local == 4 and res.search.strategy == "global"
     assert res.n_evals == res.search.n_sampled + sum(s.n_evals for s in res.starts)
     costs = [s.cost for s in res.starts]
@@ -67,7 +69,7 @@ def test_multistart_keeps_every_start_and_reports_the_winner() -> None:
 
 def test_fit_does_not_mutate_the_network() -> None:
     before = {k: (p.value, p.expr) for k, p in NET1.parameters.items()}
-    fit(NET1, data1(), ["Cr", "R"], start={"Cr": 3e6}, uncertainty=False)
+    fit(NET1, data1(), ["Cr", "R"], method="ls", start={"Cr": 3e6}, uncertainty=False)
     assert {k: (p.value, p.expr) for k, p in NET1.parameters.items()} == before
 
 
@@ -77,6 +79,7 @@ def test_estimate_at_a_bound_is_flagged() -> None:
         NET1,
         data1(),
         ["Cr", "R"],
+        method="ls",
         bounds={"R": (1e-3, 5e-3)},
         start={"R": 2e-3},
         optimizer="lbfgs",
@@ -105,7 +108,7 @@ def test_estimate_at_a_bound_is_flagged() -> None:
     ],
 )
 def test_bad_fit_inputs_raise(kwargs, err, match) -> None:
-    args = {"network": NET2, "data": data2(n=20), "free": ["Cr", "Rw"], **kwargs}
+    args = {"network": NET2, "data": data2(n=20), "free": ["Cr", "Rw"], "method": "ls", **kwargs}
     if isinstance(args["data"], str):
         args["data"] = data1(n=20)
     with pytest.raises(err, match=match):
@@ -116,7 +119,7 @@ def test_data_shape_mismatch_with_network_is_reported() -> None:
     d = data2(n=20)
     short = Dataset(d.t, d.u[:, :3], d.m, d.y, d.input_names[:3], d.flow_names, d.output_names)
     with pytest.raises(InputShapeError, match=r"data inputs \['To', 'Tsd', 'Ts'\] do not match"):
-        fit(NET2, short, ["Cr"])
+        fit(NET2, short, ["Cr"], method="ls")
 
 
 def test_map_prior_pulls_towards_construction_by_its_spread() -> None:
@@ -132,7 +135,7 @@ def test_map_prior_pulls_towards_construction_by_its_spread() -> None:
     data = Dataset(d.t, d.u, d.m, y, d.input_names, d.flow_names, d.output_names)
     kw = {"optimizer": "lbfgs", "uncertainty": False, "fixed": {"sigma_v": 0.02}}
     ml = fit(NET2, data, ["Rw"], method="ml", **kw).estimates["Rw"]
-    tight = fit(NET2, data, ["Rw"], method="map", prior_spread=1e-4, **kw).estimates["Rw"]
+    tight = fit(NET2, data, ["Rw"], method="map", options={"prior_spread": 1e-4}, **kw).estimates["Rw"]
     loose = fit(NET2, data, ["Rw"], method="map", **kw).estimates["Rw"]
     assert ml == pytest.approx(0.02, rel=0.03)
     assert tight == pytest.approx(0.01, rel=1e-3)
@@ -158,7 +161,7 @@ def test_map_mode_is_the_precision_weighted_mean_of_tempered_likelihood_and_prio
     w = min(1.0, float(np.median(np.diff(d.t))) / correlation_time)
     p_lik, p_prior = w / se_log**2, 1 / PRIOR_SPREAD**2
     expected = (p_lik * np.log(ml.estimates["Rw"]) + p_prior * np.log(0.01)) / (p_lik + p_prior)
-    mp = fit(NET2, data, ["Rw"], method="map", correlation_time_s=correlation_time, **kw)
+    mp = fit(NET2, data, ["Rw"], method="map", options={"correlation_time_s": correlation_time}, **kw)
     assert np.log(mp.estimates["Rw"]) == pytest.approx(expected, abs=0.1 * abs(expected - np.log(0.01)))
     if w < 0.1:  # tempered to the information of 5 samples: the prior holds the estimate back
         assert abs(np.log(mp.estimates["Rw"] / ml.estimates["Rw"])) > 0.2
@@ -167,7 +170,7 @@ def test_map_mode_is_the_precision_weighted_mean_of_tempered_likelihood_and_prio
 
 
 def test_the_reported_end_is_the_lowest_unless_one_tied_with_it_has_its_hessian() -> None:
-    from rczone.estimation.fit import COST_TIE, winning_end
+    from rczone.estimation.minimize import COST_TIE, winning_end
     from rczone.estimation.optimize import StartOutcome
 
     def end(cost: float, hessian: bool) -> StartOutcome:

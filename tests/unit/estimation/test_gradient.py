@@ -143,7 +143,7 @@ def test_fit_rmse_from_the_adjoint_filter_equals_the_general_filters(method: str
     """A 2-state likelihood fit takes its one-step RMSE from the adjoint kernel's forward pass: the same
     errors as the general compiled filter over the discrete matrices (missing samples, estimated x0)."""
     from rczone.estimation import Dataset, fit
-    from rczone.estimation.fit import rmse_of
+    from rczone.estimation.minimize import rmse_of
 
     data = data2(noise=0.05, rng=np.random.default_rng(3))
     y = data.y.copy()
@@ -163,7 +163,7 @@ def test_least_squares_fit_rmse_from_the_fused_kernel_equals_the_simulations(hol
     """A 2-state least-squares fit takes its open-loop RMSE from the fused value kernel's errors: the
     same as the general simulation's (missing samples, estimated x0)."""
     from rczone.estimation import Dataset, fit
-    from rczone.estimation.fit import rmse_of
+    from rczone.estimation.minimize import rmse_of
 
     data = data2(noise=0.05, rng=np.random.default_rng(4))
     y = data.y.copy()

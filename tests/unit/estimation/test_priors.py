@@ -137,7 +137,7 @@ def test_a_tight_declared_prior_holds_the_map_estimate_at_its_mean() -> None:
     free = ["Cr", "Rw", "sigma_v"]
     fixed = {"sigma_w_Ti": 1e-6}
     ml = fit(net, data, free, method="ml", fixed=fixed, n_starts=1)
-    mp = fit(net, data, free, method="map", fixed=fixed, n_starts=1, correlation_time_s=600.0)
+    mp = fit(net, data, free, method="map", fixed=fixed, n_starts=1, options={"correlation_time_s": 600.0})
     assert ml.estimates["Rw"] == pytest.approx(0.01, rel=0.02)
     assert mp.estimates["Rw"] == pytest.approx(0.013, rel=1e-3)
 

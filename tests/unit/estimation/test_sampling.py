@@ -11,8 +11,9 @@ from scipy import stats
 
 from rczone.errors import ParameterError
 from rczone.estimation import Objective, fit, make_spec
+from rczone.estimation.methods.mcmc import McmcOptions
 from rczone.estimation.posterior import ESS_MIN_PER_CHAIN
-from rczone.estimation.sampling import SamplerSettings, posterior_of
+from rczone.estimation.sampling import posterior_of
 from rczone.network import Parameter, Prior
 from rczone.simulation import simulate
 
@@ -68,14 +69,16 @@ def test_map_objective_is_refused() -> None:
 @pytest.mark.parametrize(
     ("settings", "match"),
     [
-        (SamplerSettings(draws=5), "draws"),
-        (SamplerSettings(chains=0), "chains"),
-        (SamplerSettings(tune=-1), "tune"),
+        ({"draws": 5}, "draws"),
+        ({"chains": 0}, "chains"),
+        ({"tune": -1}, "tune"),
+        ({"chains": True}, "chains"),
+        ({"draw": 10}, "did you mean 'draws'"),
     ],
 )
 def test_bad_sampler_settings_are_refused(settings, match) -> None:
     with pytest.raises(ParameterError, match=match):
-        settings.checked()
+        McmcOptions.of(settings, "mcmc")
 
 
 def test_short_run_has_the_shapes_and_json_and_refuses_to_call_itself_converged() -> None:
@@ -85,7 +88,7 @@ def test_short_run_has_the_shapes_and_json_and_refuses_to_call_itself_converged(
         ["Cr", "Rw", "sigma_v"],
         method="mcmc",
         fixed={"sigma_w_Ti": 1e-6},
-        sampler=SamplerSettings(draws=20, tune=30, chains=2),
+        options=McmcOptions(draws=20, tune=30, chains=2),
     )
     post = res.posterior
     assert post.draws.shape == (2, 20, 3)
@@ -123,7 +126,7 @@ def test_noise_level_posterior_matches_the_analytic_one() -> None:
         ["sigma_v"],
         method="mcmc",
         fixed={**spec_fixed, "x0_Ti": float(x0[0]), "x0_Tw": float(x0[1])},
-        sampler=SamplerSettings(draws=1000, tune=500, chains=4),
+        options=McmcOptions(draws=1000, tune=500, chains=4),
     )
     q = res.posterior.interval(0.9)[0]
     exact = np.sqrt(S / stats.chi2(n).ppf([0.95, 0.05]))

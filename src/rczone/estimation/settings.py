@@ -1,21 +1,25 @@
-"""One settings object for a fit, shared by ``rczone fit``, the Python API and the checks after a fit.
+"""One settings object for a fit, built once and carried whole to the method.
 
-The command line's options and :func:`rczone.fit`'s keywords build the same :class:`FitSettings`,
-so their defaults cannot drift apart (they did: the API defaulted to least squares while the
-command line defaulted to maximum likelihood).
+The command line's options, :func:`rczone.fit`'s keywords and a batch manifest build the same
+:class:`FitSettings`, so their defaults cannot drift apart (they did: the API defaulted to least
+squares while the command line defaulted to maximum likelihood). It travels unchanged through
+:func:`rczone.workflow.checks.fit_and_check`, :func:`rczone.calibration.calibrate` and
+:func:`rczone.estimation.fit`; the method's own options ride in it (:attr:`FitSettings.options`),
+so a new method's options pass no layer by name.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
-from rczone.errors import ParameterError
+from rczone.errors import ParameterError, did_you_mean
 from rczone.estimation.freeset import check_free_and_fixed, fixed_value, resolve_free
-from rczone.estimation.methods import DEFAULT_METHOD, method_of
+from rczone.estimation.methods import DEFAULT_METHOD, MethodOptions, method_of
 from rczone.estimation.optimize import OPTIMIZERS
-from rczone.estimation.sampling import SamplerSettings
 from rczone.simulation.simulate import HOLDS
 
 #: Process-noise placements of an ML or MAP fit (:func:`rczone.estimation.fit.default_free`).
@@ -29,7 +33,7 @@ class FitSettings:
     Attributes
     ----------
     method : str
-        A method of :data:`rczone.estimation.methods.REGISTRY`; default ``"ml"``.
+        A registered method (:func:`rczone.estimation.methods.method_names`); default ``"ml"``.
     free : tuple of str or None
         Free parameters; None for :func:`rczone.estimation.fit.default_free`. An entry written
         ``"+NAME"`` adds ``NAME`` (a noise level ``sigma_w_Te``, an initial state ``x0_Te``, a
@@ -50,9 +54,11 @@ class FitSettings:
         the command line makes them when it writes JSON or a report.
     profiles : bool
         With ``checks``: profile each R and C over a factor of 10 (single-output models).
-    sampler : SamplerSettings
-        Draws, warm-up and chains of a sampling method (``"mcmc"``); the seed is :attr:`seed`. The
-        defaults for any other method (settings a method would ignore are refused, not dropped).
+    options : MethodOptions
+        The method's own options (:attr:`rczone.estimation.methods.Method.options`: a MAP prior's
+        spread, a sampler's draws, warm-up and chains); given as an instance or a mapping, kept as
+        the method's options class with its defaults filled in. An option the method does not have
+        is refused, not dropped. A sampler's seed is :attr:`seed`.
     hold : {"zoh", "foh"}
         Inter-sample behaviour of the inputs: held (zero-order) or linear between samples
         (first-order hold; Franklin, Powell & Workman 1998, sec. 6.3.2). On coarse data the choice
@@ -80,7 +86,7 @@ class FitSettings:
     constants: Mapping[str, float] = field(default_factory=dict)
     checks: bool = True
     profiles: bool = True
-    sampler: SamplerSettings = field(default_factory=SamplerSettings)
+    options: MethodOptions | Mapping[str, Any] | None = None
     hold: str = "zoh"
     bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     fixed: Mapping[str, float | None] = field(default_factory=dict)
@@ -106,9 +112,7 @@ class FitSettings:
                 raise ParameterError(f"free must be a sequence of names, got the string {self.free!r}")
             object.__setattr__(self, "free", tuple(self.free) or None)
         object.__setattr__(self, "constants", dict(self.constants or {}))
-        if not isinstance(self.sampler, SamplerSettings):
-            raise ParameterError(f"sampler must be a SamplerSettings, got {type(self.sampler).__name__}")
-        self.sampler.checked()
+        object.__setattr__(self, "options", method_of(self.method).make_options(self.options))
         _check_search(self)
         if self.hold not in HOLDS:
             raise ParameterError(f"hold must be one of {', '.join(HOLDS)}, got {self.hold!r}")
@@ -119,6 +123,41 @@ class FitSettings:
         if pinned:
             raise ParameterError(f"bounds given for {pinned[0]!r}, which is fixed; drop one of the two")
 
+    @classmethod
+    def of(
+        cls, settings: FitSettings | None = None, /, *, exclude: tuple[str, ...] = (), **overrides: Any
+    ) -> FitSettings:
+        """``settings`` (default ``FitSettings()``) with ``overrides`` replacing its fields, checked.
+
+        Parameters
+        ----------
+        settings : FitSettings, optional
+        exclude : tuple of str
+            Field names the caller takes as its own arguments (refused as overrides).
+        **overrides
+            Fields of :class:`FitSettings`. Changing ``method`` without ``options`` takes the new
+            method's default options (another method's options would be refused).
+
+        Raises
+        ------
+        ParameterError
+            For ``settings`` of another type, or an override that is not a field.
+        """
+        if settings is not None and not isinstance(settings, cls):
+            raise ParameterError(f"settings must be a FitSettings, got {type(settings).__name__}")
+        base = settings or cls()
+        known = [f.name for f in dataclasses.fields(cls) if f.name not in exclude]
+        for name in overrides:
+            if name not in known:
+                raise ParameterError(
+                    f"unexpected keyword {name!r}; {did_you_mean(name, known)} (a FitSettings field)"
+                )
+        if not overrides:
+            return base
+        if "method" in overrides and "options" not in overrides and overrides["method"] != base.method:
+            overrides = {**overrides, "options": None}
+        return dataclasses.replace(base, **overrides)
+
     def free_for(self, network) -> tuple[str, ...]:
         """The free parameters of a fit of ``network`` (:func:`rczone.estimation.freeset.resolve_free`).
 
@@ -127,13 +166,11 @@ class FitSettings:
         network : RCNetwork
             The model's network.
         """
-        return resolve_free(
-            network, self.method, noise=self.noise, free=self.free, fixed=self.fixed, bounds=self.bounds
-        )
+        return resolve_free(network, self)
 
 
 def _check_search(s: FitSettings) -> None:
-    """Refuse search options the method would ignore: a sampler has no optimizer or starts, a search no draws."""
+    """Refuse search options a sampling method would ignore: it has no optimizer or starts."""
     if method_of(s.method).search == "sample":
         given = [
             f"{k} {v!r}"
@@ -145,11 +182,6 @@ def _check_search(s: FitSettings) -> None:
                 f"method {s.method!r} samples the posterior: {' and '.join(given)} would be ignored (its chains"
                 " start around one L-BFGS search); drop them, or choose the search with method 'ml'"
             )
-    elif s.sampler != SamplerSettings():
-        raise ParameterError(
-            f"method {s.method!r} does not sample: draws, tune and chains would be ignored; drop them, or"
-            " sample with method 'mcmc'"
-        )
 
 
 def _pair(name: str, bounds: object) -> tuple[float, float]:

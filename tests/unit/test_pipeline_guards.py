@@ -1,0 +1,114 @@
+"""The fit pipeline's shape, guarded: settings travel whole, and the API has what the command line has.
+
+* No function below the workflow (outside ``workflow/`` and ``cli/``) takes more than two
+  :class:`~rczone.estimation.settings.FitSettings` fields as separate parameters: a new setting
+  then passes no layer by name (the sampler's draws once passed through eight places). The few
+  exceptions are listed with their reason.
+* Every option of ``rczone fit``, ``select``, ``predict`` and ``diagnose`` has a keyword of the
+  matching Python function (python-control's ``kwargs_test`` idea), or is listed with its reason.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import inspect
+from pathlib import Path
+
+import pytest
+import typer
+
+import rczone
+from rczone.estimation.settings import FitSettings
+
+SRC = Path(rczone.__file__).resolve().parent
+FIELDS = {f.name for f in dataclasses.fields(FitSettings)}
+
+#: (module, function) -> why it takes settings fields one by one.
+SETTINGS_EXCEPTIONS = {
+    ("diagnostics/identifiability.py", "diagnose"): "a diagnosis, not a fit: free names the parameters whose"
+    " identifiability is asked, seed, hold and constants are its own; it builds one FitSettings for its quick fit",
+    ("estimation/parameters.py", "make_spec"): "builds the parameter spec from names and values already"
+    " resolved against a model (the settings' free set, the model's values merged into fixed)",
+    ("estimation/search.py", "global_search"): "the search algorithm itself, run on a bare cost in its tests;"
+    " the pipeline hands it the FitProblem's budget in one place (estimation.minimize.minimize_fit)",
+}
+
+
+def settings_fields_taken(root: Path = SRC) -> dict[tuple[str, str], list[str]]:
+    out = {}
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        if rel.split("/")[0] in ("workflow", "cli"):
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                a = node.args
+                hit = [x.arg for x in (*a.posonlyargs, *a.args, *a.kwonlyargs) if x.arg in FIELDS]
+                if len(hit) > 2:
+                    out[(rel, node.name)] = hit
+    return out
+
+
+def test_no_function_below_the_workflow_re_spells_the_fit_settings():
+    taken = settings_fields_taken()
+    unexplained = {k: v for k, v in taken.items() if k not in SETTINGS_EXCEPTIONS}
+    assert not unexplained, f"take a FitSettings instead of its fields one by one: {unexplained}"
+    stale = set(SETTINGS_EXCEPTIONS) - set(taken)
+    assert not stale, f"listed exceptions that no longer take the fields: {stale}"
+
+
+def test_the_guard_sees_a_function_that_re_spells_them(tmp_path):
+    """The scan is not blind: a module with such a function is found, one under workflow/ is not."""
+    for unit in ("estimation", "workflow"):
+        (tmp_path / unit).mkdir()
+        (tmp_path / unit / "bad.py").write_text("def f(x, method, seed, hold=1):\n    pass\n")
+    assert settings_fields_taken(tmp_path) == {("estimation/bad.py", "f"): ["method", "seed", "hold"]}
+
+
+#: command -> the Python functions that together take its options.
+API = {
+    "fit": ("fit",),
+    "select": ("select_models",),
+    "predict": ("predict", "score_horizons"),
+    "diagnose": ("diagnose",),
+}
+#: A command-line parameter's name -> the API keyword it is called there.
+RENAMED = {
+    "model_name": "model",
+    "model_file": "model",
+    "column_map": "columns",
+    "const": "constants",
+    "fix": "fixed",
+    "bound": "bounds",
+    "starts": "n_starts",
+    "option": "options",
+}
+#: What a command writes: the API returns the result, whose to_dict(), to_frame() and report do it.
+WRITTEN = {"json_out", "report_dir", "save_model", "out"}
+#: (command, parameter) -> why the API has no keyword of that name, and the keyword that does it.
+OPTION_EXCEPTIONS = {
+    ("fit", "draws"): ("options", "shorthand of options={'draws': N} (method mcmc's own option)"),
+    ("fit", "tune"): ("options", "shorthand of options={'tune': N} (method mcmc's own option)"),
+    ("fit", "chains"): ("options", "shorthand of options={'chains': N} (method mcmc's own option)"),
+}
+
+
+@pytest.mark.parametrize("command", sorted(API))
+def test_every_command_line_option_has_an_api_keyword(command):
+    from rczone.cli.main import app
+
+    click = typer.main.get_command(app).commands[command]
+    keywords = {k for fn in API[command] for k in inspect.signature(getattr(rczone, fn)).parameters}
+    missing = []
+    for param in click.params:
+        name = RENAMED.get(param.name, param.name)
+        if param.name in WRITTEN:
+            continue
+        if (command, param.name) in OPTION_EXCEPTIONS:
+            target, _why = OPTION_EXCEPTIONS[(command, param.name)]
+            assert target in keywords, (command, param.name, target)
+            continue
+        if name not in keywords:
+            missing.append(param.opts[0])
+    assert not missing, f"rczone {command} options without an API keyword: {missing}"
