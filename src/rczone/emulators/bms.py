@@ -88,6 +88,9 @@ def trend(run: Emulation, rng: np.random.Generator) -> pd.DataFrame:
         kw = f[f"Pel:{z}"].to_numpy() / 1000.0
         noisy = kw * (1.0 + POWER_NOISE_REL * rng.normal(0.0, 1.0, n))
         out[power_point(z)] = np.round(np.clip(noisy, 0.0, None) / POWER_QUANT_KW) * POWER_QUANT_KW
+    for c in f.columns:
+        if c.startswith("cmd:"):  # set points the test wrote, as the BMS logs its commands
+            out[f"{c[4:]} SP"] = _f(f[c].to_numpy())
     return pd.DataFrame(out)
 
 
