@@ -114,12 +114,20 @@ def surroundings(run: Emulation, zone: str) -> dict[str, float]:
     return {z: v / total for z, v in ua.items()} if total > 0 else {}
 
 
+def _supply(run: Emulation, zone: str, ts: str, m: str) -> list[str]:
+    """Column-map lines of a zone's supply: the first terminal's temperature, the flows summed."""
+    nodes = run.inlets[zone]
+    flows = [supply_points(n)[1] for n in nodes]
+    flow = f"column = {_s(flows[0])}" if len(flows) == 1 else f"expr = {_s(' + '.join(_q(c) for c in flows))}"
+    return [
+        f'{ts} = {{ column = {_s(supply_points(nodes[0])[0])}, unit = "degF" }}',
+        f'{m} = {{ {flow}, unit = "L/s" }}',
+    ]
+
+
 def column_map(run: Emulation, zone: str) -> str:
     """The column map (TOML) of conditioned ``zone`` for ``rczone fit`` (see the module notes)."""
     header = timezone_name(run.utc_offset_h)
-    nodes = run.inlets[zone]
-    t_pt = supply_points(nodes[0])[0]
-    flows = [supply_points(n)[1] for n in nodes]
     weights = surroundings(run, zone)
     lines = [
         f"# Column map of zone {zone} of the EnergyPlus {run.building} (weather {run.weather}),",
@@ -136,12 +144,7 @@ def column_map(run: Emulation, zone: str) -> str:
         "[columns]",
         f'Ti = {{ column = {_s(zone_point(zone))}, unit = "degF" }}',
         f'To = {{ column = {_s(OUTDOOR)}, unit = "degF" }}',
-        f'Ts = {{ column = {_s(t_pt)}, unit = "degF" }}',
-        (
-            f'm = {{ column = {_s(flows[0])}, unit = "L/s" }}'
-            if len(flows) == 1
-            else f'm = {{ expr = {_s(" + ".join(_q(c) for c in flows))}, unit = "L/s" }}'
-        ),
+        *_supply(run, zone, "Ts", "m"),
         f'Q = {{ column = {_s(power_point(zone))}, unit = "kW" }}',
     ]
     if weights:
@@ -151,6 +154,38 @@ def column_map(run: Emulation, zone: str) -> str:
         lines.append(f'Tsd = {{ expr = {_s(expr)}, unit = "degF" }}')
     else:  # no interzone surface: the surroundings are outdoors
         lines.append(f'Tsd = {{ expr = {_s("1 * " + _q(OUTDOOR))}, unit = "degF" }}')
+    return "\n".join(lines) + "\n"
+
+
+def floor_column_map(run: Emulation, floor: int) -> str:
+    """The column map (TOML) of the joint model of ``floor`` (``rczone models generate --from``)."""
+    from rczone.emulators.floor import alias
+
+    rooms = [z for z in run.conditioned if run.geometry.zone(z).floor == floor]
+    around = {n for z in rooms for n in run.geometry.neighbours(z)} - set(rooms)
+    lines = [
+        f"# Column map of floor {floor} of the EnergyPlus {run.building} for its joint model",
+        f"# (rczone models generate --from building.toml --floor {floor}), written by `rczone emulate`.",
+        f"name = {_s(f'{run.building} floor {floor}')}",
+        f"air_density = {AIR_DENSITY}",
+        "",
+        "[time]",
+        'column = "time"',
+        'format = "iso"',
+        f"timezone = {_s(timezone_name(run.utc_offset_h))}",
+        "",
+        "[columns]",
+        f'To = {{ column = {_s(OUTDOOR)}, unit = "degF" }}',
+    ]
+    for z in sorted(around):
+        lines.append(f'T{alias(z)} = {{ column = {_s(zone_point(z))}, unit = "degF" }}')
+    for z in rooms:
+        r = alias(z)
+        lines += [
+            f'T{r} = {{ column = {_s(zone_point(z))}, unit = "degF" }}',
+            *_supply(run, z, f"Ts{r}", f"m{r}"),
+            f'Q{r} = {{ column = {_s(power_point(z))}, unit = "kW" }}',
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -214,5 +249,7 @@ def export(run: Emulation, *, seed: int, test: str = "normal") -> TrendExport:
     files = {"trend.csv": trend(run, rng).to_csv(index=False, float_format="%.6g")}
     for z in run.conditioned:
         files[f"{file_stem(z)}.columns.toml"] = column_map(run, z)
+    for floor in sorted({run.geometry.zone(z).floor for z in run.conditioned}):
+        files[f"floor{floor}.columns.toml"] = floor_column_map(run, floor)
     files["building.toml"] = building_file(run, seed, test)
     return TrendExport(files)
