@@ -142,3 +142,26 @@ def test_a_failed_run_quotes_energyplus_severe_errors():
     em._objects = (*em._objects, IdfObject("Zone", ("Core_ZN",)))  # a second zone of that name
     with pytest.raises(EmulatorError, match=r"EnergyPlus failed \(office_small\): .*Core_ZN"):
         em.run()
+
+
+def test_the_plant_steps_energyplus_and_its_set_points_are_followed():
+    from rczone.emulators.plant import EnergyPlusPlant
+
+    plant = EnergyPlusPlant(
+        "office_small", "usa_il_chicago", zones=[ZONE], start="01-17", days=1, step_minutes=30
+    )
+    try:
+        first = plant.measure()
+        assert first["time"] == plant.dt and set(first) >= {"To", f"Ti_{ZONE}", f"m_{ZONE}", f"Ts_{ZONE}"}
+        with pytest.raises(EmulatorError, match="do not follow flow"):
+            plant.step({f"m_{ZONE}": 0.2})
+        fc = plant.forecast(7200.0, interval=1800.0)
+        assert fc["To"].shape == (5,) and abs(fc["To"][0] - first["To"]) < 1.5
+        ti = [plant.step({f"Tset_{ZONE}": 17.0 if k < 12 else 25.0})[f"Ti_{ZONE}"] for k in range(24)]
+        assert ti[-1] > 23.5 and ti[11] < 19.5 and ti[-1] - ti[11] > 4.0
+        k = plant.kpis()
+        assert k["energy_kWh"] > 0 and k["comfort_Kh"] >= 0 and k["peak_power_kW"] > 0
+    finally:
+        plant.close()
+    with pytest.raises(EmulatorError, match="closed"):
+        plant.measure()

@@ -252,7 +252,7 @@ class EnergyPlusEmulator:
         catalog.dataset()  # one line with the install command when the extra is missing
         from pyenergyplus.api import EnergyPlusAPI
 
-        from rczone.emulators.session import Session
+        from rczone.emulators.session import Session, Stop
 
         objects = idf.for_run(self._objects, self.start, self.last, int(3600 // self.step_s), report)
         with tempfile.TemporaryDirectory(prefix="rczone-energyplus-") as tmp:
@@ -261,9 +261,10 @@ class EnergyPlusEmulator:
             api = EnergyPlusAPI()
             session = Session(api, self.hvac, dict(actuators or {}), controller)
             code = session.run(["-d", str(folder), "-w", str(self._epw), str(folder / "in.idf")])
-            if session.error is not None:
+            stopped = isinstance(session.error, Stop)
+            if session.error is not None and not stopped:
                 raise session.error
-            if code != 0:
+            if code != 0 and not stopped:
                 raise EmulatorError(
                     f"EnergyPlus failed ({self.building}): {_severe(folder / 'eplusout.err')}"
                 )

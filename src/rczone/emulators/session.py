@@ -23,6 +23,10 @@ NODE_VARIABLES = (("Ts", "System Node Temperature"), ("m", "System Node Mass Flo
 OUTDOOR = ("Site Outdoor Air Drybulb Temperature", "Environment")
 
 
+class Stop(Exception):
+    """Raised by a controller to end the run early, cleanly (what was read so far is kept)."""
+
+
 class Session:
     """Runs one EnergyPlus state with the rczone callback (see the module notes).
 
@@ -103,6 +107,9 @@ class Session:
             return
         try:
             self._step(state)
+        except Stop:
+            self.api.runtime.stop_simulation(state)
+            self.error = Stop()
         except Exception as exc:  # kept and raised after the run: a callback cannot raise into C
             self._fail(state, exc)
 
