@@ -47,7 +47,7 @@ class Session:
         self.actuators = dict(actuators)
         self.controller = controller
         self.rows: list[dict[str, float]] = []
-        self.error: Exception | None = None
+        self.error: BaseException | None = None
         self._variables: dict[str, tuple[str, str]] = {"To": OUTDOOR}
         for z in self.zones:
             self._variables[f"Ti:{z.name}"] = (ZONE_VARIABLES[0][1], z.name)
@@ -110,7 +110,9 @@ class Session:
         except Stop:
             self.api.runtime.stop_simulation(state)
             self.error = Stop()
-        except Exception as exc:  # kept and raised after the run: a callback cannot raise into C
+        except (
+            BaseException
+        ) as exc:  # kept and raised after the run (Ctrl-C too): a callback cannot raise into C
             self._fail(state, exc)
 
     def _step(self, state) -> None:

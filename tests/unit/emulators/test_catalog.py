@@ -46,3 +46,14 @@ def test_a_period_leaving_the_weather_file_is_refused():
         catalog.check_period(h, dt.date(catalog.YEAR, 12, 30), 3, "x")
     with pytest.raises(ParameterError, match="--days"):
         catalog.check_period(h, dt.date(catalog.YEAR, 1, 1), 0, "x")
+
+
+def test_the_listing_names_buildings_zones_and_weather(capsys):
+    from rczone.cli.main import main
+
+    assert main(["emulate", "--list"]) == 0
+    out = capsys.readouterr().out
+    assert "office_medium: 18 zones (15 with air terminals)" in out and "usa_il_chicago" in out
+    assert main(["emulate", "--building", "office_medium", "--list"]) == 0
+    out = capsys.readouterr().out
+    assert "Perimeter_bot_ZN_1\n" in out and "FirstFloor_Plenum *" in out

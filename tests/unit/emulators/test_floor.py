@@ -81,3 +81,36 @@ def test_the_next_floor_sees_the_plenum_below():
 def test_a_bad_building_file_is_one_line(doc, floor, error, match):
     with pytest.raises(error, match=match):
         floor_model(doc, floor)
+
+
+def toml_of(doc) -> str:
+    lines = [f'building = "{doc["building"]}"']
+    for z in doc["zones"]:
+        lines += ["[[zones]]"] + [
+            f"{k} = {str(v).lower() if isinstance(v, bool) else repr(v)}" for k, v in z.items()
+        ]
+    for a in doc["adjacency"]:
+        lines += ["[[adjacency]]"] + [f"{k} = {v!r}" for k, v in a.items()]
+    return "\n".join(lines).replace("'", '"') + "\n"
+
+
+def test_models_generate_from_a_building_file(tmp_path, capsys):
+    from rczone.cli.main import main
+    from rczone.models import load_model
+
+    (tmp_path / "building.toml").write_text(toml_of(DOC))
+    out = tmp_path / "floor1.toml"
+    assert (
+        main(
+            ["models", "generate", "--from", str(tmp_path / "building.toml"), "--floor", "1", "-o", str(out)]
+        )
+        == 0
+    )
+    net = load_model(str(out)).network
+    assert net.outputs == ("TCore1", "TPer1") and net.parameters["Rw_Core1_Per1"].value == pytest.approx(
+        0.005
+    )
+    assert main(["models", "generate", "--from", str(tmp_path / "building.toml"), "--floor", "4"]) == 2
+    assert main(["models", "generate", "--floor", "1"]) == 2
+    err = [ln for ln in capsys.readouterr().err.strip().splitlines() if ln.startswith("error:")]
+    assert len(err) == 2 and "no conditioned zone" in err[0] and "--from building.toml" in err[1]
