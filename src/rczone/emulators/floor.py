@@ -31,8 +31,8 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
 
+from rczone.emulators.geometry import Zone
 from rczone.errors import DataError, ParameterError, did_you_mean
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 
@@ -47,23 +47,6 @@ H_MS = 9.1
 SPREAD = 100.0
 
 
-@dataclass(frozen=True)
-class FloorZone:
-    """A zone of ``building.toml``."""
-
-    name: str
-    floor: int
-    floor_area: float
-    volume: float
-    conditioned: bool
-    exterior_ua: float
-
-    @property
-    def alias(self) -> str:
-        """The name in the model (letters and digits)."""
-        return alias(self.name)
-
-
 def alias(zone: str) -> str:
     """A zone's name in a floor model: its letters and digits."""
     return re.sub(r"[^A-Za-z0-9]", "", zone)
@@ -76,7 +59,7 @@ def _number(d: Mapping, key: str, where: str, source: str) -> float:
     return float(v)
 
 
-def read_building(doc: Mapping, source: str) -> tuple[dict[str, FloorZone], list[tuple[str, str, float]]]:
+def read_building(doc: Mapping, source: str) -> tuple[dict[str, Zone], list[tuple[str, str, float]]]:
     """The zones and the adjacency ``(a, b, ua)`` of a parsed ``building.toml``; one line if malformed."""
     zones_doc, adj_doc = doc.get("zones"), doc.get("adjacency", [])
     if not isinstance(zones_doc, list) or not zones_doc or not isinstance(adj_doc, list):
@@ -91,9 +74,11 @@ def read_building(doc: Mapping, source: str) -> tuple[dict[str, FloorZone], list
         floor = z.get("floor")
         if isinstance(floor, bool) or not isinstance(floor, int):
             raise DataError(f"{source}: zone {z['name']!r} needs floor as a whole number")
-        args = (_number(z, k, f"zone {z['name']!r}", source) for k in ("floor_area", "volume", "exterior_ua"))
-        area, volume, ext = args
-        zones[z["name"]] = FloorZone(z["name"], floor, area, volume, bool(z.get("conditioned")), ext)
+        area, volume, ext = (
+            _number(z, k, f"zone {z['name']!r}", source) for k in ("floor_area", "volume", "exterior_ua")
+        )
+        window = _number(z, "window_area", f"zone {z['name']!r}", source) if "window_area" in z else 0.0
+        zones[z["name"]] = Zone(z["name"], floor, area, volume, bool(z.get("conditioned")), ext, window)
     adjacency = []
     for i, a in enumerate(adj_doc):
         if not isinstance(a, Mapping) or a.get("a") not in zones or a.get("b") not in zones:
@@ -106,8 +91,8 @@ def _p(name: str, kind: str, value: float, text: str) -> Parameter:
     return Parameter(name, kind, value, description=text, bounds=(value / SPREAD, value * SPREAD))
 
 
-def _room(z: FloorZone) -> tuple[list[Node], list[Resistor], list[Parameter]]:
-    r = z.alias
+def _room(z: Zone) -> tuple[list[Node], list[Resistor], list[Parameter]]:
+    r = alias(z.name)
     nodes = [
         Node(f"T{r}", f"Ci_{r}", f"{z.name}: air and furnishings"),
         Node(f"Tm{r}", f"Cm_{r}", f"{z.name}: mass"),
@@ -158,7 +143,7 @@ def floor_model(
         raise ParameterError(
             f"--floor {floor}: {source} has no conditioned zone there; {did_you_mean(str(floor), floors)}"
         )
-    if len({z.alias for z in rooms}) != len(rooms):
+    if len({alias(z.name) for z in rooms}) != len(rooms):
         raise DataError(f"{source}: two zones of floor {floor} have the same letters and digits")
     on_floor = {z.name for z in rooms}
     nodes, resistors, params, boundaries = [], [], [], ["To"]
@@ -169,12 +154,12 @@ def floor_model(
         if ua <= 0 or not ({a, b} & on_floor):
             continue
         if {a, b} <= on_floor:
-            x, y = zones[a].alias, zones[b].alias
+            x, y = alias(a), alias(b)
             resistors.append(Resistor(f"T{x}", f"T{y}", f"Rw_{x}_{y}"))
             params.append(_p(f"Rw_{x}_{y}", "resistance", 1.0 / ua, f"between {a} and {b} (1/UA)"))
             continue
         inside, other = (zones[a], zones[b]) if a in on_floor else (zones[b], zones[a])
-        x, y = inside.alias, other.alias
+        x, y = alias(inside.name), alias(other.name)
         if f"T{y}" not in boundaries:
             boundaries.append(f"T{y}")
         resistors.append(Resistor(f"T{x}", f"T{y}", f"Rb_{x}_{y}"))
@@ -186,9 +171,12 @@ def floor_model(
         boundaries,
         resistors,
         params,
-        heat_inputs=[HeatInput(f"Q{z.alias}", {f"T{z.alias}": 1.0}) for z in rooms],
-        supply_air=[SupplyAir(f"T{z.alias}", flow=f"m{z.alias}", temperature=f"Ts{z.alias}") for z in rooms],
-        outputs=[f"T{z.alias}" for z in rooms],
+        heat_inputs=[HeatInput(f"Q{alias(z.name)}", {f"T{alias(z.name)}": 1.0}) for z in rooms],
+        supply_air=[
+            SupplyAir(f"T{alias(z.name)}", flow=f"m{alias(z.name)}", temperature=f"Ts{alias(z.name)}")
+            for z in rooms
+        ],
+        outputs=[f"T{alias(z.name)}" for z in rooms],
         description=f"floor {floor} of {doc.get('building', 'a building')}: {len(rooms)} zones, from {source}",
     )
 
