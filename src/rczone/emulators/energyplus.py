@@ -41,14 +41,11 @@ import pandas as pd
 
 from rczone.emulators import catalog, idf
 from rczone.emulators.geometry import Geometry, read_eio
-from rczone.errors import EmulatorError, ParameterError
+from rczone.emulators.session import Session, Stop
+from rczone.errors import EmulatorError, ParameterError, did_you_mean
 
 #: Zone time steps an hour that a trend may be sampled at (EnergyPlus allows divisors of 60).
 STEPS_PER_HOUR = (1, 2, 3, 4, 5, 6, 10, 12, 15, 20, 30, 60)
-#: EnergyPlus's kind of simulation for a weather-file run period (not sizing, not design days).
-RUN_PERIOD_WEATHER = 3
-#: Meters read each step (J over the step).
-METERS = ("Electricity:HVAC", "NaturalGas:HVAC")
 #: Most severe errors quoted from eplusout.err.
 MAX_QUOTED = 3
 
@@ -206,8 +203,6 @@ class EnergyPlusEmulator:
 
     def zone(self, name: str) -> str:
         """The zone named ``name`` (any case), or one line naming the close ones."""
-        from rczone.errors import did_you_mean
-
         for z in self.zone_names:
             if z.lower() == name.lower():
                 return z
@@ -251,8 +246,6 @@ class EnergyPlusEmulator:
         self._ran = True
         catalog.dataset()  # one line with the install command when the extra is missing
         from pyenergyplus.api import EnergyPlusAPI
-
-        from rczone.emulators.session import Session, Stop
 
         objects = idf.for_run(self._objects, self.start, self.last, int(3600 // self.step_s), report)
         with tempfile.TemporaryDirectory(prefix="rczone-energyplus-") as tmp:

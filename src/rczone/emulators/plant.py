@@ -38,8 +38,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from rczone.emulators.energyplus import METERS, Actuator, EnergyPlusEmulator
-from rczone.emulators.session import Stop
+from rczone.emulators.catalog import YEAR
+from rczone.emulators.energyplus import Actuator, EnergyPlusEmulator
+from rczone.emulators.session import METERS, Stop
 from rczone.errors import EmulatorError, ParameterError
 from rczone.virtual.sensors import sense_flow, sense_temperature
 
@@ -282,7 +283,7 @@ def _hourly_outdoor(em: EnergyPlusEmulator) -> tuple[np.ndarray, np.ndarray]:
     rows = [ln.split(",") for ln in lines if ln.count(",") > 6]
     t = np.array(
         [
-            (dt.date(2017, int(r[1]), int(r[2])).timetuple().tm_yday - 1) * 86400.0 + int(r[3]) * 3600.0
+            (dt.date(YEAR, int(r[1]), int(r[2])).timetuple().tm_yday - 1) * 86400.0 + int(r[3]) * 3600.0
             for r in rows
         ]
     )

@@ -21,6 +21,10 @@ ZONE_VARIABLES = (("Ti", "Zone Mean Air Temperature"),)
 GAIN_VARIABLES = ("Zone Lights Electricity Rate", "Zone Electric Equipment Electricity Rate")
 NODE_VARIABLES = (("Ts", "System Node Temperature"), ("m", "System Node Mass Flow Rate"))
 OUTDOOR = ("Site Outdoor Air Drybulb Temperature", "Environment")
+#: Meters read each step (J over the step, turned into W).
+METERS = ("Electricity:HVAC", "NaturalGas:HVAC")
+#: EnergyPlus's kind of simulation for a weather-file run period (not sizing, not design days).
+RUN_PERIOD_WEATHER = 3
 
 
 class Stop(Exception):
@@ -89,8 +93,6 @@ class Session:
             z: [h for h in (ex.get_variable_handle(state, *p) for p in pairs) if h >= 0]
             for z, pairs in self._gains.items()
         }
-        from rczone.emulators.energyplus import METERS
-
         self._meters = {m: ex.get_meter_handle(state, m) for m in METERS}
         for label, act in self.actuators.items():
             h = ex.get_actuator_handle(state, act.component, act.control, act.key)
@@ -121,10 +123,8 @@ class Session:
             return
         if self._handles is None:
             self._lookup(state)
-        if ex.warmup_flag(state) or ex.kind_of_sim(state) != 3:
+        if ex.warmup_flag(state) or ex.kind_of_sim(state) != RUN_PERIOD_WEATHER:
             return
-        from rczone.emulators.energyplus import METERS
-
         t = (ex.day_of_year(state) - 1) * 86400.0 + round(ex.current_time(state) * 3600.0)
         row = {"t": t}
         row.update({k: ex.get_variable_value(state, h) for k, h in self._handles.items()})
