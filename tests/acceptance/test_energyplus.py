@@ -56,6 +56,26 @@ def test_the_trend_is_the_truth_with_the_documented_sensor_errors(run):
     assert again == export(run, seed=3).files["trend.csv"] != export(run, seed=4).files["trend.csv"]
 
 
+def test_the_column_map_gives_the_paper_inputs_in_si(run, tmp_path):
+    from rczone import load_data
+    from rczone.emulators.bms import surroundings
+
+    for name, text in export(run, seed=5).files.items():
+        (tmp_path / name).write_text(text)
+    data = load_data(tmp_path / "trend.csv", columns=tmp_path / f"{ZONE}.columns.toml", model="second-order")
+    truth = run.frame
+    node = run.inlets[ZONE][0]
+    np.testing.assert_allclose(data["Ti"], truth[f"Ti:{ZONE}"], atol=0.3)
+    np.testing.assert_allclose(data["To"], truth["To"], atol=0.3)
+    np.testing.assert_allclose(data["Ts"], truth[f"Ts:{node}"], atol=0.3)
+    np.testing.assert_allclose(data["m"], truth[f"m:{node}"], atol=0.05)  # L/s at 1.2 kg/m3 -> kg/s
+    np.testing.assert_allclose(data["Q"], truth[f"Pel:{ZONE}"], rtol=0.05, atol=10.0)  # kW -> W
+    weights = surroundings(run, ZONE)
+    assert sum(weights.values()) == pytest.approx(1.0)
+    tsd = sum(w * truth[f"Ti:{z}"] for z, w in weights.items())
+    np.testing.assert_allclose(data["Tsd"], tsd, atol=0.3)
+
+
 def test_rczone_fit_runs_on_the_export_as_it_is(run, tmp_path):
     for name, text in export(run, seed=0).files.items():
         (tmp_path / name).write_text(text)
@@ -77,8 +97,7 @@ def test_rczone_fit_runs_on_the_export_as_it_is(run, tmp_path):
     )
     assert rc in (0, 3)
     res = json.loads(out.read_text())
-    assert res["n_samples"] == 2 * 96 if "n_samples" in res else True
-    assert set(res["estimates"]) >= {"Cr", "Rwin"} if "estimates" in res else "parameters" in res
+    assert res["open_loop_rmse_K"] < 2.0  # the zone swings 5 K between night setback and day
 
 
 def test_the_forced_test_is_followed_by_the_thermostat(tmp_path):
