@@ -124,7 +124,7 @@ def test_the_forced_test_is_followed_by_the_thermostat(tmp_path):
     trend = pd.read_csv(tmp_path / "trend.csv")
     sp = (trend[f"{ZONE} heating SP"] - 32) / 1.8
     ti = (trend[zone_point(ZONE)] - 32) / 1.8
-    assert set(np.round(sp.unique(), 1)) == {18.0, 25.0}
+    assert sp.min() == pytest.approx(18.0) and sp.max() == pytest.approx(25.0)
     # an hour after a change, the zone is warmer under the high set points than under the low ones
     settled = sp == sp.shift(4)
     high, low = ti[settled & (sp > 20)].mean(), ti[settled & (sp < 20)].mean()

@@ -22,9 +22,7 @@ def emulate(
     start: Annotated[str, typer.Option("--start", help="First day, MM-DD.")] = "01-15",
     days: Annotated[int, typer.Option("--days", help="Whole days to run.")] = 2,
     step: Annotated[int, typer.Option("--step", help="Zone time step and trend interval, minutes.")] = 5,
-    seed: Annotated[
-        int, typer.Option("--seed", help="Sensor noise (and the forced test's design).", min=0)
-    ] = 0,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the sensor noise.", min=0)] = 0,
     test: Annotated[
         str,
         typer.Option(

@@ -122,6 +122,18 @@ def read_header(path: Path) -> WeatherHeader:
     )
 
 
+def outdoor_temperatures(path: Path) -> tuple:
+    """The EPW file's hourly dry-bulb temperatures: (s since 1 January at the end of each hour, degC)."""
+    import numpy as np
+
+    rows = [ln.split(",") for ln in path.read_text(encoding="latin-1").splitlines()[8:] if ln.count(",") > 6]
+    t = [
+        (dt.date(YEAR, int(r[1]), int(r[2])).timetuple().tm_yday - 1) * 86400.0 + int(r[3]) * 3600.0
+        for r in rows
+    ]
+    return np.array(t), np.array([float(r[6]) for r in rows])
+
+
 def parse_start(text: str) -> dt.date:
     """A start date ``MM-DD`` (in :data:`YEAR`), or one line saying what is wrong."""
     m = re.fullmatch(r"(\d{1,2})-(\d{1,2})", text.strip())

@@ -1,21 +1,28 @@
-"""A forced-response test in EnergyPlus: the zone thermostat driven by a pseudo-random sequence.
+"""A forced-response test in EnergyPlus: zone thermostats driven by the schedule ``rczone design`` makes.
 
 What EnergyPlus honours was measured on the medium office (VAV with reheat, docs/energyplus.md):
 the ``Zone Temperature Control`` actuators (heating and cooling set points of a zone) are
 followed by the terminal, which swings from its minimum flow with full reheat to its cooling
-flow at the AHU's supply temperature; the ``System Node Setpoint`` actuators on the terminal's
-outlet node (``Mass Flow Rate Maximum/Minimum Available Setpoint``) are not: the terminal sets
-its own outlet flow every iteration, and the flow stayed at its minimum whatever was asked. The
-test therefore acts on the set points, as a supervisory BMS would: each driven zone follows a
-pseudo-random binary sequence between a low and a high set point (Bacher & Madsen's PRBS
-experiments [1]_), each level held a whole number of :data:`HOLD_S` periods, drawn from the seed,
-with a dead band of :data:`DEADBAND` K between the heating and cooling set points. The supply
-flow and temperature that result are what the BMS logs, and what a fit uses.
+flow; the ``System Node Setpoint`` actuators on the terminal's nodes (flow limits, discharge
+temperature) are not: the terminal sets its own flow and reheat every HVAC iteration. The test
+therefore acts on the set points, as a supervisory BMS would.
+
+The schedule is designed by :func:`rczone.diagnostics.design.design_test` (D-optimal, coordinate
+exchange) on the paper's second-order zone model [1]_ closed by its thermostat: the HVAC is a
+supply element ``Kt (Tset - Ti)`` (W) with the gain :data:`THERMOSTAT_GAIN` W/K, so that the set
+point ``Tset`` is an input a test can drive, between :data:`SETPOINTS`, held at least
+:data:`HOLD_S`, with the outdoor temperature at the weather file's mean over the test, the
+surroundings at 21 degC and the paper's 50 W gain. Under a thermostat the outdoor resistance
+``Rwin`` is not identifiable beside the walls' (the design says so), so the design aims at
+:data:`FREE`. Several zones get the same schedule shifted in time
+by a share of its length each, so that neighbours are not driven in step.
 
 References
 ----------
-.. [1] P. Bacher, H. Madsen, "Identifying suitable models for the heat dynamics of buildings",
-   Energy and Buildings 43 (2011) 1511-1522, section 2 (PRBS heat inputs).
+.. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal
+   models of zones in multi-zone buildings", IEEE CDC 2012, eq. (4).
+.. [2] E. Walter, L. Pronzato, *Identification of Parametric Models from Experimental Data*,
+   Springer, 1997, ch. 6 (D-optimal design).
 """
 
 from __future__ import annotations
@@ -24,29 +31,62 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from rczone.emulators.catalog import outdoor_temperatures
 from rczone.emulators.energyplus import Actuator, Emulation, EnergyPlusEmulator
 from rczone.errors import ParameterError
 
-#: Low and high set points of the sequence, degC.
-LEVELS = (18.0, 25.0)
-#: Shortest hold, s, and the most holds a level keeps.
+#: Low and high set point, degC; the zone's allowed band during the test, degC.
+SETPOINTS = (18.0, 25.0)
+BAND = (15.0, 28.0)
+#: Shortest hold of a set point, s; levels of the design's grid.
 HOLD_S = 3600.0
-MAX_HOLDS = 3
+LEVELS = 3
+#: Thermostat gain of the design model, W/K; the parameters the design aims at.
+THERMOSTAT_GAIN = 300.0
+FREE = ("Cr", "Cw", "R1", "R2")
 #: Cooling set point above the heating set point, K.
 DEADBAND = 1.0
+#: Longest forced test, days (rczone.diagnostics.design.MAX_DURATION_S).
+MAX_DAYS = 7
 
 
-def prbs(n_steps: int, step_s: float, rng: np.random.Generator) -> np.ndarray:
-    """Levels (0 or 1) of a random binary sequence with holds of 1 to :data:`MAX_HOLDS` hours."""
-    per_hold = max(1, round(HOLD_S / step_s))
-    out = np.empty(n_steps, dtype=int)
-    i, level = 0, int(rng.integers(2))
-    while i < n_steps:
-        k = per_hold * int(rng.integers(1, MAX_HOLDS + 1))
-        out[i : i + k] = level
-        i += k
-        level = 1 - level
-    return out
+def thermostat_model():
+    """The paper's second-order zone closed by its thermostat (see the module notes)."""
+    from rczone.models.paper import second_order
+    from rczone.network import RCNetwork, SupplyAir
+
+    net = second_order()
+    return RCNetwork(
+        f"{net.name}+thermostat",
+        net.nodes,
+        net.boundaries,
+        net.resistors,
+        net.parameters,
+        heat_inputs=net.heat_inputs,
+        supply_air=[SupplyAir(net.outputs[0], flow="Kt", temperature="Tset", cp=1.0)],
+        outputs=net.outputs,
+        description="second-order zone under a proportional thermostat Kt (Tset - Ti)",
+    )
+
+
+def design_setpoints(em: EnergyPlusEmulator) -> np.ndarray:
+    """The designed set point at every zone time step of ``em``'s run (degC)."""
+    from rczone.diagnostics.design import DesignLimits, design_test
+
+    t0 = (em.start.timetuple().tm_yday - 1) * 86400.0
+    duration = em.days * 86400.0
+    tw, to = outdoor_temperatures(em._epw)
+    inside = (tw > t0) & (tw <= t0 + duration)
+    res = design_test(
+        thermostat_model(),
+        FREE,
+        duration_s=duration,
+        limits=DesignLimits({"Tset": SETPOINTS}, band=BAND, min_hold_s=HOLD_S, levels={"Tset": LEVELS}),
+        conditions={"To": float(to[inside].mean()), "Tsd": 21.0, "Q": 50.0, "Kt": THERMOSTAT_GAIN},
+    )
+    t = em.step_s * np.arange(round(duration / em.step_s) + 1)
+    k = np.searchsorted(res.schedule["start_s"].to_numpy(), t, side="right") - 1
+    return res.schedule["Tset"].to_numpy()[np.clip(k, 0, len(res.schedule) - 1)]
 
 
 def _zones(em: EnergyPlusEmulator, zones: str | Sequence[str] | None) -> list[str]:
@@ -63,16 +103,20 @@ def _zones(em: EnergyPlusEmulator, zones: str | Sequence[str] | None) -> list[st
     return out
 
 
-def forced_run(em: EnergyPlusEmulator, zones: str | Sequence[str] | None, *, seed: int) -> Emulation:
-    """Run ``em`` with ``zones`` (default: the first conditioned zone) driven by the sequence.
+def forced_run(em: EnergyPlusEmulator, zones: str | Sequence[str] | None) -> Emulation:
+    """Run ``em`` with ``zones`` (default: the first conditioned zone) following the designed set points.
 
-    Each zone draws its own sequence from ``seed``; the set points are in the run's frame as
-    ``cmd:<zone> heating`` and ``cmd:<zone> cooling`` (degC).
+    The set points are in the run's frame as ``cmd:<zone> heating`` and ``cmd:<zone> cooling`` (degC).
     """
     driven = _zones(em, zones)
-    rng = np.random.default_rng(seed)
-    n = round(em.days * 86400.0 / em.step_s) + 1
-    levels = {z: prbs(n, em.step_s, rng) for z in driven}
+    if em.days > MAX_DAYS:
+        raise ParameterError(
+            f"a forced test lasts at most {MAX_DAYS} days (the design's limit); run fewer --days"
+        )
+    base = design_setpoints(em)
+    n = len(base)
+    shift = max(1, round(HOLD_S / em.step_s))
+    schedules = {z: np.roll(base, i * max(shift, n // len(driven))) for i, z in enumerate(driven)}
     acts = {}
     for z in driven:
         acts[f"{z} heating"] = Actuator("Zone Temperature Control", "Heating Setpoint", z)
@@ -83,8 +127,7 @@ def forced_run(em: EnergyPlusEmulator, zones: str | Sequence[str] | None, *, see
         k = min(round((t - t0) / em.step_s), n - 1)
         out = {}
         for z in driven:
-            sp = LEVELS[levels[z][k]]
-            out[f"{z} heating"], out[f"{z} cooling"] = sp, sp + DEADBAND
+            out[f"{z} heating"], out[f"{z} cooling"] = schedules[z][k], schedules[z][k] + DEADBAND
         return out
 
     return em.run(controller, acts)

@@ -38,7 +38,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from rczone.emulators.catalog import YEAR
+from rczone.emulators.catalog import outdoor_temperatures
 from rczone.emulators.energyplus import Actuator, EnergyPlusEmulator
 from rczone.emulators.session import METERS, Stop
 from rczone.errors import EmulatorError, ParameterError
@@ -97,7 +97,7 @@ class EnergyPlusPlant:
         self._now: dict[str, float] | None = None
         self._thread: threading.Thread | None = None
         self._closed = False
-        self._weather = _hourly_outdoor(self._em)
+        self._weather = outdoor_temperatures(self._em._epw)
 
     # --- the EnergyPlus side (worker thread) ---------------------------------------------------
 
@@ -275,16 +275,3 @@ class EnergyPlusPlant:
                     pass
             self._thread.join()
         self._closed = True
-
-
-def _hourly_outdoor(em: EnergyPlusEmulator) -> tuple[np.ndarray, np.ndarray]:
-    """The weather file's dry-bulb temperature (hour-ending stamps, s since 1 January) for forecasts."""
-    lines = em._epw.read_text(encoding="latin-1").splitlines()[8:]
-    rows = [ln.split(",") for ln in lines if ln.count(",") > 6]
-    t = np.array(
-        [
-            (dt.date(YEAR, int(r[1]), int(r[2])).timetuple().tm_yday - 1) * 86400.0 + int(r[3]) * 3600.0
-            for r in rows
-        ]
-    )
-    return t, np.array([float(r[6]) for r in rows])

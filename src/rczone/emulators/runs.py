@@ -78,7 +78,7 @@ def emulate_to_folder(
     start, days, step_minutes
         As :class:`~rczone.emulators.energyplus.EnergyPlusEmulator`.
     seed : int
-        Seed of the sensor noise (and of the forced test's design).
+        Seed of the sensor noise.
     test : {"normal", "forced"}
     zones : str, optional
         The zones a forced test drives, comma-separated (default: the first conditioned zone).
@@ -97,7 +97,7 @@ def emulate_to_folder(
     if test == "forced":
         from rczone.emulators.forced import forced_run
 
-        run = forced_run(em, zones, seed=seed)
+        run = forced_run(em, zones)
     else:
         if zones:
             raise ParameterError("--zones is for --test forced (the zones the test drives)")
