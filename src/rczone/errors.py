@@ -36,6 +36,11 @@ class DataError(RczoneError, ValueError):
     timestamps, a malformed column map or manifest...)."""
 
 
+class EmulatorError(RczoneError, RuntimeError):
+    """An emulator (EnergyPlus) cannot run as asked: a missing extra, an actuator it refuses, a
+    failed simulation (its own severe errors quoted)."""
+
+
 class ModelFileError(DataError):
     """A model file (TOML written by a person, or JSON saved by rczone) cannot be used as given."""
 

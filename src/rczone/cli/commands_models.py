@@ -71,9 +71,9 @@ def show(
 @models_app.command("generate")
 def generate(
     rooms: Annotated[
-        str,
+        str | None,
         typer.Option("--rooms", help="Number of rooms (named 1..N) or their names, comma-separated (a,b,c)."),
-    ],
+    ] = None,
     wall: Annotated[
         list[str] | None,
         typer.Option("--wall", help="Two rooms that share a wall, A-B (repeat for each wall)."),
@@ -95,11 +95,36 @@ def generate(
     out: Annotated[
         Path | None, typer.Option("--out", "-o", help="Write the model file here instead of printing it.")
     ] = None,
+    from_: Annotated[
+        Path | None,
+        typer.Option("--from", help="A building.toml of `rczone emulate`: the joint model of one --floor."),
+    ] = None,
+    floor: Annotated[
+        int | None, typer.Option("--floor", help="With --from: the floor (1 is the lowest).")
+    ] = None,
 ) -> None:
     """Generate a multi-zone model file (TOML): rooms, the walls between them and the heating circuits."""
     from rczone.errors import ParameterError
     from rczone.models import model_to_toml
     from rczone.models.multizone import multizone
+
+    if from_ is not None or floor is not None:
+        from rczone.emulators.floor import floor_model_file
+
+        if from_ is None or floor is None or rooms or wall or circuit:
+            raise ParameterError(
+                "give --from building.toml with --floor N (and no --rooms, --wall, --circuit)"
+            )
+        net = floor_model_file(from_, floor)
+        _emit(
+            model_to_toml(
+                net, header=f"rczone model file, generated: {net.description}\nValues in SI units."
+            ),
+            out,
+        )
+        return
+    if rooms is None:
+        raise ParameterError("give --rooms (or --from building.toml --floor N)")
 
     def names(text: str, what: str) -> list[str]:
         out = [p.strip() for p in text.split(",")]

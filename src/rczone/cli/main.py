@@ -57,6 +57,7 @@ from rczone.cli import (  # noqa: E402, F401
     commands_control,
     commands_demo,
     commands_diagnose,
+    commands_emulate,
     commands_fit,
     commands_methods,
     commands_models,
