@@ -53,6 +53,7 @@ from typing import Any
 
 import numpy as np
 
+from rczone.control.constraints import ZoneConstraints
 from rczone.control.disturbance import Disturbance
 from rczone.control.energy import zone_power
 from rczone.control.model import ControlModel
@@ -140,11 +141,22 @@ class MPCZoneController:
     season : str
         For the outdoor forecast's diurnal curve.
     price : {"flat", "tou", "dr"}
+    constraints : ZoneConstraints, optional
+        The zone's limits, handed to the MPC as per-step flow bounds (default: those of ``config``).
     """
 
-    def __init__(self, mpc: MPC, config: ControllerConfig, season: str, price: str = "flat") -> None:
+    def __init__(
+        self,
+        mpc: MPC,
+        config: ControllerConfig,
+        season: str,
+        price: str = "flat",
+        *,
+        constraints: ZoneConstraints | None = None,
+    ) -> None:
         self.mpc = mpc
         self.cfg = config
+        self.constraints = constraints or ZoneConstraints.from_config(config)
         self.season = season
         self.price = price
         self.readings: dict[str, float] = {}
@@ -169,8 +181,15 @@ class MPCZoneController:
         lower, upper, _ = band(self.cfg, times)
         used = set(self.mpc.cm.input_names)
         inputs = {k: v for k, v in {"To": to, **held}.items() if k in used}
+        bounds = self.constraints.steps(t, s.dt, s.horizon)
         return Forecast(
-            inputs, np.full(times.size, t_ahu), lower, upper, forecast_price(self.price, t, times)
+            inputs,
+            np.full(times.size, t_ahu),
+            lower,
+            upper,
+            forecast_price(self.price, t, times),
+            m_min=bounds.m_min,
+            m_max=bounds.m_max,
         )
 
     def step(self, t: float, t_sensed: float, t_ahu: float) -> tuple[float, float]:
@@ -194,7 +213,8 @@ class ClosedLoopResult:
         ``comfort_Kh``, ``energy_kWh`` (and its parts), ``peak_flow_kg_s``,
         ``max_discharge_degC``, ``prediction_rmse_K``, ``solve_time_s`` (mean, max) or None.
     setup : mapping
-        Model, scenario, days, seed, controller, disturbance.
+        Model, scenario, days, seed, controller, disturbance, and ``constraints``: the zone's
+        limits the controller ran under (:class:`ZoneConstraints`, as a mapping).
     t : ndarray, shape (N,)
         s from the first 6 pm, one per minute (scored part).
     series : mapping of str to ndarray, shape (N,)
@@ -217,7 +237,8 @@ class ClosedLoopResult:
             f"  comfort      {s['comfort_Kh']:.2f} K h outside the band (occupied hours)",
             f"  energy       {s['energy_kWh']:.2f} kWh (reheat {s['reheat_kWh']:.2f}, cooling "
             f"{s['cooling_kWh']:.2f}, fan {s['fan_kWh']:.2f})",
-            f"  peak flow    {s['peak_flow_kg_s']:.3f} kg/s",
+            f"  peak flow    {s['peak_flow_kg_s']:.3f} kg/s; {s['constraint_violations']} minute(s) outside"
+            " the zone's limits",
             f"  prediction   {s['prediction_rmse_K']:.3f} K RMSE (10 min ahead)",
         ]
         if "event_energy_kWh" in s:
@@ -286,13 +307,14 @@ def closed_loop_test(
     bld = build_building()
     duration = round(days * DAY / CONTROL_DT) * CONTROL_DT
     cfg = thermostat_configs(bld, season, np.random.default_rng(seed), warmup=WARMUP, daily=True)["target"]
+    limits = ZoneConstraints.from_config(cfg)
     ctrl = None
     if comfort_band == "tight":
         cfg = tighten(cfg)
         ctrl = VAVController(cfg, -WARMUP)  # the thermostat, on the tight band
     if controller == "mpc":
         mpc = MPC(model, settings, disturbance=Disturbance("heat") if disturbance else None)
-        ctrl = MPCZoneController(mpc, cfg, season, price)
+        ctrl = MPCZoneController(mpc, cfg, season, price, constraints=limits)
     r = run(
         bld,
         season,
@@ -303,6 +325,7 @@ def closed_loop_test(
         daily=True,
     )
     result = _score(r, bld, cfg, model, price)
+    result[0]["constraint_violations"] = limits.violations(result[1], result[2]["m"], result[2]["Ts"])
     setup = {
         "model": model.label,
         "scenario": season,
@@ -312,6 +335,7 @@ def closed_loop_test(
         "disturbance_estimate": bool(disturbance) if controller == "mpc" else None,
         "price": price,
         "band": comfort_band,
+        "constraints": limits.to_dict(),
     }
     solve = None
     if isinstance(ctrl, MPCZoneController) and ctrl.solve_times:
@@ -382,3 +406,24 @@ def prediction_rmse(r: EmulatorRun, bld, model: ZoneModel) -> float:
     fr = obs.filter(PREDICTION_DT * np.arange(n), u, m[:, None], y, obs.prior(y[0]))
     e = fr.innovations[6:, 0]  # the first hour settles the filter
     return float(np.sqrt(np.mean(e**2)))
+
+
+#: What two closed-loop results must share to be compared.
+COMPARABLE = ("scenario", "days", "seed", "price", "band", "constraints")
+
+
+def check_comparable(a: ClosedLoopResult, b: ClosedLoopResult) -> None:
+    """Refuse to compare two runs that differ in the test or in the limits their controllers had.
+
+    Raises
+    ------
+    ParameterError
+        Naming the first setting that differs (e.g. the constraints: a controller allowed a lower
+        ventilation minimum saves energy by breaking what the other was held to).
+    """
+    for k in COMPARABLE:
+        if a.setup.get(k) != b.setup.get(k):
+            raise ParameterError(
+                f"cannot compare {a.setup['controller']} with {b.setup['controller']}: their {k} differ "
+                f"({a.setup.get(k)!r} vs {b.setup.get(k)!r}); run both under the same test and limits"
+            )

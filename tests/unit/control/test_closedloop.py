@@ -1,9 +1,12 @@
 """Closed-loop tests on the virtual building: scores, bounds, and bad arguments."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from rczone.control.closedloop import PEAK_PRICE, closed_loop_test, price_signal
+from rczone.control.closedloop import PEAK_PRICE, check_comparable, closed_loop_test, price_signal
+from rczone.control.constraints import ZoneConstraints
 from rczone.control.energy import zone_power
 from rczone.control.mpc import MPCSettings
 from rczone.errors import ParameterError
@@ -23,6 +26,12 @@ def test_a_short_mpc_run_respects_every_input_bound_and_reports_its_scores(zm):
     assert KEYS <= set(r.scores) and set(r.to_dict()["setup"]) >= {"model", "scenario", "controller"}
     m, ts = r.series["m"], r.series["Ts"]
     assert np.all((m >= 0.03) & (m <= 0.1)) and np.all(ts <= 32.0)
+    # the zone's ventilation minimum, a per-step bound, held at every minute of the run
+    limits = ZoneConstraints(**r.setup["constraints"])
+    occ = limits.occupied(r.t)
+    assert occ.any() and (~occ).any()
+    assert np.all(m >= limits.flow_min(r.t)) and r.scores["constraint_violations"] == 0
+    assert m[occ].min() == pytest.approx(0.05, abs=1e-6)  # the bound was active
     assert r.scores["solve_time_s"]["max"] > 0
     # the energy score is the sum of the power series (zone_power at each minute)
     assert r.scores["energy_kWh"] == pytest.approx(r.series["power_W"].sum() * 60 / 3.6e6)
@@ -38,6 +47,18 @@ def test_the_comfort_score_integrates_the_distance_outside_the_occupied_band(zm)
     assert set(np.unique(s["m"])) <= {0.02, 0.05, 0.08, 0.12}  # the thermostat's own levels
     p = zone_power(0.05, 20.0, 13.0, 23.0, 30.0)
     assert p.cooling == pytest.approx(0.05 * 1005.0 * 10.0) and p.reheat == pytest.approx(0.05 * 1005.0 * 7.0)
+
+
+def test_runs_under_different_limits_or_days_cannot_be_compared(zm):
+    a = closed_loop_test(zm, season="summer", days=0.05, seed=4, controller="thermostat")
+    b = closed_loop_test(zm, season="summer", days=0.05, seed=4, controller="thermostat")
+    check_comparable(a, b)
+    low = {**a.setup["constraints"], "flow_min_occupied": 0.02}
+    cheat = replace(b, setup={**b.setup, "constraints": low, "controller": "mpc"})
+    with pytest.raises(ParameterError, match="constraints differ"):
+        check_comparable(a, cheat)
+    with pytest.raises(ParameterError, match="seed"):
+        check_comparable(a, replace(b, setup={**b.setup, "seed": 5}))
 
 
 @pytest.mark.parametrize(
