@@ -12,9 +12,9 @@ thermostat, the reference MPC, a user's) implements :class:`Controller`, and
 Names (all values SI: s, degC, kg/s, W; one float per name):
 
 * **measurements** (:meth:`Plant.measure`, :meth:`Plant.step`): ``time`` (s), ``To`` (outdoor),
-  ``T_ahu`` (the air-handling unit's supply temperature), the sensed air temperature of every
-  zone under its air-node name (``Ti`` for the target zone, ``Tn1``, ...), and per zone its
-  metered supply flow ``m_<zone>`` and discharge temperature ``Ts_<zone>`` over the last step;
+  ``T_ahu`` (the air-handling unit's supply temperature), and per zone its sensed air temperature
+  ``Ti_<zone>``, metered supply flow ``m_<zone>`` and discharge temperature ``Ts_<zone>`` (over
+  the last step; NaN before the first);
 * **actions** (:meth:`Controller.act`): per controlled zone ``m_<zone>`` (supply flow, kg/s) and
   ``Ts_<zone>`` (discharge-temperature set point, degC: the zone's reheat coil heats the AHU's air
   towards it, with its own lag; it cannot cool below ``T_ahu`` nor heat above the coil's limit);
@@ -57,10 +57,24 @@ class Plant(Protocol):
     zones : tuple of str
         The zones a controller runs (``m_<zone>``, ``Ts_<zone>`` in its actions); every other zone
         is run by the plant itself.
+    end : float
+        Plant time at which the test ends, s.
     """
 
     dt: float
     zones: tuple[str, ...]
+    end: float
+
+    def describe(self) -> Mapping[str, object]:
+        """The test's settings as plain values, the zones' limits under ``constraints`` included.
+
+        A result records it; two runs are compared only when these agree.
+
+        Returns
+        -------
+        mapping of str to object
+        """
+        ...
 
     def measure(self) -> Mapping[str, float]:
         """What the BMS reads now (``time`` included), without advancing.
