@@ -52,6 +52,13 @@ def control_test(
             " weather and prices; biased: measured + 2 K.",
         ),
     ] = "measured",
+    noise_floor: Annotated[
+        float,
+        typer.Option(
+            "--noise-floor",
+            help="Lowest sensor noise (K) the prediction score's filter assumes; default the 0.1 F resolution.",
+        ),
+    ] = 0.1 * 5.0 / 9.0,
     compare: Annotated[
         str | None,
         typer.Option(
@@ -78,19 +85,21 @@ def control_test(
     zm = model(model_spec)
     out = out_console(json_out)
     if compare is not None:
-        from rczone.control.comparison import Test, compare_entries
+        from rczone.control.comparison import Scenario, compare_entries
         from rczone.control.comparison import compare as compare_runs
 
         if seeds < 1:
             raise ParameterError(f"--seeds must be an integer >= 1, got {seeds}")
-        test = Test(scenario, days=days, price=price, comfort_band=band, forecast=forecast)
+        test = Scenario(scenario, days=days, price=price, comfort_band=band, forecast=forecast)
         entries = compare_entries(compare, zm, model, disturbance=not no_disturbance)
-        cmp = compare_runs(entries, list(range(seed, seed + seeds)), test=test)
+        cmp = compare_runs(entries, list(range(seed, seed + seeds)), scenario=test)
         out.print(esc(cmp.summary()))
         write_json(json_out, cmp.to_dict())
         return
     plant = VirtualPlant(scenario, days=days, seed=seed, price=price, comfort_band=band, forecast=forecast)
-    res = closed_loop_test(plant, controller, model=zm, disturbance=not no_disturbance)
+    res = closed_loop_test(
+        plant, controller, model=zm, disturbance=not no_disturbance, noise_floor=noise_floor
+    )
     out.print(esc(res.summary()))
     write_json(json_out, res.to_dict())
     if report_dir:

@@ -8,8 +8,9 @@ over its horizon and returns its actions. The controller may be given by name
 (:mod:`rczone.control.registry`: ``thermostat``, ``naive``, ``mpc``, a registered or plug-in
 one). The result adds to the plant's scores:
 
-* ``prediction_rmse_K``: the model's 10-min-ahead prediction error along the run (its Kalman
-  filter without a disturbance state, on the run's measurements averaged over each 10 min);
+* ``prediction_rmse_K``, ``prediction_1h_rmse_K``, ``open_loop_rmse_K``: the model's one-step
+  (its Kalman filter, the sensor noise floored at the sensor's resolution), one-hour and
+  open-loop prediction errors on the run's measurements (:mod:`rczone.control.prediction`);
 * ``solve_time_s``: the controller's mean and largest solve time per decision, if it keeps
   ``solve_times`` (the MPC does; none for the thermostat).
 
@@ -32,17 +33,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rczone.control.model import ControlModel
 from rczone.control.mpc import MPCSettings
-from rczone.control.observer import KalmanObserver
 from rczone.control.plant import Controller, Plant
+from rczone.control.prediction import SENSOR_RESOLUTION_K, prediction_scores
 from rczone.control.registry import ControllerOptions, make_controller
 from rczone.errors import ParameterError
 from rczone.models.zone import ZoneModel
-from rczone.virtual.scenarios import SURROUNDINGS
-
-#: Interval of the prediction-error score, s.
-PREDICTION_DT = 600.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,7 +87,10 @@ class ClosedLoopResult:
             " the zone's limits",
         ]
         if s.get("prediction_rmse_K") is not None:
-            lines.append(f"  prediction   {s['prediction_rmse_K']:.3f} K RMSE (10 min ahead)")
+            lines.append(
+                f"  prediction   {s['prediction_rmse_K']:.3f} K RMSE 10 min ahead (filter), "
+                f"{s['prediction_1h_rmse_K']:.3f} K 1 h ahead, {s['open_loop_rmse_K']:.3f} K open loop"
+            )
         if "event_energy_kWh" in s:
             lines.append(
                 f"  DR event     {s['event_energy_kWh']:.2f} kWh, peak flow {s['event_peak_flow_kg_s']:.3f} kg/s, "
@@ -132,6 +131,7 @@ def closed_loop_test(
     model: ZoneModel | None = None,
     settings: MPCSettings | None = None,
     disturbance: bool = True,
+    noise_floor: float = SENSOR_RESOLUTION_K,
 ) -> ClosedLoopResult:
     """Run ``controller`` on ``plant`` to its end, and score it.
 
@@ -147,6 +147,8 @@ def closed_loop_test(
     settings : MPCSettings, optional
     disturbance : bool
         For a named MPC: its observer estimates an unmeasured heat input (offset-free).
+    noise_floor : float
+        The prediction score's lowest sensor noise, K (:mod:`rczone.control.prediction`).
 
     Returns
     -------
@@ -158,7 +160,10 @@ def closed_loop_test(
     log = run_loop(plant, controller)
     zone = plant.zones[0]
     scores = dict(plant.kpis())
-    scores["prediction_rmse_K"] = prediction_rmse(log, model, zone) if model is not None else None
+    if model is not None:
+        scores.update(prediction_scores(log.values, log.t, model, zone=zone, noise_floor=noise_floor))
+    else:
+        scores["prediction_rmse_K"] = None
     times = getattr(controller, "solve_times", None)
     scores["solve_time_s"] = {"mean": float(np.mean(times)), "max": float(np.max(times))} if times else None
     setup = {
@@ -203,38 +208,3 @@ def check_comparable(a: ClosedLoopResult, b: ClosedLoopResult) -> None:
                 f"cannot compare {a.setup['controller']} with {b.setup['controller']}: their {k} differ "
                 f"({a.setup.get(k)!r} vs {b.setup.get(k)!r}); run both under the same test and limits"
             )
-
-
-def prediction_rmse(log: MeasurementLog, model: ZoneModel, zone: str = "target") -> float | None:
-    """10-min-ahead RMSE of the model's Kalman filter on the run's measurements (see module notes).
-
-    None for a run shorter than :data:`PREDICTION_DT` times eight (the first hour settles the filter).
-    """
-    v = log.values
-    k0 = int(np.searchsorted(log.t, 0.0))
-    step = round(PREDICTION_DT / float(log.t[1] - log.t[0]))
-    n = (len(log.t) - 1 - k0) // step
-    if n < 8:
-        return None
-    sl = slice(k0, k0 + n * step)
-
-    def avg(a: np.ndarray) -> np.ndarray:
-        return a[sl].reshape(n, step).mean(axis=1)
-
-    flow = v[f"m_{zone}"][1:]  # held over [t_k, t_k+1), measured at t_k+1
-    m = avg(flow)
-    cols = {
-        "To": avg(v["To"][:-1]),
-        "Ts": avg(flow * v[f"Ts_{zone}"][1:]) / m,
-        **{c: avg(v[f"Ti_{z}"][:-1]) for c, z in SURROUNDINGS.items() if f"Ti_{z}" in v},
-    }
-    cols["Tsd"] = np.mean([cols[c] for c in SURROUNDINGS if c in cols], axis=0)
-    net = model.network
-    u = np.column_stack(
-        [cols[nm] if nm in cols else np.full(n, model.inputs.defaults.get(nm, 0.0)) for nm in net.input_names]
-    )
-    y = v[f"Ti_{zone}"][k0 : k0 + n * step : step][:, None]
-    obs = KalmanObserver(ControlModel(model))
-    fr = obs.filter(PREDICTION_DT * np.arange(n), u, m[:, None], y, obs.prior(y[0]))
-    e = fr.innovations[6:, 0]  # the first hour settles the filter
-    return float(np.sqrt(np.mean(e**2)))

@@ -63,7 +63,7 @@ class Entry:
 
 
 @dataclass(frozen=True)
-class Test:
+class Scenario:
     """The closed-loop test every entry runs (the :class:`VirtualPlant`'s settings but the seed)."""
 
     season: str = "summer"
@@ -171,7 +171,7 @@ def compare(
     entries: Sequence[Entry],
     seeds: Sequence[int],
     *,
-    test: Test | None = None,
+    scenario: Scenario | None = None,
     settings: MPCSettings | None = None,
 ) -> Comparison:
     """Run every entry on every seed of ``test``, and pair the runs by seed.
@@ -181,7 +181,7 @@ def compare(
     entries : sequence of Entry
         The first is the reference; labels must differ.
     seeds : sequence of int
-    test : Test, optional
+    scenario : Scenario, optional
     settings : MPCSettings, optional
         For the entries that are MPCs.
 
@@ -189,7 +189,7 @@ def compare(
     -------
     Comparison
     """
-    test = test or Test()
+    scenario = scenario or Scenario()
     labels = [e.label for e in entries]
     if len(entries) < 2 or len(set(labels)) != len(labels):
         raise ParameterError(f"a comparison needs two or more entries with distinct labels, got {labels}")
@@ -202,7 +202,11 @@ def compare(
         runs: list[ClosedLoopResult] = []
         for e in entries:
             r = closed_loop_test(
-                test.plant(seed), e.controller, model=e.model, settings=settings, disturbance=e.disturbance
+                scenario.plant(seed),
+                e.controller,
+                model=e.model,
+                settings=settings,
+                disturbance=e.disturbance,
             )
             if runs:
                 check_comparable(runs[0], r)
