@@ -35,6 +35,7 @@ import numpy as np
 from rczone import datasets
 from rczone.calibration import calibrate
 from rczone.control.closedloop import closed_loop_test
+from rczone.control.virtualplant import VirtualPlant
 from rczone.models import load_model
 
 #: scenario -> (season, price, comfort band)
@@ -110,14 +111,10 @@ def run_all(out: Path, days: float, seeds: list[int], harder: bool = False) -> l
         season, price, band = scenarios[scen]
         t0, c0 = time.perf_counter(), time.process_time()
         r = closed_loop_test(
-            thermostat_model if variant == "thermostat" else zms[variant],
-            season=season,
-            days=days,
-            seed=seed,
-            controller="thermostat" if variant == "thermostat" else "mpc",
+            VirtualPlant(season, days=days, seed=seed, price=price, comfort_band=band),
+            "naive" if variant == "thermostat" else "mpc",
+            model=thermostat_model if variant == "thermostat" else zms[variant],
             disturbance=bool(dist),
-            price=price,
-            comfort_band=band,
         )
         row.update(r.scores, wall_s=time.perf_counter() - t0, cpu_s=time.process_time() - c0, days=days)
         with log.open("a") as f:
@@ -218,12 +215,12 @@ def event_figure(path: Path, seed: int = 1, days: float = 1.0) -> str:
     """
     from matplotlib.figure import Figure
 
-    from rczone.control.closedloop import DR_HOURS, DR_NOTICE
+    from rczone.control.signals import DR_HOURS, DR_NOTICE
 
     zms = models(("2-state, ML on C (forced)", "13-state, construction"))
     two = zms["2-state, ML on C (forced)"]
     cases = {
-        "thermostat": (two, "thermostat", "dr"),
+        "thermostat": (two, "naive", "dr"),
         "MPC, 2-state ML on C, flat price": (two, "mpc", "flat"),
         "MPC, 2-state ML on C, DR event": (two, "mpc", "dr"),
         "MPC, 13-state, DR event": (zms["13-state, construction"], "mpc", "dr"),
@@ -237,7 +234,7 @@ def event_figure(path: Path, seed: int = 1, days: float = 1.0) -> str:
         "|---|---|---|---|---|",
     ]
     for label, (zm, ctrl, price) in cases.items():
-        r = closed_loop_test(zm, season="summer", days=days, seed=seed, controller=ctrl, price=price)
+        r = closed_loop_test(VirtualPlant("summer", days=days, seed=seed, price=price), ctrl, model=zm)
         t, s = r.t, r.series
         pre = (t >= DR_HOURS[0] - DR_NOTICE) & (t < DR_HOURS[0])
         ev = (t >= DR_HOURS[0]) & (t < DR_HOURS[1])

@@ -9,6 +9,7 @@ import typer
 
 from rczone.cli.common import MODEL_HELP, esc, model, out_console, write_json
 from rczone.cli.main import app
+from rczone.errors import ParameterError
 
 
 @app.command("control-test")
@@ -17,7 +18,14 @@ def control_test(
     scenario: Annotated[str, typer.Option("--scenario", help="summer or winter.")] = "summer",
     days: Annotated[float, typer.Option("--days", help="Days to run (from 6 pm).")] = 1.0,
     seed: Annotated[int, typer.Option("--seed", help="Weather, settings and noise.")] = 0,
-    controller: Annotated[str, typer.Option("--controller", help="mpc or thermostat.")] = "mpc",
+    controller: Annotated[
+        str,
+        typer.Option(
+            "--controller",
+            help="mpc, thermostat (commissioned), naive (schedule set points), oracle, or a registered"
+            " or plug-in controller (entry-point group rczone.controllers).",
+        ),
+    ] = "mpc",
     no_disturbance: Annotated[
         bool, typer.Option("--no-disturbance", help="The MPC's observer estimates no unmeasured heat input.")
     ] = False,
@@ -36,6 +44,33 @@ def control_test(
             help="normal: the thermostat's comfort band; tight: its occupied band narrowed to 0.8 K.",
         ),
     ] = "normal",
+    forecast: Annotated[
+        str,
+        typer.Option(
+            "--forecast",
+            help="measured: diurnal outdoor curve shifted by the last error; perfect: the run's true"
+            " weather and prices; biased: measured + 2 K.",
+        ),
+    ] = "measured",
+    noise_floor: Annotated[
+        float,
+        typer.Option(
+            "--noise-floor",
+            help="Lowest sensor noise (K) the prediction score's filter assumes; default the 0.1 F resolution.",
+        ),
+    ] = 0.1 * 5.0 / 9.0,
+    compare: Annotated[
+        str | None,
+        typer.Option(
+            "--compare",
+            help="Compare controllers (and models) on the same seeds: comma-separated CONTROLLER[:MODEL]"
+            " (e.g. 'thermostat,mpc,mpc:first-order,oracle'); the first is the reference; MPCs without"
+            " :MODEL use --model.",
+        ),
+    ] = None,
+    seeds: Annotated[
+        int, typer.Option("--seeds", help="With --compare: seeds --seed, --seed + 1, ... (paired runs).")
+    ] = 1,
     json_out: Annotated[
         Path | None, typer.Option("--json", help="Write the scores as JSON ('-': stdout).")
     ] = None,
@@ -45,18 +80,25 @@ def control_test(
 ) -> None:
     """Closed-loop test on the virtual building: comfort (K h), energy (kWh), peak flow, prediction RMSE."""
     from rczone.control.closedloop import closed_loop_test
+    from rczone.control.virtualplant import VirtualPlant
 
     zm = model(model_spec)
     out = out_console(json_out)
+    if compare is not None:
+        from rczone.control.comparison import Scenario, compare_entries
+        from rczone.control.comparison import compare as compare_runs
+
+        if seeds < 1:
+            raise ParameterError(f"--seeds must be an integer >= 1, got {seeds}")
+        test = Scenario(scenario, days=days, price=price, comfort_band=band, forecast=forecast)
+        entries = compare_entries(compare, zm, model, disturbance=not no_disturbance)
+        cmp = compare_runs(entries, list(range(seed, seed + seeds)), scenario=test)
+        out.print(esc(cmp.summary()))
+        write_json(json_out, cmp.to_dict())
+        return
+    plant = VirtualPlant(scenario, days=days, seed=seed, price=price, comfort_band=band, forecast=forecast)
     res = closed_loop_test(
-        zm,
-        season=scenario,
-        days=days,
-        seed=seed,
-        controller=controller,
-        disturbance=not no_disturbance,
-        price=price,
-        comfort_band=band,
+        plant, controller, model=zm, disturbance=not no_disturbance, noise_floor=noise_floor
     )
     out.print(esc(res.summary()))
     write_json(json_out, res.to_dict())

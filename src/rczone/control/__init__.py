@@ -11,7 +11,10 @@ Modules: :mod:`~rczone.control.noise` (the discrete noise model of a fit),
 derivatives in the flow), :mod:`~rczone.control.observer` (Kalman filter, steady-state gain,
 :func:`estimate_state`), :mod:`~rczone.control.energy` (how a zone's fan, reheat and cooling
 energy is counted), :mod:`~rczone.control.mpc` (the reference economic MPC, OSQP),
-:mod:`~rczone.control.closedloop` (closed-loop tests on the virtual building) and
+:mod:`~rczone.control.constraints` (a zone's limits), :mod:`~rczone.control.plant` (the plant and
+controller protocols), :mod:`~rczone.control.virtualplant` (the virtual building as a plant),
+:mod:`~rczone.control.controllers` and :mod:`~rczone.control.registry` (controllers by name,
+plug-ins), :mod:`~rczone.control.closedloop` (closed-loop tests) and
 :mod:`~rczone.control.export` (python-control and plain named arrays).
 
 Examples
@@ -29,6 +32,7 @@ True
 (2, 2)
 """
 
+from rczone.control.constraints import ZoneConstraints
 from rczone.control.disturbance import Disturbance
 from rczone.control.energy import ZonePower, zone_power
 from rczone.control.export import NamedArrays, named_arrays, to_control
@@ -36,6 +40,8 @@ from rczone.control.model import ControlModel, DiscreteMatrices, FlowDerivative
 from rczone.control.mpc import MPC, ControlAction, Forecast, MPCSettings, Plan
 from rczone.control.noise import NoiseModel
 from rczone.control.observer import Estimate, KalmanObserver, StateEstimate, estimate_state
+from rczone.control.plant import Controller, Plant
+from rczone.control.registry import ControllerOptions, controller_names, make_controller, register_controller
 from rczone.models.zone import FORMAT, DiscreteModel, ZoneModel
 
 __all__ = [
@@ -43,6 +49,8 @@ __all__ = [
     "MPC",
     "ControlAction",
     "ControlModel",
+    "Controller",
+    "ControllerOptions",
     "DiscreteMatrices",
     "DiscreteModel",
     "Disturbance",
@@ -54,11 +62,16 @@ __all__ = [
     "NamedArrays",
     "NoiseModel",
     "Plan",
+    "Plant",
     "StateEstimate",
+    "ZoneConstraints",
     "ZoneModel",
     "ZonePower",
+    "controller_names",
     "estimate_state",
+    "make_controller",
     "named_arrays",
+    "register_controller",
     "to_control",
     "zone_power",
 ]

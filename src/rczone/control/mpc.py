@@ -12,7 +12,8 @@ Every ``dt`` (default 10 min) the controller
             + w_1 s_k + w_2 s_k^2 + \\text{small move penalties}
 
    subject to the model, ``T_low,k - s_k <= Ti_k <= T_high,k + s_k``, ``s_k >= 0``,
-   ``m_min <= m_k <= m_max`` and ``0 <= P_k <= m_k cp (Ts_max - T_ahu,k)`` (the discharge
+   ``m_min,k <= m_k <= m_max,k`` (per step: the settings' bounds and the plant's, e.g. a
+   ventilation minimum that follows the schedule) and ``0 <= P_k <= m_k cp (Ts_max - T_ahu,k)`` (the discharge
    temperature limit, linear in ``(m, P)``). The energy terms are those of
    :mod:`rczone.control.energy`; ``pi`` a price (default 1 per kWh: energy);
 3. applies the first flow and reheat power (discharge temperature ``T_ahu + P/(m cp)``).
@@ -160,6 +161,11 @@ class Forecast:
         Comfort band, degC.
     price : ndarray, optional
         Price per kWh (default 1: energy).
+    m_min, m_max : ndarray, optional
+        The plant's flow limits per step (length >= H), kg/s, e.g. a ventilation minimum that
+        follows the occupancy schedule (:class:`~rczone.control.constraints.ZoneConstraints`);
+        step ``k``'s flow is held to ``max(flow_min, m_min[k]) <= m_k <= min(flow_max, m_max[k])``
+        (the settings' bounds still apply).
     """
 
     inputs: Mapping[str, np.ndarray]
@@ -167,6 +173,8 @@ class Forecast:
     lower: np.ndarray
     upper: np.ndarray
     price: np.ndarray | None = None
+    m_min: np.ndarray | None = None
+    m_max: np.ndarray | None = None
 
     def length(self) -> int:
         return min(len(self.t_ahu), len(self.lower), len(self.upper), *(len(v) for v in self.inputs.values()))
@@ -325,7 +333,32 @@ class MPC:
         band = np.column_stack([fc.lower[: H + 1], fc.upper[: H + 1]])
         if not np.all(np.isfinite(band)) or np.any(band[:, 0] > band[:, 1]):
             raise InputShapeError("the comfort band must be finite with lower <= upper")
+        for name in ("m_min", "m_max"):
+            v = getattr(fc, name)
+            if v is not None and (len(v) < H or not np.all(np.isfinite(np.asarray(v, float)[:H]))):
+                raise InputShapeError(f"the forecast's {name} must have {H} finite values, one per step")
         return H
+
+    def flow_bounds(self, fc: Forecast, H: int) -> tuple[np.ndarray, np.ndarray]:
+        """Per-step flow bounds (H,) each, kg/s: the settings' bounds and the forecast's, the tighter."""
+        lim = self.limits
+        lo = (
+            np.full(H, lim.m_min)
+            if fc.m_min is None
+            else np.maximum(lim.m_min, np.asarray(fc.m_min, float)[:H])
+        )
+        hi = (
+            np.full(H, lim.m_max)
+            if fc.m_max is None
+            else np.minimum(lim.m_max, np.asarray(fc.m_max, float)[:H])
+        )
+        if np.any(lo > hi):
+            k = int(np.argmax(lo > hi))
+            raise InputShapeError(
+                f"the flow bounds of step {k} are empty ({lo[k]:.4g} > {hi[k]:.4g} kg/s); "
+                "check the plant's limits against the MPC's flow_min and flow_max"
+            )
+        return lo, hi
 
     # ------------------------------------------------------------ the QP
     def simulate(self, x0: np.ndarray, u: np.ndarray, m: np.ndarray, reheat: np.ndarray) -> np.ndarray:
@@ -394,6 +427,7 @@ class MPC:
                 hi.append(bounds[1])
         lim = self.limits
         span = np.maximum(lim.ts_max - np.asarray(fc.t_ahu, float)[:H], 0.0) * CP_AIR / 1e3
+        m_lo, m_hi = self.flow_bounds(fc, H)
         for k in range(H):  # input bounds, reheat limit P <= m cp (ts_max - T_ahu), slack >= 0
             r = A.rows
             A.block(r, im + k, np.array([[1.0]]))
@@ -402,8 +436,8 @@ class MPC:
             A.block(r + 2, im + k, np.array([[-span[k]]]))
             A.block(r + 3, isl + k, np.array([[1.0]]))
             A.rows += 4
-            lo.extend([lim.m_min, 0.0, -np.inf, 0.0])
-            hi.extend([lim.m_max, np.inf, 0.0, np.inf])
+            lo.extend([m_lo[k], 0.0, -np.inf, 0.0])
+            hi.extend([m_hi[k], np.inf, 0.0, np.inf])
         qv = np.zeros(nz)
         qv[im : im + H] = q.qm
         qv[ip : ip + H] = q.qp * 1e3
@@ -428,9 +462,11 @@ class MPC:
         u = self._input_matrix(forecast, H)
         lim = self.limits
         mem = self._mem
-        m_prev = mem.action.m if mem.action else lim.m_min
+        m_lo, m_hi = self.flow_bounds(forecast, H)
+        m_prev = mem.action.m if mem.action else m_lo[0]
         p_prev = mem.action.reheat if mem.action else 0.0
-        m, reheat = nominal if nominal is not None else (np.full(H, lim.m_min), np.zeros(H))
+        m, reheat = nominal if nominal is not None else (m_lo.copy(), np.zeros(H))
+        m = np.clip(m, m_lo, m_hi)
         elapsed, status = 0.0, ""
         z = _shifted(mem.z, len(x0), H) if mem.z is not None and len(mem.z) == (len(x0) + 3) * H else None
         n = len(x0)
@@ -461,7 +497,7 @@ class MPC:
                     f"the MPC's QP could not be solved ({status}); check the band and the bounds"
                 )
             z = res.x
-            m = np.clip(z[n * H : n * H + H], lim.m_min, lim.m_max)
+            m = np.clip(z[n * H : n * H + H], m_lo, m_hi)
             span = np.maximum(lim.ts_max - np.asarray(forecast.t_ahu, float)[:H], 0.0) * CP_AIR
             reheat = np.clip(z[n * H + H : n * H + 2 * H] * 1e3, 0.0, m * span)
         mem.z = z

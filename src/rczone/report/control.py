@@ -43,15 +43,17 @@ def closed_loop_figure(result: ClosedLoopResult) -> Figure:
 
 def closed_loop_report(result: ClosedLoopResult) -> Report:
     """The scores as a table and :func:`closed_loop_figure`."""
-    st = result.setup
+    st, sc = result.setup, result.scores
     rep = Report(f"Closed-loop test: {st['controller']}, {st['scenario']}")
     rep.paragraph(
         "The plant is the full virtual building (152 states, neighbours under their thermostats,"
         " unmeasured daytime gains); energy is reheat + cooling-coil load + fan (SFP 1500 W per m3/s);"
-        f" comfort counts K h outside the band in occupied hours. Model: {html.escape(str(st['model']))}."
+        f" comfort counts K h outside the band in occupied hours. Model: {html.escape(str(st['model']))};"
+        f" forecast: {html.escape(str(st.get('forecast')))}. Every controller is held to the zone's limits"
+        " (ventilation minimum 0.05 kg/s occupied, 0.02 kg/s unoccupied; steps outside them:"
+        f" {html.escape(str(sc.get('constraint_violations')))})."
     )
-    sc = result.scores
-    rows = [{"score": k, "value": v} for k, v in sc.items() if k != "solve_time_s"]
+    rows = [{"score": k, "value": v} for k, v in sc.items() if k != "solve_time_s" and v is not None]
     if sc.get("solve_time_s"):
         rows += [{"score": f"QP time {k} (s)", "value": v} for k, v in sc["solve_time_s"].items()]
     rep.table(rows, "Scores of the run", digits=4)

@@ -201,6 +201,7 @@ class VAVController:
         self.last_change = t_start - config.hold
         self.integral = 0.0
         self.ts = None  # discharge temperature (coil output), degC
+        self.command: float | None = None  # discharge set point (coil input), degC
 
     def _mode(self, t: float) -> bool:
         return self.cfg.unoccupied(t)
@@ -224,7 +225,8 @@ class VAVController:
             self.level = level
             self.last_change = t
         reheat, self.integral = pi_reheat(self.integral, heat_sp - t_sensed, c.kp, c.ti, c.ts_max - t_ahu)
-        self.ts = coil_lag(self.ts, t_ahu + reheat, c.tau_coil)
+        self.command = t_ahu + reheat  # the coil's set point (what a plant with its own coil takes)
+        self.ts = coil_lag(self.ts, self.command, c.tau_coil)
         return FLOW_LEVELS[self.level], self.ts
 
 

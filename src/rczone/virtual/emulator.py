@@ -269,91 +269,168 @@ def run(
     -------
     EmulatorRun
     """
-    check_season(season)
-    forced = dict(forced or {})
-    g_weather, g_ctrl, g_ahu, g_sense = rng.spawn(4)
-    n_steps = round((duration + warmup) / CONTROL_DT)
-    t = -warmup + CONTROL_DT * np.arange(n_steps + 1)
-    to = outdoor_temperature(season, t, g_weather)
-    s = SEASONS[season]
-    a = np.exp(-CONTROL_DT / AHU_DRIFT_TAU)
-    drift = np.empty(n_steps + 1)
-    drift[0] = g_ahu.normal(0.0, AHU_DRIFT_STD)
-    w = g_ahu.normal(0.0, AHU_DRIFT_STD * np.sqrt(1 - a * a), size=n_steps + 1)
-    for k in range(1, n_steps + 1):
-        drift[k] = a * drift[k - 1] + w[k]
-    t_ahu = s.t_ahu + drift
-
-    op = operation or Operation()
-    cfgs = _configs(bld, season, g_ctrl, warmup, op, daily)
-    ctrls: dict[str, ZoneController] = {
-        z: TightController(cfgs[z], TIGHT_FLOW) if op.loop == "tight" else VAVController(cfgs[z], -warmup)
-        for z in bld.zones
-    }
-    for z, cmds in forced.items():
-        ctrls[z] = ForcedController(cmds, VAVController(cfgs[z], -warmup))
-    ctrls.update(dict(controllers or {}))
-    observers = {z: c for z, c in ctrls.items() if isinstance(c, ObservingController)}
-    ss = bld.network.state_space()
-    n, p, nf = len(ss.state_names), len(ss.input_names), len(ss.flow_names)
-    air_idx = np.array([ss.state_names.index(bld.air_nodes[z]) for z in bld.zones])
-    ts_idx = np.array([ss.input_names.index(bld.supply_name(z)) for z in bld.zones])
-    to_idx = ss.input_names.index("To")
-    u_base = np.zeros(p)
-    for z in bld.zones:
-        u_base[ss.input_names.index(bld.gain_name(z))] = bld.gains[z]
-
-    u_day = np.zeros(p)
-    for z in bld.zones:
-        u_day[ss.input_names.index(bld.gain_name(z))] = DAY_GAIN.get(z, 0.0)
-    x = np.empty((n_steps + 1, n))
-    u = np.empty((n_steps, p))
-    m = np.empty((n_steps, nf))
-    sensed = np.empty((n_steps + 1, len(bld.zones)))
-    x[0] = _initial_state(bld, season, {z: cfgs[z].heat_occ for z in bld.zones})
-    cache: dict[tuple[float, ...], tuple[np.ndarray, np.ndarray]] = {}
-    gain_idx = np.array([ss.input_names.index(bld.gain_name(z)) for z in bld.zones])
-    for k in range(n_steps + 1):
-        reading = x[k, air_idx]
-        if op.sensor != "room" and k > 0:
-            reading = sensor_reading(reading, u[k - 1, ts_idx], m[k - 1], op.sensor, op.diffuser_mix)
-        sensed[k] = sense(reading, g_sense)
-        if k == n_steps:
-            break
-        uk = u_base + day_gain_share(float(t[k]), daily) * u_day
-        if op.gains == "schedule":
-            occupied = np.array([not cfgs[z].unoccupied(float(t[k])) for z in bld.zones])
-            uk[gain_idx] += SCHEDULE_GAIN * occupied
-        uk[to_idx] = to[k]
-        if observers:
-            readings = {
-                "To": float(to[k]),
-                **{bld.air_nodes[z]: float(sensed[k, j]) for j, z in enumerate(bld.zones)},
-            }
-            for c in observers.values():
-                c.observe(float(t[k]), readings)
-        mk = np.empty(nf)
-        for j, z in enumerate(bld.zones):
-            mk[j], uk[ts_idx[j]] = ctrls[z].step(float(t[k]), float(sensed[k, j]), float(t_ahu[k]))
-        key = tuple(mk)
-        if key not in cache:
-            cache[key] = zoh(*ss.matrices(mk), CONTROL_DT)
-        phi, gam = cache[key]
-        x[k + 1] = phi @ x[k] + gam @ uk
-        u[k], m[k] = uk, mk
-    return EmulatorRun(
-        t=t,
-        x=x,
-        u=u,
-        m=m,
-        sensed={z: sensed[:, j] for j, z in enumerate(bld.zones)},
-        state_names=ss.state_names,
-        input_names=ss.input_names,
-        flow_names=ss.flow_names,
-        n_discretizations=len(cache),
-        t_ahu=t_ahu[:-1].copy(),
-        t_out=to[:-1].copy(),
+    sim = Simulation(
+        bld,
+        season,
+        rng,
+        duration=duration,
+        warmup=warmup,
+        forced=forced,
+        sense=sense,
+        operation=operation,
+        controllers=controllers,
+        daily=daily,
     )
+    while not sim.done:
+        sim.advance()
+    return sim.result()
+
+
+class Simulation:
+    """One run of the building, advanced one control interval at a time (what :func:`run` loops over).
+
+    The arguments are those of :func:`run`. After construction the zone temperatures at
+    ``-warmup`` are sensed; each :meth:`advance` lets every zone's controller act (or takes the
+    caller's ``(m, Ts)`` for the zones in ``held``), advances the network exactly over
+    :data:`CONTROL_DT` and senses again. The random streams are drawn in :func:`run`'s order, so a
+    run advanced here with the zones' own thermostats is :func:`run`'s run.
+    """
+
+    def __init__(
+        self,
+        bld: VirtualBuilding,
+        season: str,
+        rng: np.random.Generator,
+        *,
+        duration: float,
+        warmup: float,
+        forced: Mapping[str, tuple[Command, ...]] | None = None,
+        sense: Callable[[np.ndarray, np.random.Generator], np.ndarray] = sense_temperature,
+        operation: Operation | None = None,
+        controllers: Mapping[str, ZoneController] | None = None,
+        daily: bool = False,
+    ) -> None:
+        check_season(season)
+        g_weather, g_ctrl, g_ahu, self._g_sense = rng.spawn(4)
+        self.bld, self.daily, self._sense = bld, daily, sense
+        self.n_steps = round((duration + warmup) / CONTROL_DT)
+        self.t = -warmup + CONTROL_DT * np.arange(self.n_steps + 1)
+        self.t_out = outdoor_temperature(season, self.t, g_weather)
+        self.t_ahu = SEASONS[season].t_ahu + _ahu_drift(g_ahu, self.n_steps + 1)
+        self.op = operation or Operation()
+        self.configs = _configs(bld, season, g_ctrl, warmup, self.op, daily)
+        self.ctrls = self._controllers(forced, controllers, warmup)
+        self.ss = ss = bld.network.state_space()
+        idx = ss.input_names.index
+        self._air = np.array([ss.state_names.index(bld.air_nodes[z]) for z in bld.zones])
+        self._ts = np.array([idx(bld.supply_name(z)) for z in bld.zones])
+        self._gain = np.array([idx(bld.gain_name(z)) for z in bld.zones])
+        self._to = idx("To")
+        self._u_base, self._u_day = np.zeros(len(ss.input_names)), np.zeros(len(ss.input_names))
+        for z in bld.zones:
+            self._u_base[idx(bld.gain_name(z))] = bld.gains[z]
+            self._u_day[idx(bld.gain_name(z))] = DAY_GAIN.get(z, 0.0)
+        n, p, nf = len(ss.state_names), len(ss.input_names), len(ss.flow_names)
+        self.x = np.empty((self.n_steps + 1, n))
+        self.u = np.empty((self.n_steps, p))
+        self.m = np.empty((self.n_steps, nf))
+        self.sensed = np.empty((self.n_steps + 1, len(bld.zones)))
+        self.x[0] = _initial_state(bld, season, {z: self.configs[z].heat_occ for z in bld.zones})
+        self._cache: dict[tuple[float, ...], tuple[np.ndarray, np.ndarray]] = {}
+        self.k = 0
+        self._sense_now()
+
+    def _controllers(self, forced, controllers, warmup: float) -> dict[str, ZoneController]:
+        cfgs, op = self.configs, self.op
+        ctrls: dict[str, ZoneController] = {
+            z: TightController(cfgs[z], TIGHT_FLOW) if op.loop == "tight" else VAVController(cfgs[z], -warmup)
+            for z in self.bld.zones
+        }
+        for z, cmds in dict(forced or {}).items():
+            ctrls[z] = ForcedController(cmds, VAVController(cfgs[z], -warmup))
+        ctrls.update(dict(controllers or {}))
+        return ctrls
+
+    @property
+    def done(self) -> bool:
+        """Whether the run has reached its end."""
+        return self.k >= self.n_steps
+
+    def _sense_now(self) -> None:
+        k = self.k
+        reading = self.x[k, self._air]
+        if self.op.sensor != "room" and k > 0:
+            reading = sensor_reading(
+                reading, self.u[k - 1, self._ts], self.m[k - 1], self.op.sensor, self.op.diffuser_mix
+            )
+        self.sensed[k] = self._sense(reading, self._g_sense)
+
+    def readings(self) -> dict[str, float]:
+        """``{"To": outdoor, <air node>: sensed temperature of every zone}`` now, degC."""
+        k, bld = self.k, self.bld
+        return {
+            "To": float(self.t_out[k]),
+            **{bld.air_nodes[z]: float(self.sensed[k, j]) for j, z in enumerate(bld.zones)},
+        }
+
+    def advance(self, held: Mapping[str, tuple[float, float]] | None = None) -> None:
+        """Advance one control interval; zones in ``held`` get its ``(m, Ts)``, the others their controller."""
+        k, bld, held = self.k, self.bld, held or {}
+        tk = float(self.t[k])
+        uk = self._u_base + day_gain_share(tk, self.daily) * self._u_day
+        if self.op.gains == "schedule":
+            occupied = np.array([not self.configs[z].unoccupied(tk) for z in bld.zones])
+            uk[self._gain] += SCHEDULE_GAIN * occupied
+        uk[self._to] = self.t_out[k]
+        observers = [c for z, c in self.ctrls.items() if z not in held and isinstance(c, ObservingController)]
+        if observers:
+            readings = self.readings()
+            for c in observers:
+                c.observe(tk, readings)
+        mk = np.empty(len(self.ss.flow_names))
+        for j, z in enumerate(bld.zones):
+            if z in held:
+                mk[j], uk[self._ts[j]] = held[z]
+            else:
+                mk[j], uk[self._ts[j]] = self.ctrls[z].step(
+                    tk, float(self.sensed[k, j]), float(self.t_ahu[k])
+                )
+        key = tuple(mk)
+        if key not in self._cache:
+            self._cache[key] = zoh(*self.ss.matrices(mk), CONTROL_DT)
+        phi, gam = self._cache[key]
+        self.x[k + 1] = phi @ self.x[k] + gam @ uk
+        self.u[k], self.m[k] = uk, mk
+        self.k = k + 1
+        self._sense_now()
+
+    def result(self) -> EmulatorRun:
+        """The run so far (states up to now)."""
+        k, ss = self.k, self.ss
+        return EmulatorRun(
+            t=self.t[: k + 1].copy(),
+            x=self.x[: k + 1].copy(),
+            u=self.u[:k].copy(),
+            m=self.m[:k].copy(),
+            sensed={z: self.sensed[: k + 1, j].copy() for j, z in enumerate(self.bld.zones)},
+            state_names=ss.state_names,
+            input_names=ss.input_names,
+            flow_names=ss.flow_names,
+            n_discretizations=len(self._cache),
+            t_ahu=self.t_ahu[:k].copy(),
+            t_out=self.t_out[:k].copy(),
+        )
+
+
+def _ahu_drift(g_ahu: np.random.Generator, n: int) -> np.ndarray:
+    """The AHU supply temperature's slow drift (first order, :data:`AHU_DRIFT_STD`, :data:`AHU_DRIFT_TAU`), K."""
+    a = np.exp(-CONTROL_DT / AHU_DRIFT_TAU)
+    drift = np.empty(n)
+    drift[0] = g_ahu.normal(0.0, AHU_DRIFT_STD)
+    w = g_ahu.normal(0.0, AHU_DRIFT_STD * np.sqrt(1 - a * a), size=n)
+    for k in range(1, n):
+        drift[k] = a * drift[k - 1] + w[k]
+    return drift
 
 
 def _with_deadband(cfg: ControllerConfig, deadband: float | None) -> ControllerConfig:

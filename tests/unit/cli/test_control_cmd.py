@@ -9,7 +9,7 @@ from rczone.cli.main import main
 KEYS = {"comfort_Kh", "energy_kWh", "peak_flow_kg_s", "prediction_rmse_K", "solve_time_s"}
 
 
-@pytest.mark.parametrize("controller", ["thermostat", "mpc"])
+@pytest.mark.parametrize("controller", ["naive", "mpc"])
 def test_control_test_writes_the_scores_and_the_report(tmp_path, capsys, controller):
     out = tmp_path / "scores.json"
     args = ["control-test", "--model", "second-order", "--scenario", "summer", "--days", "0.1", "--seed", "1"]
@@ -17,14 +17,23 @@ def test_control_test_writes_the_scores_and_the_report(tmp_path, capsys, control
     assert code == 0
     doc = json.loads(out.read_text())
     assert KEYS <= set(doc) and doc["setup"]["controller"] == controller
-    assert (doc["solve_time_s"] is None) == (controller == "thermostat")
+    assert (doc["solve_time_s"] is None) == (controller == "naive")
+    assert doc["setup"]["constraints"]["target"]["flow_min_occupied"] == 0.05
     assert (tmp_path / "rep" / "report.html").exists() and (tmp_path / "rep" / "closed_loop.png").exists()
     assert "comfort" in capsys.readouterr().out
 
 
 @pytest.mark.parametrize(
     ("extra", "match"),
-    [(["--scenario", "spring"], "spring"), (["--controller", "pid"], "pid"), (["--days", "-1"], "days")],
+    [
+        (["--scenario", "spring"], "spring"),
+        (["--controller", "pid"], "pid"),
+        (["--days", "-1"], "days"),
+        (["--days", "1e-9"], "scored minute"),
+        (["--days", "0.0001"], "scored minute"),
+        (["--seed", "-1"], "seed"),
+        (["--forecast", "psychic"], "psychic"),
+    ],
 )
 def test_control_test_mistakes_are_one_line_and_exit_2(tmp_path, capsys, extra, match):
     out = tmp_path / "scores.json"
@@ -36,7 +45,7 @@ def test_control_test_mistakes_are_one_line_and_exit_2(tmp_path, capsys, extra, 
 
 def test_control_test_runs_the_tight_band_and_the_event_and_refuses_an_unknown_band(tmp_path, capsys):
     out = tmp_path / "scores.json"
-    args = ["control-test", "--scenario", "summer", "--days", "0.1", "--controller", "thermostat"]
+    args = ["control-test", "--scenario", "summer", "--days", "0.1", "--controller", "naive"]
     assert main([*args, "--band", "tight", "--price", "dr", "--json", str(out)]) == 0
     doc = json.loads(out.read_text())
     assert doc["setup"]["band"] == "tight" and doc["setup"]["price"] == "dr"

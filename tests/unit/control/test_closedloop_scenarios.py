@@ -3,21 +3,13 @@
 import numpy as np
 import pytest
 
-from rczone.control.closedloop import (
-    DR_PRICE,
-    TIGHT_BAND_K,
-    MPCZoneController,
-    closed_loop_test,
-    forecast_price,
-    price_signal,
-    tighten,
-)
-from rczone.control.mpc import MPC
+from rczone.control.closedloop import closed_loop_test
+from rczone.control.signals import DR_PRICE, TIGHT_BAND_K, forecast_price, price_signal, tighten
+from rczone.control.virtualplant import VirtualPlant
 from rczone.errors import ParameterError
 from rczone.models import load_model
 from rczone.virtual.building import build_building
 from rczone.virtual.emulator import thermostat_configs
-from rczone.virtual.scenarios import SURROUNDINGS
 
 H = 3600.0  # s; times are s after 6 pm
 
@@ -40,19 +32,17 @@ def test_the_event_price_is_ten_times_from_2_to_4_pm_every_day():
     np.testing.assert_array_equal(price_signal("flat", t), np.ones(t.size))
 
 
-def test_the_event_is_in_the_mpc_forecast_only_from_its_announcement_at_11_am(zm, cfg):
-    ctrl = MPCZoneController(MPC(zm), cfg, "summer", "dr")
-    ctrl.observe(0.0, {"To": 30.0, **{c: 23.0 for c in SURROUNDINGS}})
+def test_the_event_is_in_the_forecast_only_from_its_announcement_at_11_am():
+    def fc(now):  # the MPC's horizon: 37 values, 10 min apart
+        return forecast_price("dr", now, now + 600.0 * np.arange(37))
+
     for day in (0, 1):
         d = day * 24 * H
-        before = ctrl.forecast(d + 17 * H - 600, 13.0)  # 10:50 am: the horizon reaches 4:50 pm
-        np.testing.assert_array_equal(before.price, np.ones(37))
-        at = ctrl.forecast(d + 17 * H, 13.0)  # 11 am: steps 18..29 (2 pm to 3:50 pm) are the event
+        np.testing.assert_array_equal(fc(d + 17 * H - 600), np.ones(37))  # 10:50 am: not yet announced
         expected = np.ones(37)
-        expected[18:30] = DR_PRICE
-        np.testing.assert_array_equal(at.price, expected)
-        during = ctrl.forecast(d + 21 * H, 13.0)  # 3 pm: the event's last hour, then normal
-        np.testing.assert_array_equal(during.price, np.r_[np.full(6, DR_PRICE), np.ones(31)])
+        expected[18:30] = DR_PRICE  # 11 am: steps 18..29 (2 pm to 3:50 pm) are the event
+        np.testing.assert_array_equal(fc(d + 17 * H), expected)
+        np.testing.assert_array_equal(fc(d + 21 * H), np.r_[np.full(6, DR_PRICE), np.ones(31)])
     # the time-of-use price stays known in advance
     t = 6 * H + 600 * np.arange(37)
     np.testing.assert_array_equal(forecast_price("tou", 6 * H, t), price_signal("tou", t))
@@ -60,8 +50,11 @@ def test_the_event_is_in_the_mpc_forecast_only_from_its_announcement_at_11_am(zm
 
 @pytest.fixture(scope="module")
 def dr_runs(zm):
-    kw = {"season": "summer", "days": 1, "seed": 4, "controller": "thermostat"}
-    return closed_loop_test(zm, **kw), closed_loop_test(zm, **kw, price="dr")
+    kw = {"days": 1, "seed": 4}
+    return (
+        closed_loop_test(VirtualPlant("summer", **kw), "naive"),
+        closed_loop_test(VirtualPlant("summer", **kw, price="dr"), "naive"),
+    )
 
 
 def test_the_event_is_scored_at_its_price_with_its_own_energy_and_peak_flow(dr_runs):
@@ -89,8 +82,9 @@ def test_the_tight_band_is_narrowed_about_its_centre_for_the_thermostat_and_the_
     assert (tc.heat_unocc, tc.cool_unocc) == (cfg.heat_unocc, cfg.cool_unocc)
     assert cfg.cool_occ - cfg.heat_occ > TIGHT_BAND_K + 0.5  # tighter than the summer band
 
-    kw = {"season": "summer", "days": 0.5, "seed": 4, "controller": "thermostat"}
-    normal, tight = closed_loop_test(zm, **kw), closed_loop_test(zm, **kw, comfort_band="tight")
+    kw = {"days": 0.5, "seed": 4}
+    normal = closed_loop_test(VirtualPlant("summer", **kw), "naive")
+    tight = closed_loop_test(VirtualPlant("summer", **kw, comfort_band="tight"), "naive")
     occ = tight.series["occupied"]
     assert occ.any() and (~occ).any()
     s, n = tight.series, normal.series
@@ -104,6 +98,6 @@ def test_the_tight_band_is_narrowed_about_its_centre_for_the_thermostat_and_the_
     assert tight.setup["band"] == "tight" and normal.setup["band"] == "normal"
 
 
-def test_an_unknown_band_is_a_one_line_error(zm):
+def test_an_unknown_band_is_a_one_line_error():
     with pytest.raises(ParameterError, match="wide"):
-        closed_loop_test(zm, comfort_band="wide")
+        VirtualPlant("summer", comfort_band="wide")

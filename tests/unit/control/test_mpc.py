@@ -17,13 +17,14 @@ def zm():
     return load_model("second-order")
 
 
-def forecast(H, *, low=21.0, up=23.0, to=28.0, t_ahu=13.0, price=None):
+def forecast(H, *, low=21.0, up=23.0, to=28.0, t_ahu=13.0, price=None, m_min=None):
     return Forecast(
         {"To": np.full(H + 1, to), "Tsd": np.full(H + 1, 24.0)},
         np.full(H + 1, t_ahu),
         np.full(H + 1, low),
         np.full(H + 1, up),
         price,
+        m_min=m_min,
     )
 
 
@@ -65,11 +66,12 @@ def brute_force(mpc, x0, fc, m_nom, p_nom, m_prev):
         {"type": "ineq", "fun": lambda z: fc.upper[1 : H + 1] - outputs(z) + z[2 * H :]},
         {"type": "ineq", "fun": lambda z: z[:H] * span / 1e3 - z[H : 2 * H]},
     ]
-    bounds = [(lim.m_min, lim.m_max)] * H + [(0, None)] * H + [(0, None)] * H
+    m_lo = np.maximum(lim.m_min, fc.m_min[:H]) if fc.m_min is not None else np.full(H, lim.m_min)
+    bounds = [(lo, lim.m_max) for lo in m_lo] + [(0, None)] * H + [(0, None)] * H
     best = None
     rng = np.random.default_rng(0)
     for _ in range(6):
-        z0 = np.r_[rng.uniform(lim.m_min, lim.m_max, H), rng.uniform(0, 0.5, H), rng.uniform(0, 1, H)]
+        z0 = np.r_[rng.uniform(m_lo, lim.m_max, H), rng.uniform(0, 0.5, H), rng.uniform(0, 1, H)]
         r = minimize(
             cost, z0, method="SLSQP", bounds=bounds, constraints=cons, options={"ftol": 1e-14, "maxiter": 500}
         )
@@ -93,6 +95,20 @@ def test_qp_matches_a_brute_force_solution_on_a_three_step_horizon(zm, x_start, 
     np.testing.assert_allclose(plan.m, ref[:3], atol=2e-5)
     np.testing.assert_allclose(plan.reheat, ref[3:6], atol=0.05)
     np.testing.assert_allclose(plan.slack, ref[6:], atol=1e-4)
+
+
+def test_a_per_step_flow_minimum_is_a_per_step_bound_of_the_qp(zm):
+    # the room sits in its band: the optimum rides the minimum flow, which steps up and down
+    mpc = MPC(zm, MPCSettings(horizon=3, linearizations=1, move_weight=1.0), disturbance=None)
+    m_min = np.array([0.02, 0.07, 0.05])
+    fc = forecast(3, m_min=m_min)
+    x0 = np.array([22.0, 21.8])
+    m_nom, p_nom = np.full(3, 0.05), np.zeros(3)
+    plan = mpc.plan(x0, fc, nominal=(m_nom, p_nom))
+    ref = brute_force(mpc, x0, fc, m_nom, p_nom, mpc.limits.m_min)
+    np.testing.assert_allclose(plan.m, ref[:3], atol=2e-5)
+    assert np.all(plan.m >= m_min - 1e-9)
+    np.testing.assert_allclose(plan.m, m_min, atol=1e-4)  # every bound active
 
 
 def test_the_linearized_energy_cost_is_exact_at_the_nominal_trajectory(zm):
@@ -154,6 +170,18 @@ def test_bounds_are_given_in_the_users_units(zm):
             lambda zm: MPC(zm, MPCSettings(horizon=3)).step(0.0, {"Ti": 22.0}, forecast(3, low=24.0)),
             InputShapeError,
             "band",
+        ),
+        (
+            lambda zm: MPC(zm, MPCSettings(horizon=3, flow_max=0.1)).step(
+                0.0, {"Ti": 22.0}, forecast(3, m_min=np.array([0.05, 0.11, 0.05]))
+            ),
+            InputShapeError,
+            "step 1",
+        ),
+        (
+            lambda zm: MPC(zm, MPCSettings(horizon=3)).step(0.0, {"Ti": 22.0}, forecast(3, m_min=np.ones(2))),
+            InputShapeError,
+            "m_min",
         ),
         (
             lambda zm: MPC(zm, MPCSettings(horizon=3)).step(0.0, {"Tii": 22.0}, forecast(3)),

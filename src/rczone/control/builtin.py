@@ -1,0 +1,68 @@
+"""The factories of the built-in controllers (names in :mod:`rczone.control.registry`)."""
+
+from __future__ import annotations
+
+from rczone.control.controllers import (
+    CommissionedThermostat,
+    MPCController,
+    OracleController,
+    ThermostatController,
+)
+from rczone.control.disturbance import Disturbance
+from rczone.control.mpc import MPC
+from rczone.control.plant import Controller, Plant
+from rczone.control.registry import ControllerOptions
+from rczone.errors import ParameterError
+
+
+def _configs(plant: Plant, name: str) -> dict:
+    configs = getattr(plant, "configs", None)
+    if configs is None:
+        raise ParameterError(
+            f"the {name} controller needs the plant's thermostat settings (a VirtualPlant's configs); "
+            f"{type(plant).__name__} has none"
+        )
+    return configs
+
+
+def naive(plant: Plant, options: ControllerOptions) -> Controller:
+    """The zone's thermostat on its schedule's set points (the building's own, before issue 33)."""
+    zone = plant.zones[0]
+    cfg = _configs(plant, "naive")[zone]
+    return ThermostatController(cfg, zone=zone, t_start=plant.measure()["time"], dt=plant.dt)
+
+
+def thermostat(plant: Plant, options: ControllerOptions) -> Controller:
+    """The zone's thermostat as commissioned: set points inside the band, optimal start (the fair baseline)."""
+    zone = plant.zones[0]
+    cfg = _configs(plant, "thermostat")[zone]
+    return CommissionedThermostat(cfg, zone=zone, t_start=plant.measure()["time"], dt=plant.dt)
+
+
+def mpc(plant: Plant, options: ControllerOptions) -> Controller:
+    """The reference MPC with ``options.model`` (an integrating heat disturbance unless told not to)."""
+    if options.model is None:
+        raise ParameterError("the mpc controller needs a model (--model, or model= in the API)")
+    dist = Disturbance("heat") if options.disturbance else None
+    return MPCController(MPC(options.model, options.settings, disturbance=dist), zone=plant.zones[0])
+
+
+#: The oracle's model: the reduced 2-state model of the true construction (fast enough per step).
+ORACLE_MODEL = "second-order"
+
+
+def oracle(plant: Plant, options: ControllerOptions) -> Controller:
+    """The MPC with the true construction's model, true temperature, forecast and gains."""
+    from rczone.models.paper import paper_model
+
+    bld = getattr(plant, "bld", None)
+    if bld is None or not hasattr(plant, "true_forecast"):
+        raise ParameterError(
+            f"the oracle needs the plant's truth (a VirtualPlant); {type(plant).__name__} has none"
+        )
+    model = paper_model(ORACLE_MODEL, geometry=bld.target)
+    dist = Disturbance("heat") if options.disturbance else None
+    return OracleController(MPC(model, options.settings, disturbance=dist), plant, zone=plant.zones[0])
+
+
+FACTORIES = {"naive": naive, "thermostat": thermostat, "mpc": mpc, "oracle": oracle}
