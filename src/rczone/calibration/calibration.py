@@ -87,6 +87,9 @@ class Calibration(Result):
     plausibility : Plausibility or None
         UA, time constants and solar aperture of the fitted model against the model's values
         before the fit, with warnings (:mod:`rczone.models.plausibility`); None when not made.
+    data_warnings : tuple of str
+        The data's signals outside their plausible range (``Dataset.warnings``: degF read as
+        degC, ...); each flags the fit.
     verdict : Verdict
         The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
@@ -100,10 +103,12 @@ class Calibration(Result):
     checks: dict | None = None
     identifiability: Any = None
     plausibility: Plausibility | None = None
+    data_warnings: tuple[str, ...] = ()
     verdict: Verdict = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "verdict", verdict_of(self.result, self.identifiability, self.checks))
+        verdict = verdict_of(self.result, self.identifiability, self.checks, data=self.data_warnings)
+        object.__setattr__(self, "verdict", verdict)
 
     @property
     def data_label(self) -> str:
@@ -363,7 +368,14 @@ def calibrate(
     if analyses:
         plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
     return Calibration(
-        res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr, plausibility=plaus
+        res,
+        fitted,
+        ol,
+        ljung_box(ol.error[:, 0], n_lags=n_lags),
+        inn,
+        olr,
+        plausibility=plaus,
+        data_warnings=data.warnings,
     )
 
 

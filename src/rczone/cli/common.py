@@ -248,12 +248,13 @@ def free_list(items: Iterable[str] | None) -> list[str] | None:
 
 def out_console(json_out: Path | None) -> Console:
     """The console for the human-readable output: stderr when JSON goes to stdout (``--json -``,
-    ``--json /dev/stdout`` or a link to it)."""
+    ``--json /dev/stdout`` or a link to it); unwrapped where it is not a terminal."""
     from rich.console import Console
 
+    from rczone.cli.console import unwrapped
     from rczone.files.atomic import is_stream
 
-    return Console(stderr=json_out is not None and is_stream(json_out))
+    return unwrapped(Console(stderr=json_out is not None and is_stream(json_out)))
 
 
 def write_json(json_out: Path | None, payload: Any) -> None:
