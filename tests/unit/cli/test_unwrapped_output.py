@@ -44,6 +44,9 @@ def test_a_redirected_fit_prints_whole_numbers(tmp_path, capsys):
     assert continuation_rows(out) == []
     (ci,) = [r for r in out.splitlines() if r.startswith("│") and r.split("│")[1].strip() == "Ci"]
     assert re.search(r"\d\.\d+e\+0\d", ci)  # the capacity, e.g. 2.001e+06, whole on its row
+    # a built-in family model's values before the fit are generic starts, not construction data
+    (head,) = [line for line in out.splitlines() if "parameter" in line and "estimate" in line]
+    assert "generic start" in head and "construction" not in head
 
 
 @pytest.mark.parametrize("stderr", [False, True])
