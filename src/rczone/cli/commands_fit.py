@@ -12,6 +12,7 @@ from rczone.cli.common import (
     BoundsOption,
     FixOption,
     HoldOption,
+    QuietOption,
     bounds,
     check_seed,
     constants,
@@ -27,6 +28,7 @@ from rczone.cli.common import (
     write_json,
 )
 from rczone.cli.main import app
+from rczone.cli.progress import reporter
 from rczone.estimation.methods import DEFAULT_METHOD, REGISTRY
 
 #: The methods of the registry, for --help.
@@ -132,6 +134,7 @@ def fit(
     draws: Annotated[int, typer.Option(help="--method mcmc: draws kept per chain.")] = 1000,
     tune: Annotated[int, typer.Option(help="--method mcmc: warm-up draws per chain (discarded).")] = 1000,
     chains: Annotated[int, typer.Option(help="--method mcmc: independent chains (--seed seeds them).")] = 4,
+    quiet: QuietOption = False,
 ) -> None:
     """Identify the model's parameters from DATA.
 
@@ -140,7 +143,6 @@ def fit(
     too few effective draws or divergent transitions) - every output is still written; 2: a mistake
     in the input.
     """
-    from rich.console import Console
 
     from rczone.estimation.sampling import SamplerSettings
     from rczone.workflow import FitSettings, fit_and_check
@@ -172,10 +174,8 @@ def fit(
     )
     others = {p: read_frame(Path(p), column_map, zm) for p in split(check_on) or []}
     label = data_label(data)
-    with Console(stderr=True).status("fitting") as status:
-        cal = fit_and_check(
-            zm, frame, settings, label=label, others=others, progress=lambda m: status.update(esc(m))
-        )
+    with reporter(quiet=quiet) as report:
+        cal = fit_and_check(zm, frame, settings, label=label, others=others, progress=report)
     out = out_console(json_out)
     for line in cal.summary_lines():
         out.print(line)

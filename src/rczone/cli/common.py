@@ -33,6 +33,14 @@ EXIT_INFRASTRUCTURE = 5  # fit-many: some tasks could not run (lost worker...); 
 EXIT_INTERRUPTED = 130  # Ctrl-C
 
 #: Options several commands share (declare a command's parameter with these types).
+QuietOption = Annotated[
+    bool,
+    typer.Option(
+        "--quiet",
+        "-q",
+        help="No progress on stderr (a bar with elapsed and remaining time on a terminal, elsewhere a line every 10 s).",
+    ),
+]
 ColumnMapOption = Annotated[Path | None, typer.Option("--columns", help="TOML column map for trend logs.")]
 ConstantsOption = Annotated[
     list[str] | None,
