@@ -34,13 +34,13 @@ bench: $(STAMP)
 	$(BIN)/python bench/limit.py
 	$(BIN)/python bench/batch.py
 
-# The API reference (Sphinx + numpydoc) into docs/api/_build/html; warnings are errors.
+# The guides and the API reference (Sphinx + MyST + numpydoc) into docs/_build/html; warnings are errors.
 docs: $(STAMP)
-	$(BIN)/python -m sphinx -b html -q -E -W --keep-going docs/api docs/api/_build/html
+	$(BIN)/python -m sphinx -b html -q -E -W --keep-going docs docs/_build/html
 
 # Re-resolve every dependency and pin it in constraints.txt (see its header).
 lock:
 	bash .ci/lock
 
 clean:
-	rm -rf $(VENV) demo-output .pytest_cache docs/api/_build
+	rm -rf $(VENV) demo-output .pytest_cache docs/_build

@@ -100,7 +100,7 @@ def test_the_api_reference_builds_without_warnings(tmp_path) -> None:
             "-E",
             "-W",
             "--keep-going",
-            "docs/api",
+            "docs",
             str(tmp_path),
         ],
         cwd=ROOT,
@@ -108,5 +108,10 @@ def test_the_api_reference_builds_without_warnings(tmp_path) -> None:
         text=True,
     )
     assert proc.returncode == 0, proc.stderr
-    page = (tmp_path / "estimation.html").read_text(encoding="utf-8")
+    page = (tmp_path / "api" / "estimation.html").read_text(encoding="utf-8")
     assert "rczone.estimation.fit" in page and "Parameters" in page
+    # the functions a user calls first have entries, and the Markdown guides are pages of the site
+    top = (tmp_path / "api" / "toplevel.html").read_text(encoding="utf-8")
+    for name in ("fit", "predict", "load_data", "diagnose", "select_models", "smooth"):
+        assert f'id="rczone.{name}"' in top, name
+    assert "column map" in (tmp_path / "your-building.html").read_text(encoding="utf-8")

@@ -19,7 +19,7 @@ from rczone.network.stochastic import is_reserved
 from rczone.results.protocol import Result, json_number
 
 if TYPE_CHECKING:  # matplotlib loads only where a report is written, not in every worker process
-    from rczone.report.html import ReportFigure as Figure
+    from matplotlib.figure import Figure
 
 VERDICTS = ("identifiable", "weak", "not identifiable")
 
@@ -72,7 +72,9 @@ def summarize(df: pd.DataFrame) -> dict:
 
 
 def _histograms(df: pd.DataFrame, params: list[str]) -> Figure:
-    from rczone.report.html import ReportFigure as Figure
+    from matplotlib.figure import Figure
+
+    from rczone.report.html import literal
 
     fig = Figure(figsize=(4.0 * max(1, len(params)), 3.2), layout="constrained")
     axes = fig.subplots(1, max(1, len(params)), squeeze=False)[0]
@@ -85,12 +87,12 @@ def _histograms(df: pd.DataFrame, params: list[str]) -> Figure:
         bins = np.logspace(np.log10(vals.min()) - 0.05, np.log10(vals.max()) + 0.05, 30)
         for method, g in ok.groupby("method"):
             v = g[p].dropna()
-            ax.hist(v[v > 0], bins=bins, alpha=0.55, label=method.upper())
+            ax.hist(v[v > 0], bins=bins, alpha=0.55, label=literal(method.upper()))
         cons = ok.get(f"{p}_construction")
         if cons is not None and cons.notna().any():
             ax.axvline(float(cons.dropna().iloc[0]), color="k", ls="--", lw=1, label="construction")
         ax.set_xscale("log")
-        ax.set_xlabel(p)
+        ax.set_xlabel(literal(p))
         ax.set_ylabel("zones")
         ax.legend(fontsize=8)
     return fig

@@ -51,12 +51,17 @@ from rczone.network.stochastic import (
     measurement_noise_names,
 )
 from rczone.results import Result
+from rczone.results.accessors import FitAccessors
 from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, verdict_of
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Calibration(Result):
+class Calibration(FitAccessors, Result):
     """A fit, its open-loop check on the calibration data, the checks after it and one verdict.
+
+    statsmodels' accessors are at the top (:class:`rczone.results.accessors.FitAccessors`):
+    ``params``, ``bse``, ``cov_params()``, ``conf_int(alpha)``, ``tvalues``, ``llf``, ``aic``,
+    ``bic``, ``nobs``, a labelled ``correlation``, and :meth:`get_prediction` / :meth:`forecast`.
 
     Attributes
     ----------
@@ -89,6 +94,9 @@ class Calibration(Result):
     holdout : HorizonScores or None
         The scores on data held out of the fit (``--holdout``,
         :func:`rczone.workflow.holdout.score_held_out`); None without a held-out part.
+    data_warnings : tuple of str
+        The data's signals outside their plausible range (``Dataset.warnings``: degF read as
+        degC, ...); each flags the fit.
     verdict : Verdict
         The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
@@ -103,10 +111,12 @@ class Calibration(Result):
     identifiability: Any = None
     plausibility: Plausibility | None = None
     holdout: Any = None
+    data_warnings: tuple[str, ...] = ()
     verdict: Verdict = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "verdict", verdict_of(self.result, self.identifiability, self.checks))
+        verdict = verdict_of(self.result, self.identifiability, self.checks, data=self.data_warnings)
+        object.__setattr__(self, "verdict", verdict)
 
     @property
     def data_label(self) -> str:
@@ -122,6 +132,48 @@ class Calibration(Result):
     def exit_code(self) -> int:
         """0 for a trustworthy fit, :data:`~rczone.results.verdict.EXIT_UNTRUSTED` for a flagged one."""
         return 0 if self.verdict.trustworthy else EXIT_UNTRUSTED
+
+    def get_prediction(self, data: pd.DataFrame, *, steps: int | None = None, **options):
+        """The fitted model's prediction of ``data`` (:func:`rczone.calibration.prediction`).
+
+        Parameters
+        ----------
+        data : DataFrame
+            The inputs (and measurements, to score) of the period to predict, in SI units.
+        steps : int, optional
+            Steps ahead from the Kalman filter's state; default open loop.
+        **options
+            The keywords of :func:`rczone.calibration.prediction` (``constants``, ``hold`` ...).
+
+        Returns
+        -------
+        Prediction
+            With ``summary_frame(alpha)`` (statsmodels' columns, a band at any level).
+        """
+        from rczone.calibration.prediction import prediction
+
+        return prediction(self.model, data, steps=steps, label=options.pop("label", "data"), **options)
+
+    def forecast(self, steps: int, data: pd.DataFrame) -> pd.DataFrame:
+        """Each sample of ``data`` predicted ``steps`` ahead, one column per output.
+
+        statsmodels' ``forecast(steps)`` continues a series past its end; a zone's temperature
+        depends on inputs that must be given, so ``data`` holds them (and the measurements the
+        Kalman filter runs on up to ``steps`` samples before each prediction).
+
+        Parameters
+        ----------
+        steps : int
+            Steps ahead (a model fitted by ML or MAP, which has noise levels).
+        data : DataFrame
+            Inputs and measurements, SI units.
+
+        Returns
+        -------
+        DataFrame
+            One column per output, indexed by the data's time stamps.
+        """
+        return self.get_prediction(data, steps=steps).predicted_mean
 
     def to_frame(self) -> pd.DataFrame:
         """The parameter table (:meth:`FitResult.to_frame`)."""
@@ -147,7 +199,10 @@ class Calibration(Result):
 
         r = self.result
         title = f"{esc(self.model_label)} fitted to {esc(self.data_label)} by {r.method.upper()}"
-        lines: list = [parameter_table(r, title), search_line(r)]
+        from rczone.models.library import is_family_name
+
+        generic = is_family_name(self.model_label)  # generic starting values, not construction data
+        lines: list = [parameter_table(r, title, generic=generic), search_line(r)]
         # an LS fit's own RMSE is the open-loop one: said once (issue 22, defect 8)
         own = "" if r.rmse_kind == "open-loop" else f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K;"
         lines.append(
@@ -345,7 +400,14 @@ def calibrate(
     if analyses:
         plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
     return Calibration(
-        res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr, plausibility=plaus
+        res,
+        fitted,
+        ol,
+        ljung_box(ol.error[:, 0], n_lags=n_lags),
+        inn,
+        olr,
+        plausibility=plaus,
+        data_warnings=data.warnings,
     )
 
 

@@ -8,11 +8,13 @@ longest complete stretch of a record.
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
 
+from rczone.data.quality import RczoneWarning
 from rczone.errors import DataError
 from rczone.estimation import Dataset
 from rczone.models import ZoneModel, load_model
@@ -133,6 +135,9 @@ def dataset(
     """
     zm = as_model(model)
     t, u, m, y = zm.signals(frame_from(frame), constants)
+    implausible = zm.implausible_signals(u, m, y)  # every path's data pass here: frame, file, batch
+    for line in implausible:
+        warnings.warn(line, RczoneWarning, stacklevel=2)
     if stretch == "longest":
         sl = complete_stretch(u, m, y)
         if sl.stop - sl.start < 2:
@@ -158,4 +163,6 @@ def dataset(
     elif stretch != "all":
         raise DataError(f"stretch must be 'longest' or 'all', got {stretch!r}")
     net = zm.network
-    return Dataset(t, u, m if m.shape[1] else None, y, net.input_names, net.flow_names, net.outputs)
+    return Dataset(
+        t, u, m if m.shape[1] else None, y, net.input_names, net.flow_names, net.outputs, implausible
+    )

@@ -46,6 +46,7 @@ from rczone.network.stochastic import (
     target_of,
 )
 from rczone.results import Result
+from rczone.results.accessors import PredictionFrames
 from rczone.simulation.simulate import HOLDS
 
 
@@ -78,7 +79,7 @@ class HiddenStates(NamedTuple):
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Prediction(Result):
+class Prediction(PredictionFrames, Result):
     """An open-loop or k-step-ahead prediction with a band of plus or minus two standard deviations.
 
     Attributes
@@ -113,6 +114,9 @@ class Prediction(Result):
         standard deviations; None: the band is ``predicted -+ 2 sd``.
     ignored_channels : tuple of str
         Channels the data's column map mapped that the model does not use.
+
+    ``summary_frame(alpha)`` and ``predicted_mean`` are statsmodels'
+    (:class:`rczone.results.accessors.PredictionFrames`).
     """
 
     t: np.ndarray

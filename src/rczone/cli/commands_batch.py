@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from rczone.cli.common import EXIT_INFRASTRUCTURE as EXIT_TASKS_LOST
-from rczone.cli.common import EXIT_UNTRUSTED, EXIT_ZONES_FAILED
+from rczone.cli.common import EXIT_UNTRUSTED, EXIT_ZONES_FAILED, QuietOption
 from rczone.cli.main import app
+from rczone.cli.progress import reporter
 
 
 @app.command("fit-many")
@@ -27,6 +29,7 @@ def fit_many(
         int | None,
         typer.Option(help="Zones per Dask task (default: about 16 tasks per worker, at most 64 zones)."),
     ] = None,
+    quiet: QuietOption = False,
 ) -> None:
     """Calibrate many zones; resumes where an earlier run stopped.
 
@@ -54,7 +57,9 @@ def fit_many(
         TextColumn("{task.fields[failed]} failed"),
         TimeRemainingColumn(),
     )
-    progress = Progress(*columns, console=err, transient=False)
+    # a bar on a terminal; elsewhere a line at most every 10 s (a bar off a terminal prints at the end)
+    progress = Progress(*columns, console=err, transient=False, disable=quiet or not err.is_terminal)
+    lines = reporter(quiet=quiet or err.is_terminal, stream=sys.stderr, heartbeat=False)
     bar = progress.add_task("fit", total=None, failed=0)
     state = {"failed": 0}
 
@@ -69,6 +74,8 @@ def fit_many(
     def on_result(row: dict, done: int, total: int) -> None:
         state["failed"] += row["status"] != "ok"
         progress.update(bar, completed=done, failed=state["failed"])
+        lines(f"calibrating, {state['failed']} failed")
+        lines.advance(done, total)
 
     try:
         run = run_batch(

@@ -254,7 +254,12 @@ def design(
             " inputs the model gives a default may be left out.",
         ),
     ] = None,
-    band: Annotated[str, typer.Option(help="Allowed zone temperature 'low,high' (default 17,28 degC).")] = "",
+    temperature_limits: Annotated[
+        str,
+        typer.Option(
+            "--limits", help="Allowed zone temperature during the test, 'low,high' (default 17,28 degC)."
+        ),
+    ] = "",
     units: Annotated[
         str | None,
         typer.Option(
@@ -277,7 +282,7 @@ def design(
     hours: Annotated[float, typer.Option(help="Length of the test, h.")] = 12.0,
     min_hold: Annotated[float, typer.Option(help="Shortest hold of a command, min.")] = 30.0,
     initial: Annotated[
-        float | None, typer.Option(help="Zone temperature at the start (default: the middle of the band).")
+        float | None, typer.Option(help="Zone temperature at the start (default: the middle of --limits).")
     ] = None,
     start: Annotated[
         str | None,
@@ -344,9 +349,9 @@ def design(
         role = "boundary" if k in net.boundaries else ("supply" if k in supply else quantity[k])
         conds[k] = _to_si(f"--condition {k}", (v,), unit[k], quantity[k], _ROLE.get(role, role), density)[0]
     band_si = (17.0, 28.0)
-    if band:
-        pair = _numbers(band, "--band", 2, "two numbers 'low,high'")
-        band_si = _to_si("--band", pair, t_unit, "temperature", "room", density)
+    if temperature_limits:
+        pair = _numbers(temperature_limits, "--limits", 2, "two numbers 'low,high'")
+        band_si = _to_si("--limits", pair, t_unit, "temperature", "room", density)
     ti0 = (
         _to_si("--initial", (initial,), t_unit, "temperature", "room", density)[0]
         if initial is not None

@@ -13,6 +13,7 @@ from rczone.cli.common import (
     FixOption,
     HoldOption,
     OptionsOption,
+    QuietOption,
     bounds,
     check_seed,
     constants,
@@ -29,6 +30,7 @@ from rczone.cli.common import (
     write_json,
 )
 from rczone.cli.main import app
+from rczone.cli.progress import reporter
 from rczone.estimation.methods import DEFAULT_METHOD, REGISTRY
 
 #: The methods of the registry, for --help.
@@ -141,6 +143,7 @@ def fit(
     chains: Annotated[
         int | None, typer.Option(help="--method mcmc: independent chains, --seed seeds them (default 4).")
     ] = None,
+    quiet: QuietOption = False,
 ) -> None:
     """Identify the model's parameters from DATA.
 
@@ -149,7 +152,6 @@ def fit(
     too few effective draws or divergent transitions) - every output is still written; 2: a mistake
     in the input.
     """
-    from rich.console import Console
 
     from rczone.workflow import FitSettings, fit_and_check
     from rczone.workflow.holdout import before, split_time
@@ -177,16 +179,8 @@ def fit(
     )
     others = {p: read_frame(Path(p), column_map, zm) for p in split(check_on) or []}
     label = data_label(data)
-    with Console(stderr=True).status("fitting") as status:
-        cal = fit_and_check(
-            zm,
-            full,
-            settings,
-            label=label,
-            others=others,
-            progress=lambda m: status.update(esc(m)),
-            holdout=at,
-        )
+    with reporter(quiet=quiet) as report:
+        cal = fit_and_check(zm, full, settings, label=label, others=others, progress=report, holdout=at)
     out = out_console(json_out)
     for line in cal.summary_lines():
         out.print(line)

@@ -26,6 +26,7 @@ def models(ctx: typer.Context) -> None:
     from rich.console import Console
     from rich.table import Table
 
+    from rczone.cli.console import unwrapped
     from rczone.models import builtin_models, load_model
     from rczone.models.library import OPTIONS, PARTS
 
@@ -44,7 +45,7 @@ def models(ctx: typer.Context) -> None:
             ", ".join(net.default_free) if len(net.default_free) <= 6 else f"{len(net.default_free)} R and C",
             esc(text),
         )
-    console = Console()
+    console = unwrapped(Console())
     console.print(table)
     console.print(
         f"Options of Ti, TiTe, TiTh, TiTeTh, TiTm (append with +, e.g. TiTe+heater+solar): {', '.join(OPTIONS)}."

@@ -14,6 +14,7 @@ from rczone.cli.common import (
     ConstantsOption,
     FixOption,
     HoldOption,
+    QuietOption,
     bounds,
     constants,
     data_label,
@@ -26,6 +27,7 @@ from rczone.cli.common import (
     write_json,
 )
 from rczone.cli.main import app
+from rczone.cli.progress import reporter
 
 
 def _read(data: Path, column_map: Path | None, zms: list, required: list[str] | None = None) -> object:
@@ -105,6 +107,7 @@ def select(
             " (0.25), then score the selected model on the rest next to persistence and ARX.",
         ),
     ] = None,
+    quiet: QuietOption = False,
 ) -> None:
     """Fit candidate models to DATA by maximum likelihood on the same samples and choose one.
 
@@ -120,7 +123,6 @@ def select(
 
     from rczone.cli.commands_fit import _save, _starts, held_out_report
     from rczone.cli.common import check_seed
-    from rczone.cli.console import console as make_console
     from rczone.errors import ParameterError
 
     check_seed(seed)
@@ -131,7 +133,6 @@ def select(
     criterion = criterion.strip().lower()
     if criterion not in ("bic", "aic"):
         raise ParameterError(f"--criterion must be bic or aic, got {criterion!r}")
-    console = make_console(stderr=True)
     out = out_console(json_out)
     label = data_label(data)
     hold = hold.strip().lower()
@@ -174,10 +175,14 @@ def select(
         constants=constants(const) or {},
     )
 
-    def progress(name: str) -> None:
-        console.print(f"fitting {esc(name)} (ML)")
+    with reporter(quiet=quiet) as report:
+        fitted = []
 
-    with console.status(f"selecting among {len(zms)} models on {esc(label)}"):
+        def progress(name: str) -> None:
+            report(f"fitting {name} (ML), candidate {len(fitted) + 1} of {len(zms)}")
+            report.advance(len(fitted), len(zms))
+            fitted.append(name)
+
         sel = select_models(
             zms, frame, settings, rule=criterion, forward=forward, alpha=alpha, progress=progress
         )

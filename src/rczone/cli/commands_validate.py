@@ -9,6 +9,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from rczone.cli.console import unwrapped
 from rczone.cli.main import app
 
 validate_app = typer.Typer(help="Check rczone against independent references.", no_args_is_help=True)
@@ -46,7 +47,7 @@ def vdi6007(
             f"{r.max_dev_dymola_K:.2g}",
             "[green]pass[/]" if r.passed else "[red]FAIL[/]",
         )
-    Console().print(table)
+    unwrapped(Console()).print(table)
     if json_out:
         write_json_atomic(json_out, {"cases": {n: r.to_dict() for n, r in results.items()}})
     if not all(r.passed for r in results.values()):

@@ -33,6 +33,14 @@ EXIT_INFRASTRUCTURE = 5  # fit-many: some tasks could not run (lost worker...); 
 EXIT_INTERRUPTED = 130  # Ctrl-C
 
 #: Options several commands share (declare a command's parameter with these types).
+QuietOption = Annotated[
+    bool,
+    typer.Option(
+        "--quiet",
+        "-q",
+        help="No progress on stderr (a bar with elapsed and remaining time on a terminal, elsewhere a line every 10 s).",
+    ),
+]
 ColumnMapOption = Annotated[Path | None, typer.Option("--columns", help="TOML column map for trend logs.")]
 ConstantsOption = Annotated[
     list[str] | None,
@@ -279,12 +287,13 @@ def free_list(items: Iterable[str] | None) -> list[str] | None:
 
 def out_console(json_out: Path | None) -> Console:
     """The console for the human-readable output: stderr when JSON goes to stdout (``--json -``,
-    ``--json /dev/stdout`` or a link to it)."""
+    ``--json /dev/stdout`` or a link to it); unwrapped where it is not a terminal."""
     from rich.console import Console
 
+    from rczone.cli.console import unwrapped
     from rczone.files.atomic import is_stream
 
-    return Console(stderr=json_out is not None and is_stream(json_out))
+    return unwrapped(Console(stderr=json_out is not None and is_stream(json_out)))
 
 
 def write_json(json_out: Path | None, payload: Any) -> None:

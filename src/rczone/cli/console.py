@@ -18,9 +18,26 @@ def escape(text: object) -> str:
     return _rich_escape(str(text))
 
 
+#: Width of a console that writes to a file or a pipe: wider than any line of rczone's, so nothing wraps.
+UNWRAPPED_WIDTH = 100_000
+
+
+def unwrapped(out: Console) -> Console:
+    """``out``, made as wide as :data:`UNWRAPPED_WIDTH` when it does not write to a terminal.
+
+    rich wraps at 80 columns when it cannot ask a terminal its width, so ``rczone fit C > out``
+    split ``4.499e+05`` and a table's header words across lines; a file or a pipe has no width,
+    and a script reading it wants each line whole. A terminal keeps its own width.
+    """
+    if not out.is_terminal:
+        out.width = UNWRAPPED_WIDTH
+    return out
+
+
 def console(stderr: bool = False) -> Console:
     """A rich console for rczone's output (``stderr=True`` for progress and notes).
 
-    Lines are not wrapped, so a long path or message stays one line (and one copy-paste).
+    Lines are not wrapped, so a long path or message stays one line (and one copy-paste); nothing
+    wraps at all where the output is not a terminal (:func:`unwrapped`).
     """
-    return Console(stderr=stderr, emoji=False, highlight=False, soft_wrap=True)
+    return unwrapped(Console(stderr=stderr, emoji=False, highlight=False, soft_wrap=True))

@@ -13,12 +13,59 @@ from collections.abc import Callable
 from contextlib import nullcontext
 
 import typer
+from typer.core import TyperGroup
 
 from rczone.cli.interrupt import noting_ctrl_c
 from rczone.errors import RczoneError
 
+#: The commands in the order of the work (``rczone --help`` lists them so): look at the models,
+#: ask what the data can identify (or design a test that can), fit, predict, choose among models,
+#: fit many zones, control; then the paper's demo, the reference checks and the version.
+WORKFLOW_ORDER = (
+    "models",
+    "diagnose",
+    "design",
+    "fit",
+    "predict",
+    "select",
+    "fit-many",
+    "control-test",
+    "demo",
+    "validate",
+    "version",
+)
+
+
+class _WorkflowGroup(TyperGroup):
+    """The command group that lists its commands in :data:`WORKFLOW_ORDER` (others last, by name)."""
+
+    def list_commands(self, ctx) -> list[str]:
+        names = super().list_commands(ctx)
+        rank = {n: i for i, n in enumerate(WORKFLOW_ORDER)}
+        return sorted(names, key=lambda n: (rank.get(n, len(rank)), n))
+
+    def get_command(self, ctx, cmd_name: str):
+        cmd = super().get_command(ctx, cmd_name)
+        if cmd is not None:
+            _untyped_flags(cmd, ctx)
+        return cmd
+
+    def get_params(self, ctx):
+        params = super().get_params(ctx)
+        _untyped_flags(self, ctx, params)
+        return params
+
+
+def _untyped_flags(cmd, ctx, params=None) -> None:
+    """No ``<bool>`` beside a flag in the help: a flag takes no value, so it has no type to show."""
+    for p in cmd.get_params(ctx) if params is None else params:
+        if getattr(p, "is_flag", False) and p.metavar is None:
+            p.metavar = ""
+
+
 app = typer.Typer(
     name="rczone",
+    cls=_WorkflowGroup,
     help="Grey-box RC thermal models of building zones: simulate, compare, identify, diagnose.",
     no_args_is_help=True,
     pretty_exceptions_enable=False,

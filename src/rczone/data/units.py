@@ -31,6 +31,7 @@ and the message says which other unit would have made the values plausible.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -184,16 +185,17 @@ def to_si(
     return x * _POWER_W[canon]
 
 
-def check_plausible(
+def implausible(
     si_values: np.ndarray,
     raw_values: np.ndarray,
     role: str,
     unit: str,
     column: str,
+    *,
     air_density: float = DEFAULT_AIR_DENSITY,
     rows: np.ndarray | None = None,
-) -> None:
-    """Raise :class:`DataError` if converted values fall outside the role's plausible range.
+) -> str | None:
+    """What is wrong with values outside the role's plausible range, or None if nothing is.
 
     Parameters
     ----------
@@ -204,30 +206,36 @@ def check_plausible(
     role : str
         A key of :data:`PLAUSIBLE`.
     unit : str
-        The declared unit.
+        The declared unit (or the SI unit a frame without a column map is taken to be in).
     column : str
         Source column (for the message).
     air_density : float
         kg/m3, to test alternative volume-flow units.
     rows : ndarray of int, optional
         0-based data-row number of each value, for the message (default: position).
+
+    Returns
+    -------
+    str or None
+        One line: the column, how many values, the range, the first value, and a hint naming the
+        units that would make every value plausible.
     """
     rng = PLAUSIBLE[role]
     si = np.asarray(si_values, dtype=float)
     finite = np.isfinite(si)
     bad = finite & ((si < rng.low) | (si > rng.high))
     if not bad.any():
-        return
+        return None
     where = np.flatnonzero(bad)
     first = int(where[0])
     row = int(rows[first]) if rows is not None else first
     si_unit = SI_UNITS[rng.quantity]
+    raw = np.asarray(raw_values, dtype=float)
     what = (
         f"column {column!r} ({rng.label}, declared {unit!r}): {where.size} value(s) outside the plausible"
         f" range [{rng.low:g}, {rng.high:g}] {si_unit} after conversion"
-        f" (first at data row {row + 1}: {float(np.asarray(raw_values, dtype=float)[first]):g} {unit})"
+        f" (first at data row {row + 1}: {float(raw[first]):g} {unit})"
     )
-    raw = np.asarray(raw_values, dtype=float)
     fits = []
     for other in known_units(rng.quantity):
         if other == canonical_unit(unit, rng.quantity, column):
@@ -242,4 +250,62 @@ def check_plausible(
         hint = "flows must be >= 0; check the sign convention or sensor offset"
     else:
         hint = "check the declared unit and the sensor"
-    raise DataError(f"{what}; {hint}")
+    return f"{what}; {hint}"
+
+
+def check_plausible(
+    si_values: np.ndarray,
+    raw_values: np.ndarray,
+    role: str,
+    unit: str,
+    column: str,
+    air_density: float = DEFAULT_AIR_DENSITY,
+    rows: np.ndarray | None = None,
+) -> None:
+    """Raise :class:`DataError` if converted values fall outside the role's plausible range.
+
+    The parameters are those of :func:`implausible`, whose line is the error's message.
+    """
+    problem = implausible(si_values, raw_values, role, unit, column, air_density=air_density, rows=rows)
+    if problem is not None:
+        raise DataError(problem)
+
+
+def signal_warnings(signals: Mapping[str, np.ndarray], roles: Mapping[str, str]) -> tuple[str, ...]:
+    """Plausibility of the signals a model reads from a frame taken to be in SI units.
+
+    A frame handed to the API, or a trend log read without a column map, declares no units: its
+    temperatures are taken as degC, flows as kg/s, heat as W. Temperatures in degF or K then pass
+    every check of shape and gaps and give a fit that looks good and means nothing; this is the
+    check the column map's path makes after conversion (:func:`check_plausible`), made where every
+    path (frame, CSV, Parquet, API, command line, batch) builds a model's data set. It returns the
+    findings instead of raising: the fit is flagged with them (and the command exits 3), so data
+    that are right but unusual are still fitted, never silently.
+
+    Parameters
+    ----------
+    signals : mapping of str to ndarray
+        Each channel's values, by name, in the units rczone takes them to be in.
+    roles : mapping of str to str
+        The plausibility role (a key of :data:`PLAUSIBLE`) of each channel to check; channels not
+        named here are not checked.
+
+    Returns
+    -------
+    tuple of str
+        One line per implausible channel, with the unit that would make it plausible.
+    """
+    found = []
+    for name, role in roles.items():
+        if name not in signals:
+            continue
+        unit = SI_UNITS[PLAUSIBLE[role].quantity]
+        x = np.asarray(signals[name], dtype=float)
+        problem = implausible(x, x, role, unit, name)
+        if problem is not None:
+            problem = problem.replace(f"declared {unit!r}", f"taken as {unit!r}", 1)
+            problem = problem.replace(
+                "; declare that unit", f"; convert them to {unit} (or declare the unit in a column map)"
+            )
+            found.append(problem)
+    return tuple(found)

@@ -65,7 +65,7 @@ def load(name: str) -> pd.DataFrame:
     -------
     pandas.DataFrame
         720 rows, columns ``time, Ti, To, Ts, m, Q, Tf, Tc, Tn1, Tn2, Thw, Tsd``; ``df.attrs``
-        holds the scenario, season, mode, seed and description.
+        holds the name (the data's label in results), the scenario, season, mode, seed and description.
 
     Raises
     ------
@@ -83,6 +83,7 @@ def load(name: str) -> pd.DataFrame:
         )
     df.attrs.update(
         {
+            "name": name,  # the data's name in titles and the JSON, and the hints' `rczone fit C`
             "scenario": name,
             "description": s.description,
             "season": s.season,

@@ -64,6 +64,9 @@ class Dataset:
     y : ndarray, shape (N, ny)
         Measured outputs; NaN marks a missing sample.
     input_names, flow_names, output_names : tuple of str
+    warnings : tuple of str
+        Signals outside their plausible range in SI units (degF read as degC, ...), found where
+        the data set was built (:func:`rczone.data.units.signal_warnings`); a fit to them is flagged.
     """
 
     t: np.ndarray
@@ -73,6 +76,7 @@ class Dataset:
     input_names: tuple[str, ...]
     flow_names: tuple[str, ...] = ()
     output_names: tuple[str, ...] = ("Ti",)
+    warnings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         t = check_time(self.t)

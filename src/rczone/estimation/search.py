@@ -186,13 +186,14 @@ def cost_tolerance(method: str, cost: float, scale: float = 0.0) -> float:
 
 
 def latin_hypercube(n: int, d: int, rng: np.random.Generator) -> np.ndarray:
-    """``n`` points of a Latin hypercube in the unit cube ``[0, 1)^d`` [2]_.
+    """``n`` points of a Latin hypercube in the unit cube ``[0, 1)^d`` [2]_ (scipy's ``qmc``).
 
     Each coordinate takes one value in each of the ``n`` equal strata, at a uniform position
     inside it, in an independent random order.
     """
-    strata = np.argsort(rng.random((d, n)), axis=1).T  # a random permutation of 0..n-1 per column
-    return (strata + rng.random((n, d))) / n
+    from scipy.stats import qmc
+
+    return qmc.LatinHypercube(d=d, rng=rng).random(n)
 
 
 def sample_points(spec: ParameterSpec, n: int, rng: np.random.Generator) -> np.ndarray:

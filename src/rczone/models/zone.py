@@ -284,6 +284,44 @@ class ZoneModel:
             out.update({c: "temperature" for c in cols})
         return out
 
+    def signal_roles(self) -> dict[str, str]:
+        """Plausibility role (:data:`rczone.data.units.PLAUSIBLE`) of every signal the model reads.
+
+        Outputs are room temperatures, supply temperatures supply-air temperatures, the channels
+        rczone knows by name (:data:`rczone.data.columnmap.KNOWN_CHANNELS`) their own role, other
+        boundaries outdoor or adjacent-space temperatures (the outdoor range, -60 to 60 degC).
+        """
+        from rczone.data.columnmap import KNOWN_CHANNELS
+
+        net = self.network
+        roles = {b: KNOWN_CHANNELS.get(b, ("temperature", "outdoor"))[1] for b in net.boundaries}
+        roles.update({s.temperature: "supply" for s in net.supply_air})
+        roles.update({o: "room" for o in net.outputs})
+        roles.update({f: "flow" for f in net.flow_names})
+        roles.update({h.name: "power" if h.unit == "W" else "irradiance" for h in net.heat_inputs})
+        return roles
+
+    def implausible_signals(self, u: np.ndarray, m: np.ndarray, y: np.ndarray) -> tuple[str, ...]:
+        """One line per signal of :meth:`signals` outside its plausible range in SI units.
+
+        Parameters
+        ----------
+        u, m, y : ndarray
+            Inputs, flows and outputs as :meth:`signals` returns them.
+
+        Returns
+        -------
+        tuple of str
+            The findings of :func:`rczone.data.units.signal_warnings` (degF read as degC, ...).
+        """
+        from rczone.data.units import signal_warnings
+
+        net = self.network
+        named = {n: u[:, j] for j, n in enumerate(net.input_names)}
+        named.update({n: m[:, j] for j, n in enumerate(net.flow_names)})
+        named.update({n: y[:, j] for j, n in enumerate(net.outputs)})
+        return signal_warnings(named, self.signal_roles())
+
     def required_signals(self) -> tuple[str, ...]:
         """Signals the data must have as columns: outputs, and inputs without a default or a mean."""
         net = self.network

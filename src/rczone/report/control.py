@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from rczone.control.closedloop import ClosedLoopResult
-from rczone.report.html import Report
+from rczone.report.html import Report, literal
 
 
 def closed_loop_figure(result: ClosedLoopResult) -> Figure:
@@ -35,7 +35,9 @@ def closed_loop_figure(result: ClosedLoopResult) -> Figure:
         ax.grid(alpha=0.3)
     st = result.setup
     fig.suptitle(
-        f"{st['controller']} on the {st['scenario']} scenario (model {st['model']}, seed {st['seed']})"
+        literal(
+            f"{st['controller']} on the {st['scenario']} scenario (model {st['model']}, seed {st['seed']})"
+        )
     )
     fig.tight_layout()
     return fig

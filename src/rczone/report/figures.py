@@ -11,10 +11,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
+from matplotlib.figure import Figure
 
 from rczone.models.comparison import FrequencyComparison, TimeComparison
 from rczone.models.reduction import F_PER_K
-from rczone.report.html import ReportFigure as Figure
+from rczone.report.html import literal
 
 if TYPE_CHECKING:  # pragma: no cover
     from rczone.estimation.innovations import ResidualAnalysis
@@ -35,14 +36,14 @@ def time_comparison(comparisons: Sequence[TimeComparison], title: str = "") -> F
         h = _hours(c.t)
         ax.plot(h, c.measured, color=COLORS["measured"], lw=1.0, label="measured")
         for name, y in c.predicted.items():
-            ax.plot(h, y, color=COLORS.get(name), lw=1.3, label=LABELS.get(name, name))
+            ax.plot(h, y, color=COLORS.get(name), lw=1.3, label=literal(LABELS.get(name, name)))
         ax.set_ylabel("Ti (°C)")
-        ax.set_title(c.label, fontsize=10, loc="left")
+        ax.set_title(literal(c.label), fontsize=10, loc="left")
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("hours from start (6 pm)")
     axes[0].legend(fontsize=8, ncol=4, loc="best")
     if title:
-        fig.suptitle(title)
+        fig.suptitle(literal(title))
     fig.tight_layout()
     return fig
 
@@ -53,8 +54,8 @@ def gains(fc: FrequencyComparison, inputs: Sequence[str] = ("Ts", "Tsd")) -> Fig
     axes = fig.subplots(1, len(inputs), squeeze=False)[0]
     for ax, i in zip(axes, inputs, strict=True):
         for name, g in fc.gains.items():
-            ax.semilogx(fc.freq_hz, g[i], color=COLORS.get(name), label=LABELS.get(name, name))
-        ax.set_title(f"|H_{i}| at m = {fc.m:g} kg/s", fontsize=10)
+            ax.semilogx(fc.freq_hz, g[i], color=COLORS.get(name), label=literal(LABELS.get(name, name)))
+        ax.set_title(literal(f"|H_{i}| at m = {fc.m:g} kg/s"), fontsize=10)
         ax.set_xlabel("frequency (Hz)")
         period_axis(ax, per_hour=False)
         ax.grid(alpha=0.3, which="both")
@@ -70,8 +71,8 @@ def gain_errors(fc: FrequencyComparison, inputs: Sequence[str] = ("Ts", "Tsd")) 
     axes = fig.subplots(1, len(inputs), squeeze=False)[0]
     for ax, i in zip(axes, inputs, strict=True):
         for name, e in fc.errors.items():
-            ax.semilogx(fc.freq_hz, e[i], color=COLORS.get(name), label=LABELS.get(name, name))
-        ax.set_title(f"e_{i} (du = {fc.du[i]:.1f} K)", fontsize=10)
+            ax.semilogx(fc.freq_hz, e[i], color=COLORS.get(name), label=literal(LABELS.get(name, name)))
+        ax.set_title(literal(f"e_{i} (du = {fc.du[i]:.1f} K)"), fontsize=10)
         ax.set_xlabel("frequency (Hz)")
         period_axis(ax, per_hour=False)
         ax.grid(alpha=0.3, which="both")
@@ -92,13 +93,13 @@ def signals_overview(
     h = _hours(frame["time"].to_numpy(float))
     for ax, (label, cols) in zip(axes, panels, strict=False):
         for c in cols:
-            ax.plot(h, frame[c].to_numpy(float), lw=1.0, label=c)
-        ax.set_ylabel(label)
+            ax.plot(h, frame[c].to_numpy(float), lw=1.0, label=literal(c))
+        ax.set_ylabel(literal(label))
         ax.legend(fontsize=7, ncol=min(len(cols), 6), loc="best")
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("hours from start")
     if title:
-        fig.suptitle(title)
+        fig.suptitle(literal(title))
     fig.tight_layout()
     return fig
 
@@ -112,7 +113,7 @@ def fit_overview(
     h = _hours(t)
     ax1.plot(h, measured, color="black", lw=1.0, label="measured")
     ax1.plot(h, predicted, color="#dd6b20", lw=1.4, label="model (open loop)")
-    ax1.set_ylabel(f"{label} (°C)")
+    ax1.set_ylabel(literal(f"{label} (°C)"))
     ax1.legend(fontsize=8)
     ax1.grid(alpha=0.3)
     ax2.plot(h, measured - predicted, color="#c53030", lw=0.9)
@@ -121,7 +122,7 @@ def fit_overview(
     ax2.set_xlabel("hours from start")
     ax2.grid(alpha=0.3)
     if title:
-        fig.suptitle(title)
+        fig.suptitle(literal(title))
     fig.tight_layout()
     return fig
 
@@ -141,7 +142,7 @@ def residual_acf(
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     if title:
-        ax.set_title(title, fontsize=10)
+        ax.set_title(literal(title), fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -170,13 +171,15 @@ def paper_figs_5_6(
     for j, i in enumerate(inputs):
         top, bottom = axes[0, j], axes[1, j]
         for name, g in fc.gains.items():
-            top.semilogx(fc.freq_hz, g[i], label=LABELS.get(name, name), **_variant_style(name))  # type: ignore[arg-type]
+            top.semilogx(fc.freq_hz, g[i], label=literal(LABELS.get(name, name)), **_variant_style(name))  # type: ignore[arg-type]
         for name, e in fc.errors.items():
-            bottom.semilogx(fc.freq_hz, e[i] * F_PER_K, label=LABELS.get(name, name), **_variant_style(name))  # type: ignore[arg-type]
+            bottom.semilogx(
+                fc.freq_hz, e[i] * F_PER_K, label=literal(LABELS.get(name, name)), **_variant_style(name)
+            )  # type: ignore[arg-type]
         bottom.axhline(limit_F, color="grey", lw=0.8)
         period_axis(top, per_hour=False)
-        top.set_title(f"|H_{i}| at m = {fc.m:g} kg/s", fontsize=10)
-        bottom.set_title(f"e_{i}, du = {fc.du[i] * F_PER_K:.0f} F", fontsize=10)
+        top.set_title(literal(f"|H_{i}| at m = {fc.m:g} kg/s"), fontsize=10)
+        bottom.set_title(literal(f"e_{i}, du = {fc.du[i] * F_PER_K:.0f} F"), fontsize=10)
         bottom.set_xlabel("frequency (Hz)")
         for ax in (top, bottom):
             ax.grid(alpha=0.3, which="both")
@@ -225,7 +228,7 @@ def _cpgram(ax, analysis: ResidualAnalysis, j: int, color: str = "#2b6cb0", labe
     """The cumulative periodogram of output ``j`` against frequency in cycles per hour, with its band."""
     cp = analysis.outputs[j].periodogram
     f = cp.freq * 3600.0 / analysis.dt_s
-    ax.step(f, cp.cumulative, where="post", color=color, lw=1.1, label=label or None)
+    ax.step(f, cp.cumulative, where="post", color=color, lw=1.1, label=literal(label) if label else None)
 
 
 def _cpgram_band(ax, analysis: ResidualAnalysis, j: int) -> None:
@@ -258,7 +261,7 @@ def residual_panels(analysis: ResidualAnalysis, output: int = 0, title: str = ""
     a1.axhline(0, color="black", lw=0.6)
     a1.set_xlabel("hours from start")
     a1.set_ylabel("standardized" if innov else "error / RMS")
-    a1.set_title(("innovations" if innov else "open-loop error") + f" of {o.output}", fontsize=10)
+    a1.set_title(("innovations" if innov else "open-loop error") + literal(f" of {o.output}"), fontsize=10)
     lag_h = analysis.lags_h
     a2.vlines(lag_h[1:], 0, o.acf[1:], color="#2b6cb0", lw=1.2)
     a2.axhspan(-o.band, o.band, color="#a0aec0", alpha=0.3, label="95 % band of white noise")
@@ -273,7 +276,7 @@ def residual_panels(analysis: ResidualAnalysis, output: int = 0, title: str = ""
     a3.legend(fontsize=7, loc="lower right")
     for k, (name, r) in enumerate(o.ccf.items()):
         if r is not None:
-            a4.plot(lag_h, r, lw=1.0, color=f"C{k}", label=name)
+            a4.plot(lag_h, r, lw=1.0, color=f"C{k}", label=literal(name))
     a4.axhspan(-o.band, o.band, color="#a0aec0", alpha=0.3)
     a4.axhline(0, color="black", lw=0.6)
     a4.set_xlabel("lag (h), input leading")
@@ -282,7 +285,7 @@ def residual_panels(analysis: ResidualAnalysis, output: int = 0, title: str = ""
     for ax in (a1, a2, a3, a4):
         ax.grid(alpha=0.3)
     if title:
-        fig.suptitle(title)
+        fig.suptitle(literal(title))
     fig.tight_layout()
     return fig
 
@@ -294,8 +297,8 @@ def residual_comparison(analyses: dict[str, ResidualAnalysis], output: int = 0, 
     first = None
     for k, (name, an) in enumerate(analyses.items()):
         o = an.outputs[output]
-        a1.plot(an.lags_h[1:], o.acf[1:], color=f"C{k}", lw=1.1, marker=".", ms=3, label=name)
-        _cpgram(a2, an, output, color=f"C{k}", label=name)
+        a1.plot(an.lags_h[1:], o.acf[1:], color=f"C{k}", lw=1.1, marker=".", ms=3, label=literal(name))
+        _cpgram(a2, an, output, color=f"C{k}", label=literal(name))
         first = first or an
     if first is not None:
         band = first.outputs[output].band
@@ -310,7 +313,7 @@ def residual_comparison(analyses: dict[str, ResidualAnalysis], output: int = 0, 
     for ax in (a1, a2):
         ax.grid(alpha=0.3)
     if title:
-        fig.suptitle(title)
+        fig.suptitle(literal(title))
     fig.tight_layout()
     return fig
 
@@ -342,7 +345,7 @@ def profile_curves(profiles: dict[str, dict], estimates: dict[str, float], units
         hi = x[-1] if hi is None or not np.isfinite(hi) else hi
         ax.axvspan(lo, hi, color="#90cdf4", alpha=0.3, lw=0)
         unit = units.get(name, "")
-        ax.set_xlabel(f"{name} ({unit})" if unit else name)
+        ax.set_xlabel(literal(f"{name} ({unit})" if unit else name))
         ax.set_ylabel("rise of the cost")
         ax.grid(alpha=0.3, which="both")
     for ax in axes[len(names) :]:

@@ -11,9 +11,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import matplotlib
 from matplotlib.figure import Figure
-from matplotlib.text import Text
 
 from rczone.files.atomic import write_bytes_in, write_text_in
 
@@ -31,31 +29,31 @@ figcaption{font-size:.9em;color:#555}.note{background:#f6f8fa;border-left:4px so
 """
 
 
-def plain_text(fig: Figure) -> Figure:
-    """Every text of ``fig`` printed as written: no mathtext, so a user's ``$`` in a zone, file,
-    model or node name is a dollar sign, not a formula that fails to parse (``a$\\frac{$b``).
+def literal(text: object) -> str:
+    """``text`` as a figure label that matplotlib prints as written: each ``$`` escaped.
 
-    rczone's own labels use no mathtext; this is the figures' counterpart of the escaping of user
-    strings for rich (:func:`rczone.cli.console.escape`) and for HTML (``html.escape``).
+    A user's zone, file, model, node or column name may hold ``$`` (``a$\\frac{$b``); unescaped,
+    matplotlib would read it as mathtext and fail to parse or print a formula. Escaping the user's
+    strings where they are drawn keeps mathtext on for matplotlib's own labels (the log axes'
+    ``10^{-5}`` tick labels are mathtext), the figures' counterpart of the escaping of user strings
+    for rich (:func:`rczone.cli.console.escape`) and for HTML (``html.escape``).
+
+    Parameters
+    ----------
+    text : object
+        A name or label (converted with ``str``).
+
+    Returns
+    -------
+    str
+        The label with every ``$`` written ``\\$``.
+
+    References
+    ----------
+    The matplotlib developers, "Writing mathematical expressions" (matplotlib 3.8 user guide): an
+    escaped dollar sign ``\\$`` prints a literal ``$``.
     """
-    for text in fig.findobj(Text):
-        text.set_parse_math(False)
-    return fig
-
-
-class ReportFigure(Figure):
-    """The figures of rczone's reports: every text printed as written (:func:`plain_text`),
-    whenever the figure is laid out or drawn, so no user string is ever parsed as mathtext."""
-
-    def draw(self, renderer):
-        plain_text(self)
-        with matplotlib.rc_context({"text.parse_math": False}):
-            return super().draw(renderer)
-
-    def tight_layout(self, *args, **kwargs):
-        plain_text(self)
-        with matplotlib.rc_context({"text.parse_math": False}):
-            return super().tight_layout(*args, **kwargs)
+    return str(text).replace("$", r"\$")
 
 
 def file_stem(name: str) -> str:
@@ -119,9 +117,7 @@ class Report:
     def figure(self, name: str, fig: Figure, caption: str = "") -> None:
         """Embed a matplotlib figure; it is also written as ``<name>.png``."""
         buf = io.BytesIO()
-        plain_text(fig)
-        with matplotlib.rc_context({"text.parse_math": False}):  # tick labels made while drawing too
-            fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
         png = buf.getvalue()
         self.figures[file_stem(name)] = png
         b64 = base64.b64encode(png).decode("ascii")

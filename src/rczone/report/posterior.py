@@ -17,10 +17,10 @@ import html
 from typing import TYPE_CHECKING
 
 import numpy as np
+from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from rczone.report.html import Report
-from rczone.report.html import ReportFigure as Figure
+from rczone.report.html import Report, literal
 
 if TYPE_CHECKING:  # pragma: no cover
     from rczone.estimation.posterior import Posterior
@@ -52,7 +52,7 @@ def trace_figure(post: Posterior) -> Figure:
             axes[i, 1].hist(
                 post.draws[c, :, i], bins=30, histtype="step", color=color, orientation="horizontal"
             )
-        axes[i, 0].set_ylabel(name, fontsize=8)
+        axes[i, 0].set_ylabel(literal(name), fontsize=8)
         axes[i, 0].tick_params(labelsize=7)
         axes[i, 1].tick_params(labelsize=7, labelleft=False)
         axes[i, 0].grid(alpha=0.3)
@@ -90,9 +90,9 @@ def pair_figure(post: Posterior) -> Figure:
             else:
                 ax.plot(flat[:, j], flat[:, i], ",", color="#2b6cb0", alpha=0.5)
             if i == k - 1:
-                ax.set_xlabel(post.names[j], fontsize=7)
+                ax.set_xlabel(literal(post.names[j]), fontsize=7)
             if j == 0 and i > 0:
-                ax.set_ylabel(post.names[i], fontsize=7)
+                ax.set_ylabel(literal(post.names[i]), fontsize=7)
     fig.tight_layout()
     return fig
 

@@ -5,12 +5,12 @@ from __future__ import annotations
 import html
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from rczone.calibration import Prediction
 from rczone.calibration.horizons import HorizonScores
 from rczone.network.stochastic import target_of
-from rczone.report.html import Report
-from rczone.report.html import ReportFigure as Figure
+from rczone.report.html import Report, literal
 
 
 def prediction_figure(pred: Prediction, title: str = "") -> Figure:
@@ -43,19 +43,21 @@ def prediction_figure(pred: Prediction, title: str = "") -> Figure:
                 label="±2 σ from the estimates",
             )
         ax.plot(h, pred.measured[:, j], color="black", lw=1.0, label="measured")
-        ax.plot(h, pred.predicted[:, j], color="#2b6cb0", lw=1.3, label=f"predicted ({pred.horizon})")
-        ax.set_ylabel(f"{o} (°C)")
+        ax.plot(
+            h, pred.predicted[:, j], color="#2b6cb0", lw=1.3, label=literal(f"predicted ({pred.horizon})")
+        )
+        ax.set_ylabel(literal(f"{o} (°C)"))
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="best")
     ax = axes[-1]
     for j, o in enumerate(pred.outputs):
-        ax.plot(h, pred.error[:, j], lw=1.0, label=o)
+        ax.plot(h, pred.error[:, j], lw=1.0, label=literal(o))
     ax.axhline(0.0, color="grey", lw=0.8)
     ax.set_ylabel("error (K)")
     ax.set_xlabel("hours from start")
     ax.grid(alpha=0.3)
     if title:
-        fig.suptitle(title)
+        fig.suptitle(literal(title))
     fig.tight_layout()
     return fig
 
@@ -121,9 +123,9 @@ def horizons_figure(scores: HorizonScores) -> Figure:
         x = [labels.index(h) for h in rows["horizon"]]
         colour, marker = styles.get(name, ("black", "x"))
         tag = name if len(scores.outputs) == 1 else f"{name} ({output})"
-        ax_rmse.plot(x, rows["rmse_K"], marker=marker, color=colour, label=tag)
+        ax_rmse.plot(x, rows["rmse_K"], marker=marker, color=colour, label=literal(tag))
         if name == MODEL:
-            ax_cov.plot(x, 100 * rows["coverage_2sigma"], marker=marker, color=colour, label=tag)
+            ax_cov.plot(x, 100 * rows["coverage_2sigma"], marker=marker, color=colour, label=literal(tag))
     ax_rmse.set_ylabel("RMSE (K)")
     ax_rmse.grid(alpha=0.3)
     ax_rmse.legend(fontsize=8, loc="best")
@@ -133,9 +135,9 @@ def horizons_figure(scores: HorizonScores) -> Figure:
     ax_cov.set_ylim(0, 102)
     ax_cov.grid(alpha=0.3)
     ax_cov.legend(fontsize=8, loc="lower left")
-    ax_cov.set_xticks(pos, labels, rotation=20, fontsize=8)
+    ax_cov.set_xticks(pos, [literal(x) for x in labels], rotation=20, fontsize=8)
     ax_cov.set_xlabel("horizon")
-    fig.suptitle(f"{scores.model_label} on {scores.data_label}: error against horizon")
+    fig.suptitle(literal(f"{scores.model_label} on {scores.data_label}: error against horizon"))
     fig.tight_layout()
     return fig
 

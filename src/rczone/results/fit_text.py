@@ -28,7 +28,7 @@ def esc(text: object) -> str:
     return escape(str(text))
 
 
-def parameter_table(r, title: str):
+def parameter_table(r, title: str, *, generic: bool = False):
     """The estimates with units, standard errors, construction values and a flag per parameter.
 
     Parameters
@@ -37,6 +37,9 @@ def parameter_table(r, title: str):
         The fit.
     title : str
         Title of the table (rich markup).
+    generic : bool
+        The model's values before the fit are generic starting points (a built-in model of the
+        Bacher & Madsen family), not construction data: the column says so, and no ratio is shown.
 
     Returns
     -------
@@ -47,7 +50,14 @@ def parameter_table(r, title: str):
     table = Table(title=title)
     table.add_column("parameter", no_wrap=True)
     post = getattr(r, "posterior", None)
-    heads = ("estimate", "unit", "std. error", "construction", "ratio", "flag")
+    heads = (
+        "estimate",
+        "unit",
+        "std. error",
+        "generic start" if generic else "construction",
+        "ratio",
+        "flag",
+    )
     if post is not None:
         heads = ("posterior mean", "unit", "sd", "90 % interval", "R-hat", "flag")
         q90 = post.interval(0.9)
@@ -66,7 +76,7 @@ def parameter_table(r, title: str):
             lo, hi = search.spread[n]
             if lo > 0 and hi / lo > 1.1 and e.unit in ("K/W", "J/K"):
                 flags.append(f"[yellow]starts: x{hi / lo:.2g}[/]")
-        c, ratio = e.construction, e.ratio_to_construction
+        c, ratio = e.construction, math.nan if generic else e.ratio_to_construction
         cells = [
             esc(n),
             f"{e.value:.4g}",

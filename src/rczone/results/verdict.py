@@ -11,7 +11,7 @@ Before, the report said "do not trust" from the analysis while the command exite
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, NamedTuple
 
 #: Exit code of a command whose result is flagged untrustworthy.
@@ -53,7 +53,13 @@ class Verdict(NamedTuple):
         }
 
 
-def verdict_of(result, identifiability=None, checks: Mapping[str, Any] | None = None) -> Verdict:
+def verdict_of(
+    result,
+    identifiability=None,
+    checks: Mapping[str, Any] | None = None,
+    *,
+    data: Sequence[str] = (),
+) -> Verdict:
     """The one verdict on a fit from its own flags and the checks made after it.
 
     Parameters
@@ -71,12 +77,15 @@ def verdict_of(result, identifiability=None, checks: Mapping[str, Any] | None = 
     checks : mapping, optional
         The JSON-ready post-fit checks (``profiles``, ``disagreements``): a profile flat over a
         factor of ten, or fits to other data that disagree, make the estimate untrustworthy.
+    data : sequence of str
+        The data's signals outside their plausible range (:attr:`rczone.estimation.Dataset.warnings`):
+        temperatures in degF read as degC fit as well as any, so each is a reason not to trust the fit.
 
     Returns
     -------
     Verdict
     """
-    reasons = list(result.flags)
+    reasons = list(result.flags) + [f"implausible data: {line}" for line in data]
     suspect = [n for n, e in result.parameters.items() if e.at_bound and result.issues]
     checked = ["fit"]
     notes: list[str] = []

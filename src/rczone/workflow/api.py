@@ -303,7 +303,8 @@ def simulate(
 
     The bilinear supply-air term m cp (Ts - Ti) is kept: the model is discretized exactly on each
     sampling interval with the inputs held as ``hold`` says (Lin, Middelkoop and Barooah 2012,
-    eq. 2). Measured outputs in ``data`` are not used.
+    eq. 2). Measured outputs in ``data`` are used only for the start: a measured node starts at its
+    first measurement.
 
     Parameters
     ----------
@@ -312,8 +313,9 @@ def simulate(
     data : DataFrame, str or path
         As for :func:`fit` (only the model's inputs are read).
     x0 : mapping of str to float, optional
-        Initial temperature of each node, degC; default the steady state for the first inputs.
-        Nodes not named start at that steady state too.
+        Initial temperature of each node, degC. Nodes not named start at their first measurement
+        when the data measure them (an output with a first value), else at the steady state for the
+        first inputs.
     hold : {"zoh", "foh"}
         Inputs held constant (zero-order) or linear (first-order) between samples.
     constants : mapping, optional
@@ -346,6 +348,8 @@ def simulate(
     m = m if m.shape[1] else None
     ss = zm.state_space()
     start = None
+    first = {o: given[o].iloc[0] for o in zm.network.outputs if o not in missing and o in ss.state_names}
+    x0 = {**{o: float(v) for o, v in first.items() if pd.notna(v)}, **dict(x0 or {})}
     if x0:
         unknown = sorted(set(x0) - set(ss.state_names))
         if unknown:

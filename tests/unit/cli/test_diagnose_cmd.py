@@ -219,7 +219,7 @@ def test_design_in_degf_and_cfm_is_the_si_design_converted(tmp_path, capsys):
         "--condition",
         "Tsd=71.6",
     ]
-    rc = main(["design", *args, "--units", "degF,cfm", "--band", "62.6,82.4", *short, "--out", str(us)])
+    rc = main(["design", *args, "--units", "degF,cfm", "--limits", "62.6,82.4", *short, "--out", str(us)])
     assert rc == 0
     a, b = pd.read_csv(si), pd.read_csv(us)
     assert list(b.columns) == ["time_s", "day", "clock", "Ts_setpoint_degF", "m_setpoint_cfm"]
@@ -237,7 +237,7 @@ def test_design_takes_units_time_zone_and_night_from_a_column_map(tmp_path, caps
         'Tsd = { column = "AVG-T", unit = "degF" }\n'
     )
     base = ["design", "--columns", str(tmp_path / "map.toml"), "--hours", "2", "--condition", "To=60"]
-    base += ["--condition", "Tsd=72", "--actuate", "Ts=55,95", "--actuate", "m=20,100", "--band", "63,82"]
+    base += ["--condition", "Tsd=72", "--actuate", "Ts=55,95", "--actuate", "m=20,100", "--limits", "63,82"]
     out = tmp_path / "a.csv"
     assert main([*base, "--out", str(out)]) == 0
     s = pd.read_csv(out)
@@ -251,7 +251,7 @@ def test_design_takes_units_time_zone_and_night_from_a_column_map(tmp_path, caps
 def test_design_for_a_heater_schedules_its_power(tmp_path, capsys):
     out, js = tmp_path / "heat.csv", tmp_path / "heat.json"
     args = ["design", "--model", "TiTe+heater", "--actuate", "Ph=0,2", "--units", "kW", "--condition", "To=5"]
-    args += ["--band", "15,30", "--hours", "24", "--min-hold", "120", "--out", str(out), "--json", str(js)]
+    args += ["--limits", "15,30", "--hours", "24", "--min-hold", "120", "--out", str(out), "--json", str(js)]
     assert main(args) == 0
     s = pd.read_csv(out)
     assert list(s.columns) == ["time_s", "day", "clock", "Ph_setpoint_kW"]
@@ -279,11 +279,11 @@ def test_design_for_a_heater_schedules_its_power(tmp_path, capsys):
         ([], "give the inputs the test may drive and their ranges with --actuate"),
         (["--actuate", "Ts=55,95", "--actuate", "m=0.02,0.12"], "the values look like degF"),
         (["--actuate", "Ts=12,35", "--actuate", "m=40,250"], "--units (e.g. --units cfm)"),
-        ([*AIR, "--band", "65,78"], "the values look like degF"),
-        ([*AIR, "--band", "25,20"], "band must be (low, high) with low < high"),
-        ([*AIR, "--band", "cold"], "--band must be two numbers"),
+        ([*AIR, "--limits", "65,78"], "the values look like degF"),
+        ([*AIR, "--limits", "25,20"], "band must be (low, high) with low < high"),
+        ([*AIR, "--limits", "cold"], "--limits must be two numbers"),
         (
-            [*AIR[:4], "--condition", "To=30", "--condition", "Tsd=35", "--band", "17,20"],
+            [*AIR[:4], "--condition", "To=30", "--condition", "Tsd=35", "--limits", "17,20"],
             "cannot stay inside",
         ),
         (AIR[:4], "conditions lack To, Tsd"),

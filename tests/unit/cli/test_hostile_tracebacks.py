@@ -146,19 +146,6 @@ def test_mathtext_in_names_reaches_the_figures_literally(tmp_path, capsys):
     assert name in (rep / "report.html").read_text()
 
 
-def test_every_figure_text_is_plain():
-    from matplotlib.text import Text
-
-    from rczone.report.html import ReportFigure
-
-    fig = ReportFigure()
-    ax = fig.subplots()
-    ax.set_title("$\\frac{$")
-    ax.set_xticks([0, 1], ["$x$", "a$\\frac{$b"])
-    fig.tight_layout()
-    assert all(not t.get_parse_math() for t in fig.findobj(Text))
-
-
 # ---- time ----------------------------------------------------------------------------------------
 
 

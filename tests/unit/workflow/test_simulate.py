@@ -43,3 +43,23 @@ def test_options_are_keyword_only_and_a_bad_node_is_one_clear_error() -> None:
         rczone.simulate("Ti", _frame(), {"Ti": 30.0})  # type: ignore[misc]
     with pytest.raises(ParameterError, match="not a node of model"):
         rczone.simulate("Ti", _frame(), x0={"Tw": 30.0})
+
+
+def test_a_measured_node_starts_at_its_first_measurement() -> None:
+    """The analytic one-node decay from the measured start (x0 still wins where given)."""
+    model = rczone.load_model("Ti")
+    tau = model.theta["Ria"] * model.theta["Ci"]
+    frame = _frame().assign(Ti=21.0)
+    out = rczone.simulate(model, frame)
+    assert out["Ti"].iloc[0] == 21.0
+    t = (frame.index[1] - frame.index[0]).total_seconds()
+    assert out["Ti"].iloc[1] == pytest.approx(5.0 + 16.0 * np.exp(-t / tau), rel=1e-9)
+    assert rczone.simulate(model, frame, x0={"Ti": 30.0})["Ti"].iloc[0] == 30.0
+    assert rczone.simulate(model, frame.assign(Ti=np.nan))["Ti"].iloc[0] == pytest.approx(5.0)
+
+
+def test_a_built_in_data_set_is_named_by_its_name() -> None:
+    from rczone.workflow.datasource import frame_and_label
+
+    zm = rczone.load_model("second-order-paper")
+    assert frame_and_label(rczone.load_data("C"), None, zm)[1] == "C"
