@@ -25,6 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from rczone.calibration.conformal import (
+    ALPHA,
+    ConformalBand,
+    ConformalSettings,
+    conformal_band,
+    interval_score,
+)
 from rczone.calibration.dataset import ModelLike, as_model, ignored_channels
 from rczone.calibration.prediction import PredictionSetup, prediction_setup, saved_covariance, write_series
 from rczone.errors import DataError, ParameterError
@@ -94,7 +101,9 @@ class HorizonScores(Result):
     table : DataFrame
         One row per horizon, predictor and output: ``horizon`` (label), ``steps`` (None: open
         loop), ``horizon_s``, ``predictor``, ``output``, ``n``, ``rmse_K``, ``mae_K``, ``bias_K``
-        (measured minus predicted), ``coverage_2sigma`` (model only; NaN without a band).
+        (measured minus predicted), ``coverage_2sigma`` and ``interval_score_K`` (model only; NaN
+        without a band; the interval score of Gneiting & Raftery 2007 of the band at its nominal
+        95.45 %, :func:`~rczone.calibration.conformal.interval_score`).
     t : ndarray, shape (N,)
         The scored samples' times, s.
     measured : ndarray, shape (N, ny)
@@ -111,6 +120,9 @@ class HorizonScores(Result):
     warmup_samples : int
     ignored_channels : tuple of str
         Channels the data's column map mapped that the model does not use.
+    conformal : ConformalBand, optional
+        The conformal band's quantiles when the band is conformal (``sd`` is then half its
+        half-width, so that ``+-2 sd`` is the band).
     """
 
     table: pd.DataFrame
@@ -127,6 +139,7 @@ class HorizonScores(Result):
     data_label: str = "data"
     warmup_samples: int = 0
     ignored_channels: tuple[str, ...] = ()
+    conformal: ConformalBand | None = None
 
     def _repr_line(self) -> str:
         return (
@@ -153,6 +166,8 @@ class HorizonScores(Result):
         table.add_column("inside ±2σ")
         for _, r in self.table.iterrows():
             cov = "" if not math.isfinite(r.coverage_2sigma) else f"{r.coverage_2sigma:.0%}"
+            if not math.isnan(r.interval_score_K):
+                cov += f" (score {r.interval_score_K:.3f})"
             table.add_row(
                 r.horizon,
                 *([esc(r.output)] if many else []),
@@ -166,6 +181,10 @@ class HorizonScores(Result):
         if None in self.horizons:
             lines.append(f"open-loop start: {esc(self.start_note)}")
         lines.append(f"band: {esc(self.band_source)}")
+        lines.append(
+            "score: the band's interval score (Gneiting & Raftery 2007), its width plus 2/alpha times"
+            " each miss's distance, K; lower is better"
+        )
         lines.append(f"baselines: {esc(self.baseline_note)}")
         return lines
 
@@ -187,6 +206,7 @@ class HorizonScores(Result):
             "band": self.band_source,
             "baselines": self.baseline_note,
             "scores": rows,
+            "conformal": None if self.conformal is None else self.conformal.to_dict(),
             "ignored_channels": list(self.ignored_channels),
         }
 
@@ -231,17 +251,20 @@ def _scores(e: np.ndarray, sd: np.ndarray | None) -> dict:
             "mae_K": math.nan,
             "bias_K": math.nan,
             "coverage_2sigma": math.nan,
+            "interval_score_K": math.nan,
         }
     v = e[ok]
-    cover = math.nan
-    if sd is not None and np.isfinite(sd[ok]).all():
+    cover = score = math.nan
+    if sd is not None and not np.isnan(sd[ok]).any():
         cover = float(np.mean(np.abs(v) <= 2 * sd[ok]))
+        score = float(np.mean(interval_score(v, -2 * sd[ok], 2 * sd[ok], ALPHA)))
     return {
         "n": n,
         "rmse_K": float(np.sqrt(np.mean(v**2))),
         "mae_K": float(np.mean(np.abs(v))),
         "bias_K": float(np.mean(v)),
         "coverage_2sigma": cover,
+        "interval_score_K": score,
     }
 
 
@@ -292,6 +315,7 @@ def horizon_scores(
     parameters: bool = True,
     label: str = "data",
     hold: str | None = None,
+    conformal: ConformalSettings | None = None,
 ) -> HorizonScores:
     """Score a model at several horizons at once, with persistence and ARX next to it.
 
@@ -314,6 +338,9 @@ def horizon_scores(
         The data's name.
     hold : {"zoh", "foh"}, optional
         Inter-sample behaviour of the inputs; default the one the model was fitted with.
+    conformal : ConformalSettings, optional
+        Replace the model's band by a conformal one calibrated on the last warm-up samples
+        (:mod:`rczone.calibration.conformal`; needs ``start``).
 
     Returns
     -------
@@ -338,6 +365,18 @@ def horizon_scores(
         sd_par = parameter_sd(predictor, setup.values, *cov)
         sd = np.sqrt(np.where(np.isfinite(sd), sd**2, 0.0) + sd_par**2)
         sources.append("the estimates' covariance")
+    cband = None
+    if conformal is not None:
+        cband, sd = _conformal(conformal, data, y_hat, sd, horizons, first)
+        sources = [
+            f"{conformal.describe()}, on the band of "
+            + " and ".join(sources or ["no noise"])
+            + (
+                " (open loop and horizons with too few errors in the window keep the model's band)"
+                if np.isnan(cband.quantile).any()
+                else ""
+            )
+        ]
     predicted = {MODEL: y_hat}
     note = "not asked for"
     if baselines:
@@ -381,7 +420,20 @@ def horizon_scores(
         data_label=label,
         warmup_samples=first,
         ignored_channels=ignored_channels(frame),
+        conformal=cband,
     )
+
+
+def _conformal(
+    settings: ConformalSettings, data, y_hat: np.ndarray, sd: np.ndarray, horizons: tuple, first: int
+) -> tuple[ConformalBand, np.ndarray]:
+    """The conformal band over the model's own, and the standard deviation whose ``+-2 sd`` is that band."""
+    t0 = data.t[first] if first < data.n_samples else data.t[-1]
+    window = int(np.sum(data.t[:first] >= t0 - settings.window_s))
+    band = conformal_band(data.y[None] - y_hat, sd, horizons, first, window, settings)
+    # open loop and horizons the window has too few errors for keep the model's band
+    keep = np.isnan(band.quantile)[:, None, :]
+    return band, np.where(keep, sd, band.half_width / 2.0)
 
 
 #: Horizons a held-out part is scored at (``--holdout``), s: one step, 1 h, 6 h and 24 h, then open loop.

@@ -160,6 +160,7 @@ def horizons_report(scores: HorizonScores) -> Report:
             "MAE (K)": r.mae_K,
             "bias (K)": r.bias_K,
             "inside ±2σ": f"{r.coverage_2sigma:.0%}" if np.isfinite(r.coverage_2sigma) else "",
+            "interval score (K)": r.interval_score_K,
         }
         for r in scores.table.itertuples()
     ]
