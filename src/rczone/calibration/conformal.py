@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -151,6 +152,8 @@ class ConformalBand:
         The split-conformal quantile of the calibration window (NaN: too few scores).
     online_quantile : ndarray, shape (H, N, ny) or None
         The adaptive quantile used at each target (None without the online update).
+    recent_quantile : ndarray, shape (H, N, ny) or None
+        The quantile at the nominal level of the scores the adaptive one is taken over.
     n_calibration : ndarray of int, shape (H, ny)
         Scores in the calibration window.
     settings : ConformalSettings
@@ -159,15 +162,20 @@ class ConformalBand:
     half_width: np.ndarray
     quantile: np.ndarray
     online_quantile: np.ndarray | None
+    recent_quantile: np.ndarray | None
     n_calibration: np.ndarray
     settings: ConformalSettings
 
     def widening(self) -> np.ndarray | None:
-        """The online quantile over the calibration one, shape (H, N, ny) (None without the online update)."""
-        if self.online_quantile is None:
+        """The recent errors' quantile over the calibration one, shape (H, N, ny) (None without the online update).
+
+        At the nominal level, not ACI's adapted one: the level swings after a run of misses
+        (k-step errors come in runs) even when nothing changed, the errors' quantile does not.
+        """
+        if self.recent_quantile is None:
             return None
         with np.errstate(invalid="ignore", divide="ignore"):
-            return self.online_quantile / self.quantile[:, None, :]
+            return self.recent_quantile / self.quantile[:, None, :]
 
     def to_dict(self) -> dict:
         """JSON-ready: the settings and the calibration quantile per horizon and output."""
@@ -184,10 +192,26 @@ class ConformalBand:
         }
 
 
+class OnlineQuantiles(NamedTuple):
+    """The online quantiles of one horizon and output, shape (N,) each (NaN before the first target).
+
+    Attributes
+    ----------
+    adaptive : ndarray
+        ACI's: the recent scores' quantile at the adapted level (the band).
+    nominal : ndarray
+        The recent scores' quantile at the nominal level: how the errors themselves moved, free of
+        the level's swings (what :mod:`rczone.calibration.drift` watches).
+    """
+
+    adaptive: np.ndarray
+    nominal: np.ndarray
+
+
 def adaptive_quantiles(
     scores: np.ndarray, first: int, steps: int, calibration: int, settings: ConformalSettings
-) -> np.ndarray:
-    """ACI's quantile for every target from ``first`` on, shape (N,) (NaN before ``first``).
+) -> OnlineQuantiles:
+    """ACI's quantile for every target from ``first`` on, and the nominal one of the same scores.
 
     Parameters
     ----------
@@ -204,6 +228,7 @@ def adaptive_quantiles(
     N = scores.shape[0]
     known = [float(v) for v in scores[:first] if math.isfinite(v)][-calibration:]
     q = np.full(N, np.nan)
+    nominal = np.full(N, np.nan)
     level = np.full(N, settings.alpha)  # the level after each target's feedback
     window_at = np.zeros(N, dtype=int)  # scores known after target t: known[:window_at[t]]
     start_level, start_len = settings.alpha, len(known)
@@ -211,7 +236,9 @@ def adaptive_quantiles(
         origin = t - steps
         a = level[origin] if origin >= first else start_level
         n_known = window_at[origin] if origin >= first else start_len
-        q[t] = conformal_quantile(np.asarray(known[max(0, n_known - calibration) : n_known]), a)
+        recent = np.asarray(known[max(0, n_known - calibration) : n_known])
+        q[t] = conformal_quantile(recent, a)
+        nominal[t] = conformal_quantile(recent, settings.alpha)
         previous = level[t - 1] if t > first else start_level
         s = scores[t]
         if math.isfinite(s):
@@ -221,7 +248,7 @@ def adaptive_quantiles(
         else:
             level[t] = previous
         window_at[t] = len(known)
-    return q
+    return OnlineQuantiles(q, nominal)
 
 
 def conformal_band(
@@ -265,6 +292,7 @@ def conformal_band(
     quantile = np.full((H, ny), np.nan)
     count = np.zeros((H, ny), dtype=int)
     online = np.full((H, N, ny), np.nan) if settings.online else None
+    recent = np.full((H, N, ny), np.nan) if settings.online else None
     for h in range(H):
         for j in range(ny):
             cal = z[h, lo:first, j]
@@ -273,9 +301,11 @@ def conformal_band(
                 continue
             quantile[h, j] = conformal_quantile(cal, settings.alpha)
             if online is not None:
-                online[h, :, j] = adaptive_quantiles(z[h, :, j], first, steps[h], count[h, j], settings)
+                online[h, :, j], recent[h, :, j] = adaptive_quantiles(
+                    z[h, :, j], first, steps[h], count[h, j], settings
+                )
     use = online if online is not None else np.broadcast_to(quantile[:, None, :], (H, N, ny))
     with np.errstate(invalid="ignore"):
         half = np.where(np.isfinite(sd), use * sd, np.nan)
     half[:, :first] = np.nan
-    return ConformalBand(half, quantile, online, count, settings)
+    return ConformalBand(half, quantile, online, recent, count, settings)

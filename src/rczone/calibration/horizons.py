@@ -33,6 +33,7 @@ from rczone.calibration.conformal import (
     interval_score,
 )
 from rczone.calibration.dataset import ModelLike, as_model, ignored_channels
+from rczone.calibration.drift import DriftCheck, check_drift
 from rczone.calibration.prediction import PredictionSetup, prediction_setup, saved_covariance, write_series
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.baselines import ARX, fit_arx, k_step_baselines, open_loop_baselines
@@ -123,6 +124,8 @@ class HorizonScores(Result):
     conformal : ConformalBand, optional
         The conformal band's quantiles when the band is conformal (``sd`` is then half its
         half-width, so that ``+-2 sd`` is the band).
+    drift : DriftCheck, optional
+        The drift tests, with a conformal band.
     """
 
     table: pd.DataFrame
@@ -140,6 +143,7 @@ class HorizonScores(Result):
     warmup_samples: int = 0
     ignored_channels: tuple[str, ...] = ()
     conformal: ConformalBand | None = None
+    drift: DriftCheck | None = None
 
     def _repr_line(self) -> str:
         return (
@@ -186,6 +190,8 @@ class HorizonScores(Result):
             " each miss's distance, K; lower is better"
         )
         lines.append(f"baselines: {esc(self.baseline_note)}")
+        if self.drift is not None:
+            lines.append(f"drift: {esc(self.drift.describe())}")
         return lines
 
     def to_dict(self) -> dict:
@@ -207,6 +213,7 @@ class HorizonScores(Result):
             "baselines": self.baseline_note,
             "scores": rows,
             "conformal": None if self.conformal is None else self.conformal.to_dict(),
+            "drift": None if self.drift is None else self.drift.to_dict(),
             "ignored_channels": list(self.ignored_channels),
         }
 
@@ -340,7 +347,8 @@ def horizon_scores(
         Inter-sample behaviour of the inputs; default the one the model was fitted with.
     conformal : ConformalSettings, optional
         Replace the model's band by a conformal one calibrated on the last warm-up samples
-        (:mod:`rczone.calibration.conformal`; needs ``start``).
+        (:mod:`rczone.calibration.conformal`; needs ``start``); the model is then also tested for
+        drift on the same window (:mod:`rczone.calibration.drift`).
 
     Returns
     -------
@@ -365,9 +373,10 @@ def horizon_scores(
         sd_par = parameter_sd(predictor, setup.values, *cov)
         sd = np.sqrt(np.where(np.isfinite(sd), sd**2, 0.0) + sd_par**2)
         sources.append("the estimates' covariance")
-    cband = None
+    cband = drift = None
     if conformal is not None:
-        cband, sd = _conformal(conformal, data, y_hat, sd, horizons, first)
+        cband, sd, window = _conformal(conformal, data, y_hat, sd, horizons, first)
+        drift = _drift(setup, horizons, cband, window)
         sources = [
             f"{conformal.describe()}, on the band of "
             + " and ".join(sources or ["no noise"])
@@ -421,6 +430,7 @@ def horizon_scores(
         warmup_samples=first,
         ignored_channels=ignored_channels(frame),
         conformal=cband,
+        drift=drift,
     )
 
 
@@ -433,7 +443,21 @@ def _conformal(
     band = conformal_band(data.y[None] - y_hat, sd, horizons, first, window, settings)
     # open loop and horizons the window has too few errors for keep the model's band
     keep = np.isnan(band.quantile)[:, None, :]
-    return band, np.where(keep, sd, band.half_width / 2.0)
+    return band, np.where(keep, sd, band.half_width / 2.0), window
+
+
+def _drift(setup: PredictionSetup, horizons: tuple, band: ConformalBand, window: int) -> DriftCheck:
+    """The drift tests (:mod:`rczone.calibration.drift`) on the filter's standardized innovations and the band."""
+    from rczone.estimation.engines import run_filter
+
+    net, data = setup.model.network, setup.data
+    out = run_filter(net, setup.values, data, setup.hold)
+    with np.errstate(invalid="ignore"):
+        z = out.innovations / np.sqrt(np.einsum("kii->ki", out.S))
+    reference = max(window, setup.first - setup.first // 4)  # the warm-up after the filter's start
+    return check_drift(
+        z, data.t, setup.first, reference, net.outputs, widening=band.widening(), horizons=horizons
+    )
 
 
 #: Horizons a held-out part is scored at (``--holdout``), s: one step, 1 h, 6 h and 24 h, then open loop.

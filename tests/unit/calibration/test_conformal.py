@@ -63,7 +63,7 @@ def test_aci_long_run_miscoverage_converges_to_alpha_on_a_shifted_stream(seed):
     n_cal, T, gamma = 300, 10000, 0.01
     z = _shifted_stream(rng, n_cal, T, T // 4, 3.0)
     settings = ConformalSettings(3600.0, online=True, gamma=gamma)
-    q = adaptive_quantiles(z, n_cal, 1, n_cal, settings)
+    q = adaptive_quantiles(z, n_cal, 1, n_cal, settings).adaptive
     miss = np.mean(z[n_cal:] > q[n_cal:])
     bound = (max(ALPHA, 1 - ALPHA) + gamma) / (gamma * T)  # Gibbs & Candes (2021), Proposition 4.1
     assert abs(miss - ALPHA) <= bound
@@ -76,11 +76,11 @@ def test_aci_with_a_delay_of_k_steps_uses_only_errors_known_at_the_origin():
     n_cal, T, k = 300, 10000, 12
     z = _shifted_stream(rng, n_cal, T, T // 4, 3.0)
     settings = ConformalSettings(3600.0, online=True)
-    q = adaptive_quantiles(z, n_cal, k, n_cal, settings)
+    q = adaptive_quantiles(z, n_cal, k, n_cal, settings).adaptive
     assert abs(np.mean(z[n_cal:] > q[n_cal:]) - ALPHA) < 0.02
     z2 = z.copy()
     z2[n_cal + 3000 :] = 100.0  # a change at target t moves no band issued before t (targets < t + k)
-    q2 = adaptive_quantiles(z2, n_cal, k, n_cal, settings)
+    q2 = adaptive_quantiles(z2, n_cal, k, n_cal, settings).adaptive
     np.testing.assert_array_equal(q2[: n_cal + 3000 + k], q[: n_cal + 3000 + k])
     assert q2[n_cal + 3000 + k + 200] > q[n_cal + 3000 + k + 200]
 
