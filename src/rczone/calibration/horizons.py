@@ -25,7 +25,15 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from rczone.calibration.conformal import (
+    ALPHA,
+    ConformalBand,
+    ConformalSettings,
+    conformal_band,
+    interval_score,
+)
 from rczone.calibration.dataset import ModelLike, as_model, ignored_channels
+from rczone.calibration.drift import DriftCheck, check_drift
 from rczone.calibration.prediction import PredictionSetup, prediction_setup, saved_covariance, write_series
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.baselines import ARX, fit_arx, k_step_baselines, open_loop_baselines
@@ -94,7 +102,9 @@ class HorizonScores(Result):
     table : DataFrame
         One row per horizon, predictor and output: ``horizon`` (label), ``steps`` (None: open
         loop), ``horizon_s``, ``predictor``, ``output``, ``n``, ``rmse_K``, ``mae_K``, ``bias_K``
-        (measured minus predicted), ``coverage_2sigma`` (model only; NaN without a band).
+        (measured minus predicted), ``coverage_2sigma`` and ``interval_score_K`` (model only; NaN
+        without a band; the interval score of Gneiting & Raftery 2007 of the band at its nominal
+        95.45 %, :func:`~rczone.calibration.conformal.interval_score`).
     t : ndarray, shape (N,)
         The scored samples' times, s.
     measured : ndarray, shape (N, ny)
@@ -111,6 +121,11 @@ class HorizonScores(Result):
     warmup_samples : int
     ignored_channels : tuple of str
         Channels the data's column map mapped that the model does not use.
+    conformal : ConformalBand, optional
+        The conformal band's quantiles when the band is conformal (``sd`` is then half its
+        half-width, so that ``+-2 sd`` is the band).
+    drift : DriftCheck, optional
+        The drift tests, with a conformal band.
     """
 
     table: pd.DataFrame
@@ -127,6 +142,8 @@ class HorizonScores(Result):
     data_label: str = "data"
     warmup_samples: int = 0
     ignored_channels: tuple[str, ...] = ()
+    conformal: ConformalBand | None = None
+    drift: DriftCheck | None = None
 
     def _repr_line(self) -> str:
         return (
@@ -153,6 +170,8 @@ class HorizonScores(Result):
         table.add_column("inside ±2σ")
         for _, r in self.table.iterrows():
             cov = "" if not math.isfinite(r.coverage_2sigma) else f"{r.coverage_2sigma:.0%}"
+            if not math.isnan(r.interval_score_K):
+                cov += f" (score {r.interval_score_K:.3f})"
             table.add_row(
                 r.horizon,
                 *([esc(r.output)] if many else []),
@@ -166,7 +185,13 @@ class HorizonScores(Result):
         if None in self.horizons:
             lines.append(f"open-loop start: {esc(self.start_note)}")
         lines.append(f"band: {esc(self.band_source)}")
+        lines.append(
+            "score: the band's interval score (Gneiting & Raftery 2007), its width plus 2/alpha times"
+            " each miss's distance, K; lower is better"
+        )
         lines.append(f"baselines: {esc(self.baseline_note)}")
+        if self.drift is not None:
+            lines.append(f"drift: {esc(self.drift.describe())}")
         return lines
 
     def to_dict(self) -> dict:
@@ -187,6 +212,8 @@ class HorizonScores(Result):
             "band": self.band_source,
             "baselines": self.baseline_note,
             "scores": rows,
+            "conformal": None if self.conformal is None else self.conformal.to_dict(),
+            "drift": None if self.drift is None else self.drift.to_dict(),
             "ignored_channels": list(self.ignored_channels),
         }
 
@@ -231,17 +258,20 @@ def _scores(e: np.ndarray, sd: np.ndarray | None) -> dict:
             "mae_K": math.nan,
             "bias_K": math.nan,
             "coverage_2sigma": math.nan,
+            "interval_score_K": math.nan,
         }
     v = e[ok]
-    cover = math.nan
-    if sd is not None and np.isfinite(sd[ok]).all():
+    cover = score = math.nan
+    if sd is not None and not np.isnan(sd[ok]).any():
         cover = float(np.mean(np.abs(v) <= 2 * sd[ok]))
+        score = float(np.mean(interval_score(v, -2 * sd[ok], 2 * sd[ok], ALPHA)))
     return {
         "n": n,
         "rmse_K": float(np.sqrt(np.mean(v**2))),
         "mae_K": float(np.mean(np.abs(v))),
         "bias_K": float(np.mean(v)),
         "coverage_2sigma": cover,
+        "interval_score_K": score,
     }
 
 
@@ -292,6 +322,7 @@ def horizon_scores(
     parameters: bool = True,
     label: str = "data",
     hold: str | None = None,
+    conformal: ConformalSettings | None = None,
 ) -> HorizonScores:
     """Score a model at several horizons at once, with persistence and ARX next to it.
 
@@ -314,6 +345,10 @@ def horizon_scores(
         The data's name.
     hold : {"zoh", "foh"}, optional
         Inter-sample behaviour of the inputs; default the one the model was fitted with.
+    conformal : ConformalSettings, optional
+        Replace the model's band by a conformal one calibrated on the last warm-up samples
+        (:mod:`rczone.calibration.conformal`; needs ``start``); the model is then also tested for
+        drift on the same window (:mod:`rczone.calibration.drift`).
 
     Returns
     -------
@@ -338,6 +373,19 @@ def horizon_scores(
         sd_par = parameter_sd(predictor, setup.values, *cov)
         sd = np.sqrt(np.where(np.isfinite(sd), sd**2, 0.0) + sd_par**2)
         sources.append("the estimates' covariance")
+    cband = drift = None
+    if conformal is not None:
+        cband, sd, window = _conformal(conformal, data, y_hat, sd, horizons, first)
+        drift = _drift(setup, horizons, cband, window)
+        sources = [
+            f"{conformal.describe()}, on the band of "
+            + " and ".join(sources or ["no noise"])
+            + (
+                " (open loop and horizons with too few errors in the window keep the model's band)"
+                if np.isnan(cband.quantile).any()
+                else ""
+            )
+        ]
     predicted = {MODEL: y_hat}
     note = "not asked for"
     if baselines:
@@ -381,6 +429,34 @@ def horizon_scores(
         data_label=label,
         warmup_samples=first,
         ignored_channels=ignored_channels(frame),
+        conformal=cband,
+        drift=drift,
+    )
+
+
+def _conformal(
+    settings: ConformalSettings, data, y_hat: np.ndarray, sd: np.ndarray, horizons: tuple, first: int
+) -> tuple[ConformalBand, np.ndarray]:
+    """The conformal band over the model's own, and the standard deviation whose ``+-2 sd`` is that band."""
+    t0 = data.t[first] if first < data.n_samples else data.t[-1]
+    window = int(np.sum(data.t[:first] >= t0 - settings.window_s))
+    band = conformal_band(data.y[None] - y_hat, sd, horizons, first, window, settings)
+    # open loop and horizons the window has too few errors for keep the model's band
+    keep = np.isnan(band.quantile)[:, None, :]
+    return band, np.where(keep, sd, band.half_width / 2.0), window
+
+
+def _drift(setup: PredictionSetup, horizons: tuple, band: ConformalBand, window: int) -> DriftCheck:
+    """The drift tests (:mod:`rczone.calibration.drift`) on the filter's standardized innovations and the band."""
+    from rczone.estimation.engines import run_filter
+
+    net, data = setup.model.network, setup.data
+    out = run_filter(net, setup.values, data, setup.hold)
+    with np.errstate(invalid="ignore"):
+        z = out.innovations / np.sqrt(np.einsum("kii->ki", out.S))
+    reference = max(window, setup.first - setup.first // 4)  # the warm-up after the filter's start
+    return check_drift(
+        z, data.t, setup.first, reference, net.outputs, widening=band.widening(), horizons=horizons
     )
 
 

@@ -300,6 +300,22 @@ def predict(
             " least squares on the model's calibration data) next to the model.",
         ),
     ] = False,
+    conformal: Annotated[
+        str | None,
+        typer.Option(
+            "--conformal",
+            help="Replace the k-step bands by split conformal ones calibrated on the last part of the"
+            " warm-up, this long (e.g. 1d, 12h); needs --warmup. Scores per horizon as --horizons.",
+        ),
+    ] = None,
+    online: Annotated[
+        bool,
+        typer.Option(
+            "--online",
+            help="With --conformal: update the bands while predicting (adaptive conformal inference) and"
+            " watch the model for drift.",
+        ),
+    ] = False,
 ) -> None:
     """Predict DATA with a model, open loop or k steps ahead: the error, the series and a 2-sigma band.
 
@@ -324,13 +340,14 @@ def predict(
     from rczone.workflow.holdout import split_time
 
     start = split_time(frame, warmup, model=zm, columns=column_map, warmup=True)
-    if horizons is not None or baselines:
+    settings = _conformal_settings(conformal, online, start)
+    if horizons is not None or baselines or settings is not None:
         from rczone.calibration.horizons import horizon_scores, parse_horizons
         from rczone.report.predict import horizons_report
 
         if steps is not None and horizons is not None:
             raise ParameterError("give --steps or --horizons, not both")
-        chosen = parse_horizons(horizons) if horizons is not None else [steps]
+        chosen = parse_horizons(horizons) if horizons is not None else [steps or 1]
         scores = horizon_scores(
             zm,
             frame,
@@ -340,6 +357,7 @@ def predict(
             start=start,
             label=label,
             hold=hold,
+            conformal=settings,
         )
         _emit(scores, lambda: horizons_report(scores), json_out, out, report_dir)
         return
@@ -356,6 +374,30 @@ def predict(
         hold=hold,
     )
     _emit(pred, lambda: prediction_report(pred, label, zm.label), json_out, out, report_dir)
+
+
+def _conformal_settings(window: str | None, online: bool, start: float | None):
+    """``--conformal`` and ``--online`` as :class:`~rczone.calibration.conformal.ConformalSettings` (None without)."""
+    import pandas as pd
+
+    from rczone.calibration.conformal import ConformalSettings
+    from rczone.errors import ParameterError
+
+    if window is None:
+        if online:
+            raise ParameterError("--online updates a conformal band: give --conformal WINDOW too (e.g. 1d)")
+        return None
+    if start is None:
+        raise ParameterError("--conformal calibrates on the end of the warm-up: give --warmup too")
+    try:
+        seconds = pd.Timedelta(window.strip()).total_seconds()
+        if not seconds > 0 or not any(c.isalpha() for c in window):
+            raise ValueError
+    except (ValueError, TypeError, OverflowError):
+        raise ParameterError(
+            f"--conformal must be a duration with its unit (e.g. 1d, 12h), got {window!r}"
+        ) from None
+    return ConformalSettings(seconds, online=online)
 
 
 def _emit(result, report, json_out: Path | None, out: Path | None, report_dir: Path | None) -> None:

@@ -48,6 +48,7 @@ from rczone.estimation.kalman import (
     stochastic_matrices,
 )
 from rczone.kernels.arrays import (
+    Assembled,
     AssembledDerivatives,
     Discretization,
     FilterOptions,
@@ -333,6 +334,84 @@ def general_cost(
     numpy.linalg.LinAlgError
         For a singular steady state or a non-positive innovation variance.
     """
+    asm = assemble(network, values, data, hold, method, wrt)
+    ss, mod, der, how = asm.ss, asm.mod, asm.der, asm.how
+    n, p, ny = ss.n_states, ss.n_inputs, ss.C.shape[0]
+    q, ls, foh, which, keys = len(tuple(wrt)), method == "ls", hold == "foh", data.intervals[1], how.keys
+    scale = how.scale if how.scale.shape[0] else None
+    if q:
+        mats, dmats = interval_derivatives(mod, der, how)
+    else:
+        if scale is not None and not ls and modal_pays(which, n):
+            mats, basis = modal_matrices(mod, how)
+            nll, n_obs, _, _ = kalman_filter(
+                mats,
+                no_sensitivities(keys.shape[0], n, p),
+                asm.observation,
+                asm.prior,
+                Series(np.require(data.u, np.float64, "CW"), np.require(data.y, np.float64, "CW"), which),
+                FilterOptions(foh, False, STEADY_RTOL),
+                outputs(data.n_samples, n, ny, 0, False, False),
+                basis,
+            )
+            if n_obs < 0:
+                raise np.linalg.LinAlgError(
+                    "an innovation variance is not positive: the noise model is invalid"
+                )
+            return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
+        mats = matrices_kernel(n, scale is not None)(mod, how)
+        dmats = no_sensitivities(keys.shape[0], n, p)
+    # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization
+    y = np.require(data.y, np.float64, "CW")
+    outs = outputs(data.n_samples, n, ny, q, ls, False)
+    nll, n_obs, g, fim = kalman_filter(
+        mats,
+        dmats,
+        asm.observation,
+        asm.prior,
+        Series(np.require(data.u, np.float64, "CW"), y, which),
+        FilterOptions(foh, ls, STEADY_RTOL),
+        outs,
+    )
+    if n_obs < 0:
+        raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")
+    if not ls:
+        return float(nll + 0.5 * n_obs * _LOG_2PI), g, fim
+    grad, curv = np.zeros(q), np.zeros(q)
+    sse = trapezoid(data.t, outs.e, outs.de, grad, curv)
+    return float(sse), grad, curv
+
+
+class Assembly(NamedTuple):
+    """A filter problem's continuous matrices, their derivatives and how they are discretized (:func:`assemble`)."""
+
+    ss: BilinearStateSpace
+    mod: Assembled  #: the continuous matrices and process noise
+    der: AssembledDerivatives
+    how: Discretization
+    observation: Observation
+    prior: Prior
+
+
+def assemble(
+    network: RCNetwork,
+    values: Mapping[str, float],
+    data: Dataset,
+    hold: str,
+    method: str,
+    wrt: Sequence[str] = (),
+) -> Assembly:
+    """The arrays :func:`general_cost` hands the compiled filter, with their derivatives along ``wrt``.
+
+    Parameters
+    ----------
+    network, values, data, hold
+        As :func:`general_cost`.
+    method : {"ls", "ml"}
+        ``"ls"``: no noise (unit measurement variances, no process noise).
+    wrt : sequence of str
+        As :func:`general_cost`.
+    """
     theta = network_theta(network, values)
     ss = network.state_space(theta)
     n, p, ny, nf = ss.n_states, ss.n_inputs, ss.C.shape[0], ss.n_flows
@@ -373,49 +452,17 @@ def general_cost(
     mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, qc)
     der = dynamics_derivatives(dA0, dN, dB0, dM, dqc)
     x0, dx0 = _initial_state_derivatives(ss, values, data, wrt, der)
-    keys, which = data.intervals
+    keys = data.intervals[0]
     foh = hold == "foh"
-    f = np.ascontiguousarray
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     how = Discretization(keys, np.empty(0) if scale is None else scale, foh, not ls)
-    if q:
-        mats, dmats = interval_derivatives(mod, der, how)
-    else:
-        if scale is not None and not ls and modal_pays(which, n):
-            mats, basis = modal_matrices(mod, how)
-            nll, n_obs, _, _ = kalman_filter(
-                mats,
-                no_sensitivities(keys.shape[0], n, p),
-                Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
-                Prior(x0, np.diag(sx**2), dx0, dP0),
-                Series(np.require(data.u, np.float64, "CW"), np.require(data.y, np.float64, "CW"), which),
-                FilterOptions(foh, False, STEADY_RTOL),
-                outputs(data.n_samples, n, ny, 0, False, False),
-                basis,
-            )
-            if n_obs < 0:
-                raise np.linalg.LinAlgError(
-                    "an innovation variance is not positive: the noise model is invalid"
-                )
-            return float(nll + 0.5 * n_obs * _LOG_2PI), np.zeros(0), np.zeros(0)
-        mats = matrices_kernel(n, scale is not None)(mod, how)
-        dmats = no_sensitivities(keys.shape[0], n, p)
-    # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization
-    y = np.require(data.y, np.float64, "CW")
-    outs = outputs(data.n_samples, n, ny, q, ls, False)
-    nll, n_obs, g, fim = kalman_filter(
-        mats,
-        dmats,
-        Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
+    return Assembly(
+        ss,
+        mod,
+        der,
+        how,
+        Observation(
+            np.ascontiguousarray(ss.C), np.ascontiguousarray(ss.D), np.ascontiguousarray(r), dC, dD, dr
+        ),
         Prior(x0, np.diag(sx**2), dx0, dP0),
-        Series(np.require(data.u, np.float64, "CW"), y, which),
-        FilterOptions(foh, ls, STEADY_RTOL),
-        outs,
     )
-    if n_obs < 0:
-        raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")
-    if not ls:
-        return float(nll + 0.5 * n_obs * _LOG_2PI), g, fim
-    grad, curv = np.zeros(q), np.zeros(q)
-    sse = trapezoid(data.t, outs.e, outs.de, grad, curv)
-    return float(sse), grad, curv

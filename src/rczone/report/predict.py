@@ -162,9 +162,40 @@ def horizons_report(scores: HorizonScores) -> Report:
             "MAE (K)": r.mae_K,
             "bias (K)": r.bias_K,
             "inside ±2σ": f"{r.coverage_2sigma:.0%}" if np.isfinite(r.coverage_2sigma) else "",
+            "interval score (K)": r.interval_score_K,
         }
         for r in scores.table.itertuples()
     ]
     rep.table(rows, "Scores per horizon (bias: measured minus predicted)", digits=3)
     rep.figure("horizons", horizons_figure(scores), "Error and band coverage against the horizon")
+    if scores.drift is not None:
+        rep.paragraph(f"Drift: {html.escape(scores.drift.describe())}.")
+        if scores.drift.traces:
+            rep.figure("drift", drift_figure(scores), "CUSUM statistics of the innovations")
     return rep
+
+
+def drift_figure(scores: HorizonScores) -> Figure:
+    """The CUSUM statistics of each output's innovations per block, the decision interval and the drift's start."""
+    from rczone.calibration.drift import CUSUM_H
+
+    check = scores.drift
+    traces = check.traces
+    fig = Figure(figsize=(8.5, 2.6 * len(traces) + 1.0))
+    axes = fig.subplots(len(traces), 1, squeeze=False, sharex=True)[:, 0]
+    t0 = scores.t[0]
+    for ax, (o, tr) in zip(axes, traces.items(), strict=True):
+        h = (tr.t - t0) / 3600.0
+        ax.plot(h, tr.mean_up, color="#c05621", label="mean up")
+        ax.plot(h, tr.mean_down, color="#2b6cb0", label="mean down")
+        ax.plot(h, tr.variance_up, color="#2f855a", label="variance up")
+        ax.axhline(CUSUM_H, color="black", lw=0.8, ls="--", label="decision interval")
+        if check.since_s is not None:
+            ax.axvline((check.since_s - t0) / 3600.0, color="red", lw=1.0, label="drift since")
+        ax.set_ylabel(f"{o}: CUSUM")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    axes[-1].set_xlabel("hours from the first scored sample")
+    fig.suptitle(f"{scores.model_label}: drift tests")
+    fig.tight_layout()
+    return fig

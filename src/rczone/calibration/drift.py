@@ -1,0 +1,356 @@
+"""Has the model drifted? CUSUM tests on the innovations and the widening of the online band.
+
+A model calibrated on past data is used on new data; when the building changes (a window left
+open, a retrofit, a sensor that slips) the model's errors change first. Two signals, both
+calibrated on the same window as the conformal band (:mod:`rczone.calibration.conformal`):
+
+* **CUSUM on the innovations** [1]_ [2]_: the filter's one-step innovations, standardized by
+  their own variance, are averaged over blocks of :data:`BLOCK_S` (batch means, so that the
+  autocorrelated innovations of a misspecified model are tested on nearly independent blocks
+  [3]_); each block's mean and the log of its mean square are standardized by their spread over
+  the calibration window's overlapping blocks (their spread widened by ``sqrt(1 + 1/B)`` for a
+  reference estimated from ``B`` blocks), and Page's CUSUM ``S+ = max(0, S+ + x - k)`` (and ``S-`` for
+  the mean) raises an alarm when it exceeds ``h`` (:data:`CUSUM_K`, :data:`CUSUM_H`: an
+  in-control run length far beyond a year of hourly blocks with known reference values, a shift of
+  three block standard deviations found in about five blocks). The change is dated at the start of the run that raised the alarm (the last
+  block the statistic was zero), Page's estimate of the change point;
+* **the online band's widening**: when the quantile (at the nominal level) of the recent
+  standardized errors over which the online band is updated stays above :data:`WIDEN_FACTOR` times
+  the calibration one for a whole :data:`WIDEN_WINDOW_S` (the median over that window), the errors
+  at that horizon have grown beyond what the model was calibrated for; the drift is dated at the
+  window's start. ACI's own level is not used: after a run of misses (k-step errors come in runs)
+  it swings to an infinite band even when nothing changed.
+
+The CUSUM's reference values come from the warm-up after its first quarter (the filter's start),
+at least the conformal window: a day of hourly blocks estimates their spread only to about 15 %,
+which a decision interval tuned for known values does not forgive.
+
+References
+----------
+.. [1] E. S. Page, "Continuous inspection schemes", Biometrika 41 (1954) 100-115.
+.. [2] D. C. Montgomery, *Introduction to Statistical Quality Control*, 6th ed., Wiley 2009,
+   section 9.1 (the tabular CUSUM, its ``k`` and ``h``, and the change-point estimate).
+.. [3] G. C. Runger, T. R. Willemain, "Model-based and model-free control of autocorrelated
+   processes", Journal of Quality Technology 27 (1995) 283-292 (batch means).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+#: Length of the blocks the innovations are averaged over, s.
+BLOCK_S = 3600.0
+#: Reference value of the CUSUM, in block standard deviations (half the shift it is tuned for).
+CUSUM_K = 0.5
+#: Decision interval of the CUSUM, in block standard deviations.
+CUSUM_H = 12.0
+#: Fewest calibration blocks the CUSUM is calibrated from.
+MIN_BLOCKS = 8
+#: The online band has drifted when its quantile stays above this factor times the calibration one...
+WIDEN_FACTOR = 2.0
+#: ...for this long (the median over the window), s.
+WIDEN_WINDOW_S = 6 * 3600.0
+
+
+@dataclass(frozen=True)
+class DriftSignal:
+    """One test that raised an alarm.
+
+    Attributes
+    ----------
+    test : str
+        ``"innovation mean"``, ``"innovation variance"`` or ``"band widening"``.
+    output : str
+    horizon : int or None
+        Steps ahead of a widening signal (None for the innovation tests).
+    since_s : float
+        Estimated start of the drift (time on the data's axis, s).
+    detected_s : float
+        When the test raised its alarm, s.
+    """
+
+    test: str
+    output: str
+    horizon: int | None
+    since_s: float
+    detected_s: float
+
+    def to_dict(self) -> dict:
+        """JSON-ready."""
+        return {
+            "test": self.test,
+            "output": self.output,
+            "horizon": self.horizon,
+            "since_s": self.since_s,
+            "detected_s": self.detected_s,
+        }
+
+
+@dataclass(frozen=True, eq=False)
+class CusumTrace:
+    """A CUSUM statistic per block for one output, for the report's figure.
+
+    Attributes
+    ----------
+    t : ndarray, shape (B,)
+        End of each scored block, s.
+    mean_up, mean_down, variance_up : ndarray, shape (B,)
+        The statistics, in block standard deviations.
+    """
+
+    t: np.ndarray
+    mean_up: np.ndarray
+    mean_down: np.ndarray
+    variance_up: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class DriftCheck:
+    """The drift tests of one prediction.
+
+    Attributes
+    ----------
+    signals : tuple of DriftSignal
+        Every test that raised an alarm (empty: no drift found).
+    traces : dict
+        Output name to its :class:`CusumTrace` (absent: too few calibration blocks).
+    notes : tuple of str
+        What could not be tested, in words.
+    """
+
+    signals: tuple[DriftSignal, ...]
+    traces: dict
+    notes: tuple[str, ...] = ()
+
+    @property
+    def drifted(self) -> bool:
+        """Whether any test raised an alarm."""
+        return bool(self.signals)
+
+    @property
+    def since_s(self) -> float | None:
+        """The earliest estimated start of a drift, s (None: no drift)."""
+        return min((s.since_s for s in self.signals), default=None)
+
+    @property
+    def detected_s(self) -> float | None:
+        """The first alarm, s (None: no drift)."""
+        return min((s.detected_s for s in self.signals), default=None)
+
+    def describe(self) -> str:
+        """One line: whether the model drifted, since when, and which tests say so."""
+        if not self.drifted:
+            tested = "CUSUM on the innovations" + (
+                "" if any("online" in n for n in self.notes) else " and the online band's widening"
+            )
+            return f"no drift found ({tested})"
+        tests = sorted(
+            {
+                f"{s.test} of {s.output}" + (f" at {s.horizon} steps" if s.horizon else "")
+                for s in self.signals
+            }
+        )
+        return (
+            f"the model has DRIFTED since about {when(self.since_s)} (first alarm {when(self.detected_s)}):"
+            f" {', '.join(tests)}"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON-ready: the verdict, when it started and every alarm, with the tests' settings."""
+        return {
+            "drifted": self.drifted,
+            "since_s": self.since_s,
+            "since": None if self.since_s is None else when(self.since_s),
+            "detected_s": self.detected_s,
+            "signals": [s.to_dict() for s in self.signals],
+            "settings": {
+                "block_s": BLOCK_S,
+                "cusum_k": CUSUM_K,
+                "cusum_h": CUSUM_H,
+                "widen_factor": WIDEN_FACTOR,
+                "widen_window_s": WIDEN_WINDOW_S,
+            },
+            "notes": list(self.notes),
+        }
+
+
+def when(t: float) -> str:
+    """A time on the data's axis in words: an ISO UTC stamp for epoch seconds, else hours from zero.
+
+    Parameters
+    ----------
+    t : float
+        Time, s.
+    """
+    import pandas as pd
+
+    from rczone.calibration.dataset import EPOCH_SECONDS
+
+    if t > EPOCH_SECONDS:
+        return pd.Timestamp(t, unit="s", tz="UTC").strftime("%Y-%m-%d %H:%M UTC")
+    return f"{t / 3600:g} h"
+
+
+def _blocks(
+    z: np.ndarray, t: np.ndarray, lo: int, hi: int, size: int, step: int | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Block means, log mean squares and end times of ``z[lo:hi]`` in blocks of ``size`` samples.
+
+    Blocks start every ``step`` samples (default ``size``: disjoint; 1: overlapping batch means,
+    Meketon & Schmeiser 1984); blocks with fewer than half their samples are dropped.
+    """
+    means, logs, ends = [], [], []
+    for a in range(lo, hi - size + 1, step or size):
+        v = z[a : a + size]
+        v = v[np.isfinite(v)]
+        if v.size * 2 < size:
+            continue
+        means.append(float(np.mean(v)))
+        logs.append(math.log(max(float(np.mean(v**2)), 1e-300)))
+        ends.append(float(t[a + size - 1]))
+    return np.array(means), np.array(logs), np.array(ends)
+
+
+def _cusum(x: np.ndarray, sign: float) -> tuple[np.ndarray, int | None, int | None]:
+    """Page's one-sided CUSUM of ``sign * x``: the statistic, the first alarm's index and the start of its run."""
+    s = np.zeros(x.size)
+    run_start = 0
+    level = 0.0
+    for i, v in enumerate(x):
+        level = max(0.0, level + sign * v - CUSUM_K)
+        if level == 0.0:
+            run_start = i + 1
+        s[i] = level
+        if level > CUSUM_H:
+            return np.concatenate([s[: i + 1], np.full(x.size - i - 1, np.nan)]), i, min(run_start, i)
+    return s, None, None
+
+
+def innovation_cusum(
+    z: np.ndarray, t: np.ndarray, first: int, window: int, output: str
+) -> tuple[list[DriftSignal], CusumTrace | None]:
+    """CUSUM tests of one output's standardized innovations after ``first``, calibrated on ``[first - window, first)``.
+
+    Parameters
+    ----------
+    z : ndarray, shape (N,)
+        Standardized one-step innovations (NaN where missing).
+    t : ndarray, shape (N,)
+        Times, s.
+    first : int
+        First scored sample.
+    window : int
+        Calibration samples before it.
+    output : str
+    """
+    dt = float(np.median(np.diff(t)))
+    size = max(1, round(BLOCK_S / dt))
+    lo = max(0, first - window)
+    m0, l0, _ = _blocks(z, t, lo, first, size, step=1)  # overlapping: a steadier spread
+    blocks = (first - lo) // size
+    if blocks < MIN_BLOCKS or np.std(m0, ddof=1) <= 0 or np.std(l0, ddof=1) <= 0:
+        return [], None
+    m, lg, ends = _blocks(z, t, first, z.size, size)
+    # the reference is estimated from `blocks` blocks: a new block's spread around it is sqrt(1 + 1/B) wider
+    inflate = math.sqrt(1.0 + 1.0 / blocks)
+    xm = (m - np.mean(m0)) / (np.std(m0, ddof=1) * inflate)
+    xv = (lg - np.mean(l0)) / (np.std(l0, ddof=1) * inflate)
+    signals = []
+    stats = {}
+    for name, x, sign in (("mean_up", xm, 1.0), ("mean_down", xm, -1.0), ("variance_up", xv, 1.0)):
+        s, alarm, start = _cusum(x, sign)
+        stats[name] = s
+        if alarm is not None:
+            test = "innovation variance" if name == "variance_up" else "innovation mean"
+            since = ends[start] - size * dt if start is not None else ends[alarm]
+            signals.append(DriftSignal(test, output, None, float(since), float(ends[alarm])))
+    return signals, CusumTrace(ends, stats["mean_up"], stats["mean_down"], stats["variance_up"])
+
+
+def widening_signals(
+    widening: np.ndarray, t: np.ndarray, first: int, horizons: tuple, outputs: tuple[str, ...]
+) -> list[DriftSignal]:
+    """Alarms where the online band's quantile stayed above :data:`WIDEN_FACTOR` times the calibration one.
+
+    Parameters
+    ----------
+    widening : ndarray, shape (H, N, ny)
+        Online over calibration quantile (:meth:`~rczone.calibration.conformal.ConformalBand.widening`).
+    t : ndarray, shape (N,)
+        Times, s.
+    first : int
+        First scored sample.
+    horizons : tuple
+        Steps ahead per horizon (None: open loop, never updated).
+    outputs : tuple of str
+    """
+    dt = float(np.median(np.diff(t)))
+    span = max(1, round(WIDEN_WINDOW_S / dt))
+    out = []
+    for h, steps in enumerate(horizons):
+        for j, o in enumerate(outputs):
+            w = widening[h, first:, j]
+            if steps is None or w.size < span or not np.isfinite(w).any():
+                continue
+            high = np.where(np.isnan(w), 0.0, (w > WIDEN_FACTOR).astype(float))
+            # the median over a window is above the factor when more than half its samples are
+            share = np.convolve(high, np.ones(span) / span, mode="valid")
+            hit = np.flatnonzero(share > 0.5)
+            if hit.size:
+                i = int(hit[0])
+                out.append(
+                    DriftSignal(
+                        "band widening", o, steps, float(t[first + i]), float(t[first + i + span - 1])
+                    )
+                )
+    return out
+
+
+def check_drift(
+    z: np.ndarray,
+    t: np.ndarray,
+    first: int,
+    window: int,
+    outputs: tuple[str, ...],
+    *,
+    widening: np.ndarray | None = None,
+    horizons: tuple = (),
+) -> DriftCheck:
+    """Every drift test of a prediction (see the module notes).
+
+    Parameters
+    ----------
+    z : ndarray, shape (N, ny)
+        Standardized one-step innovations over the warm-up and the scored samples.
+    t : ndarray, shape (N,)
+        Times, s.
+    first : int
+        First scored sample.
+    window : int
+        Calibration samples before it (those of the conformal band).
+    outputs : tuple of str
+    widening : ndarray, shape (H, N, ny), optional
+        The online band's widening; None without the online update.
+    horizons : tuple
+        Steps ahead of ``widening``'s horizons.
+    """
+    signals: list[DriftSignal] = []
+    traces: dict = {}
+    notes = []
+    for j, o in enumerate(outputs):
+        found, trace = innovation_cusum(z[:, j], t, first, window, o)
+        signals += found
+        if trace is None:
+            notes.append(
+                f"{o}: fewer than {MIN_BLOCKS} blocks of {BLOCK_S / 3600:g} h in the calibration window; no CUSUM"
+            )
+        else:
+            traces[o] = trace
+    if widening is not None:
+        signals += widening_signals(widening, t, first, horizons, outputs)
+    else:
+        notes.append("no online update (--online): the band's widening is not watched")
+    return DriftCheck(tuple(sorted(signals, key=lambda s: s.detected_s)), traces, tuple(notes))
