@@ -84,8 +84,9 @@ RENAMED = {
     "starts": "n_starts",
     "option": "options",
 }
-#: What a command writes: the API returns the result, whose to_dict(), to_frame() and report do it.
-WRITTEN = {"json_out", "report_dir", "save_model", "out"}
+#: What a command writes or shows: the API returns the result (whose to_dict(), to_frame() and
+#: report write it) and prints nothing, so it has no --quiet either.
+WRITTEN = {"json_out", "report_dir", "save_model", "out", "quiet"}
 #: (command, parameter) -> why the API has no keyword of that name, and the keyword that does it.
 OPTION_EXCEPTIONS = {
     ("fit", "draws"): ("options", "shorthand of options={'draws': N} (method mcmc's own option)"),

@@ -340,7 +340,9 @@ def predict(
     from rczone.workflow.holdout import split_time
 
     start = split_time(frame, warmup, model=zm, columns=column_map, warmup=True)
-    settings = _conformal_settings(conformal, online, start)
+    from rczone.workflow.holdout import conformal_settings
+
+    settings = conformal_settings(conformal, online, start)
     if horizons is not None or baselines or settings is not None:
         from rczone.calibration.horizons import horizon_scores, parse_horizons
         from rczone.report.predict import horizons_report
@@ -374,30 +376,6 @@ def predict(
         hold=hold,
     )
     _emit(pred, lambda: prediction_report(pred, label, zm.label), json_out, out, report_dir)
-
-
-def _conformal_settings(window: str | None, online: bool, start: float | None):
-    """``--conformal`` and ``--online`` as :class:`~rczone.calibration.conformal.ConformalSettings` (None without)."""
-    import pandas as pd
-
-    from rczone.calibration.conformal import ConformalSettings
-    from rczone.errors import ParameterError
-
-    if window is None:
-        if online:
-            raise ParameterError("--online updates a conformal band: give --conformal WINDOW too (e.g. 1d)")
-        return None
-    if start is None:
-        raise ParameterError("--conformal calibrates on the end of the warm-up: give --warmup too")
-    try:
-        seconds = pd.Timedelta(window.strip()).total_seconds()
-        if not seconds > 0 or not any(c.isalpha() for c in window):
-            raise ValueError
-    except (ValueError, TypeError, OverflowError):
-        raise ParameterError(
-            f"--conformal must be a duration with its unit (e.g. 1d, 12h), got {window!r}"
-        ) from None
-    return ConformalSettings(seconds, online=online)
 
 
 def _emit(result, report, json_out: Path | None, out: Path | None, report_dir: Path | None) -> None:

@@ -23,7 +23,7 @@ from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.workflow.checks import fit_and_check
 from rczone.workflow.datasource import DataSource, data_source, frame_and_label
-from rczone.workflow.holdout import before, score_held_out, split_time
+from rczone.workflow.holdout import before, conformal_settings, score_held_out, split_time
 
 PathLike = str | os.PathLike
 ModelLike = ZoneModel | PathLike
@@ -241,6 +241,8 @@ def score_horizons(
     columns: PathLike | None = None,
     label: str | None = None,
     hold: str | None = None,
+    conformal: str | None = None,
+    online: bool = False,
 ):
     """Score a model at several horizons at once, with baselines: ``rczone predict --horizons --baselines``.
 
@@ -264,6 +266,11 @@ def score_horizons(
         The data's name in titles and the JSON.
     hold : {"zoh", "foh"}, optional
         Inputs between samples; default the one the model was fitted with.
+    conformal : str, optional
+        Replace the k-step bands by split conformal ones calibrated on the last part of the
+        warm-up, this long (``"1d"``; needs ``warmup``), as ``--conformal``.
+    online : bool
+        With ``conformal``: update the bands while predicting and watch for drift (``--online``).
 
     Returns
     -------
@@ -277,6 +284,7 @@ def score_horizons(
     frame, name = frame_and_label(data, columns, zm)
     frame = frame_from(frame)
     start = split_time(frame, warmup, model=zm, columns=columns, warmup=True)
+    settings = conformal_settings(conformal, online, start)
     text = horizons if isinstance(horizons, str) else ",".join(str(h) for h in horizons)
     return horizon_scores(
         zm,
@@ -287,6 +295,7 @@ def score_horizons(
         start=start,
         label=label or name,
         hold=hold,
+        conformal=settings,
     )
 
 

@@ -94,3 +94,42 @@ def score_held_out(
     from rczone.calibration.horizons import holdout_scores
 
     return holdout_scores(fitted, full, at, dict(constants or {}) or None, label=f"{label} (held out)")
+
+
+def conformal_settings(window: str | None, online: bool, start: float | None):
+    """``--conformal WINDOW`` and ``--online`` as :class:`~rczone.calibration.conformal.ConformalSettings`.
+
+    Parameters
+    ----------
+    window : str, optional
+        The calibration window at the end of the warm-up, a duration with its unit (``"1d"``);
+        None: no conformal band.
+    online : bool
+        Update the bands while predicting (adaptive conformal inference).
+    start : float, optional
+        Where the warm-up ends (:func:`split_time`); a conformal band needs one.
+
+    Returns
+    -------
+    ConformalSettings or None
+    """
+    import pandas as pd
+
+    from rczone.calibration.conformal import ConformalSettings
+    from rczone.errors import ParameterError
+
+    if window is None:
+        if online:
+            raise ParameterError("--online updates a conformal band: give --conformal WINDOW too (e.g. 1d)")
+        return None
+    if start is None:
+        raise ParameterError("--conformal calibrates on the end of the warm-up: give --warmup too")
+    try:
+        seconds = pd.Timedelta(window.strip()).total_seconds()
+        if not seconds > 0 or not any(c.isalpha() for c in window):
+            raise ValueError
+    except (ValueError, TypeError, OverflowError):
+        raise ParameterError(
+            f"--conformal must be a duration with its unit (e.g. 1d, 12h), got {window!r}"
+        ) from None
+    return ConformalSettings(seconds, online=online)
