@@ -163,10 +163,12 @@ def select(
     box = bounds(bound, parameter_kinds(*zms))
     added, held = free_list(free), fixed(fix, parameter_kinds(*zms))
 
-    def progress(name: str) -> None:
-        console.print(f"fitting {esc(name)} (ML)")
+    title = f"selecting among {len(zms)} models on {esc(label)}"
+    with console.status(title) as status:
 
-    with console.status(f"selecting among {len(zms)} models on {esc(label)}"):
+        def progress(name: str) -> None:  # on the status line: a failing run prints one line, the error
+            status.update(f"{title}: fitting {esc(name)} (ML)")
+
         sel = select_models(
             zms,
             frame,
