@@ -66,14 +66,12 @@ from pathlib import Path
 from rczone.errors import DataError, RczoneError, did_you_mean
 from rczone.estimation.methods import method_names, method_of
 from rczone.estimation.optimize import OPTIMIZERS as LOCAL_OPTIMIZERS
-from rczone.estimation.settings import NOISE_PLACEMENTS, FitSettings
+from rczone.estimation.settings import MAX_STARTS, NOISE_PLACEMENTS, FitSettings
 from rczone.files.text import nfkc, read_toml, regular_file
 from rczone.workflow.datasource import BuiltinNight, DataSource, TrendLog, VirtualNight
 
 MAX_TASKS = 200_000
 """Most calibrations (zones x methods) one manifest may ask for."""
-MAX_STARTS = 1000
-"""Most optimizer starts per calibration."""
 MODEL_FILE_SUFFIXES = (".toml", ".json")
 OPTIMIZERS = ("auto", *LOCAL_OPTIMIZERS)
 SEASONS = ("summer", "winter", "autumn")
@@ -246,7 +244,7 @@ def _settings(base: Mapping[str, object], table: Mapping, where: str, folder: Pa
     ):
         raise _err(
             where,
-            f'n_starts must be "auto" or an integer from 1 to {MAX_STARTS} (rczone.batch.manifest.MAX_STARTS),'
+            f'n_starts must be "auto" or an integer from 1 to {MAX_STARTS} (rczone.estimation.settings.MAX_STARTS),'
             f" got {n_starts!r}",
         )
     seed = out["seed"]
@@ -373,6 +371,31 @@ def _constants_problem(spec: str, digest: str, names: tuple[str, ...]) -> str:
     return ""
 
 
+def _digest_of(spec: str) -> str:
+    return file_digest(spec) if Path(spec).is_absolute() else ""
+
+
+@lru_cache(maxsize=256)
+def _free_problem(spec: str, digest: str, method: str, free: tuple[str, ...] | None, noise: str) -> str:
+    """Why the free parameters of a fit do not fit the model ``spec`` ("" if they do).
+
+    Checked when the manifest is read, so an unknown parameter in one zone stops the run before
+    anything is computed (issue 39), as ``rczone fit --free`` does.
+    """
+    from rczone.estimation.freeset import ADD
+    from rczone.estimation.parameters import check_name
+    from rczone.models import load_model
+
+    try:
+        network = load_model(spec).network
+        for name in free or ():
+            check_name(network, name.removeprefix(ADD), "free parameter")
+        FitSettings(method=method, free=free, noise=noise).free_for(network)
+    except RczoneError as exc:
+        return str(exc)
+    return ""
+
+
 def _seeds(spec: object, where: str) -> range | list[int]:
     """The seeds of a generator, as a list or a lazy range (its size is checked before expanding)."""
     if isinstance(spec, list) and spec and all(isinstance(s, int) and not isinstance(s, bool) for s in spec):
@@ -405,9 +428,10 @@ def _virtual(spec: object, where: str) -> VirtualNight:
         raise _err(where, f"unknown season {season!r}; " + did_you_mean(str(season), SEASONS))
     if mode not in MODES:
         raise _err(where, f"unknown mode {mode!r}; " + did_you_mean(str(mode), MODES))
-    if not isinstance(seed, int) or isinstance(seed, bool):
-        raise _err(where, f"seed must be an integer, got {seed!r}")
-    return VirtualNight(season, mode, seed)
+    try:
+        return VirtualNight(season, mode, seed)
+    except RczoneError as exc:
+        raise _err(where, str(exc)) from None
 
 
 def _tasks(zone: str, source: DataSource, s: Mapping[str, object], where: str) -> list[Task]:
@@ -432,6 +456,10 @@ def _tasks(zone: str, source: DataSource, s: Mapping[str, object], where: str) -
                 profiles=False,
                 options={**(s["sampler"] if samples else {}), **s["options"].get(str(m), {})},
             )
+            spec = str(s["model"])
+            problem = _free_problem(spec, _digest_of(spec), settings.method, settings.free, settings.noise)
+            if problem:
+                raise DataError(problem)  # said with the zone below
             tasks.append(Task(zone, str(s["model"]), source, settings, bool(s["diagnose"])))
         return tasks
     except RczoneError as exc:  # checked above already; a setting FitSettings refuses is still one line

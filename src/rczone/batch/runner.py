@@ -14,8 +14,11 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
+import sys
+import threading
 import time
 from collections import Counter, deque
 from collections.abc import Callable, Iterator
@@ -207,20 +210,68 @@ def _dask_results(
             yield rows
 
 
-def _leave_ctrl_c_to_the_parent() -> None:
-    """A local worker process ignores Ctrl-C: the coordinating process stops the run and ends it.
+#: Linux's prctl option that sends a signal to a process when its parent dies.
+PR_SET_PDEATHSIG = 1
+
+#: Seconds between two looks at the coordinating process where no parent-death signal exists.
+PARENT_WATCH_S = 1.0
+
+
+def _leave_ctrl_c_to_the_parent(parent: int) -> None:
+    """A local worker process ignores Ctrl-C and ends with its coordinating process ``parent``.
 
     The terminal's Ctrl-C reaches every process of the group; a worker that raised it would print
     its own traceback beside the command's one line (the console script ends the workers,
     :func:`rczone.cli.run`; a caller of :func:`run_batch` gets ``KeyboardInterrupt`` and the
-    workers stop after their zone).
+    workers stop after their zone). SIGTERM takes its default action (a forked worker inherits the
+    command's handler). A coordinator killed outright (``kill -9``) runs no handler: the worker
+    then ends by itself (:func:`_end_with_parent`).
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _end_with_parent(parent)
+
+
+def _gone(pid: int) -> bool:
+    """Whether no process ``pid`` exists any more."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # exists, owned by another user (a reused number): not ours to judge
+        return False
+    return False
+
+
+def _end_with_parent(parent: int) -> None:
+    """End this process when the coordinating process ``parent`` ends.
+
+    On Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)`` (proc(5)) has the kernel kill the worker when the
+    process that started it exits; a daemon thread also looks every :data:`PARENT_WATCH_S` seconds
+    whether ``parent`` still exists (other systems, or a worker started by a fork server). A
+    coordinator that ended before either was in place is caught at once.
+    """
+    if sys.platform.startswith("linux") and os.getppid() == parent:
+        with contextlib.suppress(OSError, AttributeError):
+            import ctypes
+
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if _gone(parent):
+        os._exit(1)
+
+    def watch() -> None:
+        while not _gone(parent):
+            time.sleep(PARENT_WATCH_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="rczone-parent-watch", daemon=True).start()
 
 
 def _executor() -> ProcessPoolExecutor:
-    """A one-process executor whose process leaves Ctrl-C to this one."""
-    return ProcessPoolExecutor(max_workers=1, initializer=_leave_ctrl_c_to_the_parent)
+    """A one-process executor whose process leaves Ctrl-C to this one and ends with it."""
+    return ProcessPoolExecutor(
+        max_workers=1, initializer=_leave_ctrl_c_to_the_parent, initargs=(os.getpid(),)
+    )
 
 
 def _process_results(groups: list[list[Task]], workers: int, retries: int) -> Iterator[list[dict] | Lost]:

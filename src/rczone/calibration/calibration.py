@@ -22,6 +22,7 @@ from rczone.calibration.dataset import (
     dataset,
     frame_from,
     ignored_channels,
+    missing_inputs,
 )
 from rczone.estimation import Dataset, FitResult, fit
 from rczone.estimation.innovations import (
@@ -52,7 +53,7 @@ from rczone.network.stochastic import (
 )
 from rczone.results import Result
 from rczone.results.accessors import FitAccessors
-from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, verdict_of
+from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, dropped_samples, verdict_of
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -115,8 +116,27 @@ class Calibration(FitAccessors, Result):
     verdict: Verdict = field(init=False)
 
     def __post_init__(self) -> None:
-        verdict = verdict_of(self.result, self.identifiability, self.checks, data=self.data_warnings)
-        object.__setattr__(self, "verdict", verdict)
+        object.__setattr__(
+            self,
+            "verdict",
+            verdict_of(
+                self.result,
+                self.identifiability,
+                self.checks,
+                data=self.data_warnings,
+                data_used=self.model.provenance.get("stretch"),
+                notes=self._evaluation_note(),
+            ),
+        )
+
+    def _evaluation_note(self) -> tuple[str, ...]:
+        """A note when every R, C and gain was held: the fit estimated noise levels only (issue 39)."""
+        if any(n in self.model.network.parameters for n in self.result.parameters):
+            return ()
+        return (
+            "every R, C and gain was held (fixed): this is an evaluation of the model at its values, with"
+            " only its noise levels and initial states estimated",
+        )
 
     @property
     def data_label(self) -> str:
@@ -213,7 +233,7 @@ class Calibration(FitAccessors, Result):
             lines.append(esc(self.plausibility.line()))
             lines += [f"[yellow]implausible:[/] {esc(w)}" for w in self.plausibility.warnings]
         stretch = self.model.provenance.get("stretch") or {}
-        if stretch.get("samples", 0) < stretch.get("of", 0):
+        if stretch.get("samples", 0) < stretch.get("of", 0) and not dropped_samples(stretch):
             lines.append(
                 f"[yellow]note:[/] fitted on {stretch['samples']} of {stretch['of']} samples"
                 f" ({stretch['fraction']:.0%}), the longest stretch where every input is known"
@@ -344,6 +364,8 @@ def calibrate(
         "start_s": float(data.t[0]),
         "end_s": float(data.t[-1]),
     }
+    if data.n_samples < len(frame):
+        stretch["missing"] = missing_inputs(zm, frame, constants)
     free = settings.free_for(net)
     start = {k: v for k, v in {**zm.theta, **zm.noise}.items() if k in free}
     held = {k: v for k, v in zm.theta.items() if k not in free}

@@ -112,6 +112,36 @@ def complete_stretch(u: np.ndarray, m: np.ndarray, y: np.ndarray) -> slice:
     return slice(*best)
 
 
+def missing_inputs(
+    model: ModelLike, frame: pd.DataFrame, constants: Mapping[str, float] | None = None
+) -> list[dict]:
+    """Each input channel with missing or non-finite samples: its name, how many, and the first and last time.
+
+    What a fit on the longest complete stretch (:func:`complete_stretch`) left out, said by channel
+    so the user knows which sensor to repair (issue 39).
+
+    Returns
+    -------
+    list of dict
+        ``{"channel", "samples", "first_s", "last_s"}``, times on the data's axis (s).
+    """
+    zm = as_model(model)
+    t, u, m, _ = zm.signals(frame_from(frame), constants)
+    out = []
+    for j, name in enumerate((*zm.network.input_names, *zm.network.flow_names)):
+        bad = np.flatnonzero(~np.isfinite(np.column_stack([u, m])[:, j]))
+        if bad.size:
+            out.append(
+                {
+                    "channel": name,
+                    "samples": int(bad.size),
+                    "first_s": float(t[bad[0]]),
+                    "last_s": float(t[bad[-1]]),
+                }
+            )
+    return out
+
+
 MIN_USED_FRACTION = 0.5
 """Where inputs have gaps, the longest complete stretch is used only if it holds at least this
 fraction of the samples; below, the data are refused (exit code 2) rather than silently cut to a

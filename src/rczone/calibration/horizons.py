@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from rczone import validation
 from rczone.calibration.conformal import (
     ALPHA,
     ConformalBand,
@@ -34,7 +35,13 @@ from rczone.calibration.conformal import (
 )
 from rczone.calibration.dataset import ModelLike, as_model, ignored_channels
 from rczone.calibration.drift import DriftCheck, check_drift
-from rczone.calibration.prediction import PredictionSetup, prediction_setup, saved_covariance, write_series
+from rczone.calibration.prediction import (
+    PredictionSetup,
+    filter_failure,
+    prediction_setup,
+    saved_covariance,
+    write_series,
+)
 from rczone.errors import DataError, ParameterError
 from rczone.estimation.baselines import ARX, fit_arx, k_step_baselines, open_loop_baselines
 from rczone.estimation.forecast import parameter_sd
@@ -363,11 +370,15 @@ def horizon_scores(
             "k-step predictions need the model's noise levels; fit the model by ML (rczone fit --method ml"
             " --save-model ...) or score open loop only (--horizons open)"
         )
-    setup = prediction_setup(zm, frame, constants, start=start, hold=hold)
-    data, first = setup.data, setup.first
-    predictor = setup.predictor(horizons)
-    y_hat = predictor(setup.values)
-    sd, sources = setup.noise_sd(horizons)
+    with filter_failure(zm):
+        setup = prediction_setup(zm, frame, constants, start=start, hold=hold)
+        data, first = setup.data, setup.first
+        for h in horizons:
+            if h is not None:
+                validation.steps_ahead(h, len(data.t) - first, "horizon")
+        predictor = setup.predictor(horizons)
+        y_hat = predictor(setup.values)
+        sd, sources = setup.noise_sd(horizons)
     cov = saved_covariance(zm) if parameters else None
     if cov is not None:
         sd_par = parameter_sd(predictor, setup.values, *cov)

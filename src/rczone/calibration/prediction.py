@@ -6,14 +6,16 @@ parameters' and the noise's contributions to the band, and the scores against th
 
 from __future__ import annotations
 
+import contextlib
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 
+from rczone import validation
 from rczone.calibration.calibration import (
     estimated_start,
 )
@@ -573,15 +575,19 @@ def prediction(
     -------
     Prediction
     """
-    if steps is not None and not any(is_noise_name(k) for k in as_model(model).noise):
+    zm = as_model(model)
+    if steps is not None and not any(is_noise_name(k) for k in zm.noise):
         raise DataError(
             f"a {steps}-step prediction needs the model's noise levels; fit the model by ML"
             " (rczone fit --method ml --save-model ...) or predict open loop"
         )
-    setup = prediction_setup(model, frame, constants, start=start, initial_state=initial_state, hold=hold)
-    return setup_prediction(
-        setup, steps, parameters=parameters, calibrated=calibrated, frame=frame, label=label
-    )
+    with filter_failure(zm):
+        setup = prediction_setup(zm, frame, constants, start=start, initial_state=initial_state, hold=hold)
+        if steps is not None:
+            validation.steps_ahead(steps, len(setup.data.t) - setup.first)
+        return setup_prediction(
+            setup, steps, parameters=parameters, calibrated=calibrated, frame=frame, label=label
+        )
 
 
 def setup_prediction(
@@ -694,6 +700,24 @@ def hidden_states(setup: PredictionSetup) -> HiddenStates:
 
 #: Where an open-loop prediction starts its unmeasured nodes (:func:`prediction`).
 INITIAL_STATES = ("warmup", "steady", "estimated")
+
+
+@contextlib.contextmanager
+def filter_failure(zm: ZoneModel) -> Iterator[None]:
+    """Turn the Kalman filter's refusal of the model's noise levels into one line naming them.
+
+    A saved model whose noise levels leave an innovation variance that is not positive (every
+    level zero) cannot weigh a measurement (Durbin & Koopman 2012, sec. 4.3: the gain needs
+    ``F_t > 0``); the prediction is refused, not a traceback.
+    """
+    try:
+        yield
+    except np.linalg.LinAlgError as exc:
+        levels = ", ".join(f"{k} = {v:g}" for k, v in zm.noise.items() if is_noise_name(k)) or "none"
+        raise DataError(
+            f"the Kalman filter cannot use the noise levels of model {zm.label!r} ({levels}): {exc};"
+            " refit the model by ML (rczone fit --method ml --save-model ...)"
+        ) from None
 
 
 def noise_values(zm: ZoneModel) -> dict[str, float]:

@@ -204,7 +204,7 @@ def held_out_report(held, report_dir: Path, out) -> None:
     """``--holdout --report DIR``: the held-out scores' report in ``DIR/holdout``."""
     from rczone.report.predict import horizons_report
 
-    horizons_report(held).write(report_dir / "holdout")
+    horizons_report(held).write(report_dir, under="holdout")
     out.print(f"held-out report written to [bold]{esc(report_dir / 'holdout' / 'report.html')}[/]")
 
 
@@ -326,16 +326,14 @@ def predict(
     """
     from rczone.calibration import prediction
     from rczone.errors import ParameterError
+    from rczone.validation import integer, steps_ahead
 
-    if steps is not None and steps < 1:
-        raise ParameterError(f"--steps must be a positive integer, got {steps}")
+    if steps is not None:
+        integer(steps, "--steps", low=1)
     zm = model(model_file)
     frame = read_frame(data, column_map, zm)
-    if steps is not None and steps >= len(frame):
-        raise ParameterError(
-            f"--steps {steps} is not less than the {len(frame)} samples of {data_label(data)}: no sample would"
-            " be predicted; give fewer steps"
-        )
+    if steps is not None:
+        steps_ahead(steps, len(frame), "--steps")
     label = data_label(data)
     from rczone.workflow.holdout import split_time
 

@@ -133,7 +133,10 @@ def generate(
             raise ParameterError(f"{what} {text!r}: give room names separated by commas (A,B)")
         return out
 
-    room_list: int | list[str] = int(rooms) if rooms.strip().isdigit() else names(rooms, "--rooms")
+    from rczone.validation import ascii_count
+
+    count = ascii_count(rooms)
+    room_list: int | list[str] = count if count is not None else names(rooms, "--rooms")
     walls = []
     for w in wall or []:
         pair = [p.strip() for p in w.split("-")]

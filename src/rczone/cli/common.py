@@ -150,12 +150,10 @@ def note_ignored(frame: pd.DataFrame, column_map: Path | None, unused: str) -> N
 
 
 def check_seed(value: int) -> int:
-    """A ``--seed``: an integer from 0 to 2**63 - 1 (NumPy's generators take no negative seed)."""
-    from rczone.errors import ParameterError
+    """A ``--seed``: an integer from 0 to 2**63 - 1 (:func:`rczone.validation.seed`)."""
+    from rczone.validation import seed
 
-    if not 0 <= value < 2**63:
-        raise ParameterError(f"--seed must be an integer from 0 to 2**63 - 1, got {value}")
-    return value
+    return seed(value, "--seed")
 
 
 def split(text: str | None) -> list[str] | None:

@@ -6,7 +6,9 @@ built, whose next use fails with an error that does not carry the interrupt (``n
 yet``); either way the command goes on, or fails with a traceback, instead of ending as
 interrupted. :func:`noting_ctrl_c` notes every Ctrl-C as it arrives, from the first line of the
 console script on (a Ctrl-C dropped while the command modules import counts too), and then
-raises as Python's own handler does.
+raises as Python's own handler does. A SIGTERM is taken as a Ctrl-C: the command ends 130 and
+ends its worker processes (a process killed outright runs no handler; fit-many's workers then end
+by themselves, :func:`rczone.batch.runner._end_with_parent`).
 """
 
 from __future__ import annotations
@@ -64,10 +66,15 @@ def noting_ctrl_c() -> Iterator[Callable[[], bool]]:
     _seen.clear()
     _depth[0] = 1
     signal.signal(signal.SIGINT, on_ctrl_c)
+    term = signal.getsignal(signal.SIGTERM)
+    if term == signal.SIG_DFL:  # SIGTERM (kill, a job scheduler) ends a command as Ctrl-C does
+        signal.signal(signal.SIGTERM, on_ctrl_c)
     try:
         yield _arrived
     finally:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+        if term == signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
         _depth[0] = 0
         for timer in timers:  # the command ended: nothing is left to end (nor a caller's process)
             timer.cancel()

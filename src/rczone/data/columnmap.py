@@ -275,6 +275,10 @@ def _choice(value, choices: Sequence[str], what: str, source: str) -> str:
     return value
 
 
+#: Words pandas reads as a time relative to the clock: refused in ``[time] start/end``.
+RELATIVE_DAYS = ("now", "today", "tomorrow", "yesterday")
+
+
 def _instant(time: Mapping, key: str, tz: str, source: str) -> float | None:
     """``[time] start/end``: a date or date and time, local to the map's time zone, as UTC epoch seconds."""
     if key not in time:
@@ -285,6 +289,11 @@ def _instant(time: Mapping, key: str, tz: str, source: str) -> float | None:
     text = _text(text, f"[time] {key}", source)
     import pandas as pd
 
+    if text.strip().lower() in RELATIVE_DAYS:
+        raise DataError(
+            f"column map {source}: [time] {key} = {text!r} changes with the day rczone runs, and so would the"
+            ' result; give a date (e.g. "2014-07-01"), or leave the key out for the end of the record'
+        )
     try:
         ts = pd.Timestamp(text)
     except (ValueError, OverflowError):

@@ -172,16 +172,24 @@ def _run_nuts(logp: LogPosterior, starts: np.ndarray, settings: McmcOptions, see
         d, make_logp, make_expand, [np.dtype("float64")], [(d,)], names, make_initial_point_fn=initial_point
     )
     t0 = time.perf_counter()
-    idata = nutpie.sample(
-        model,
-        draws=settings.draws,
-        tune=settings.tune,
-        chains=settings.chains,
-        cores=1,  # the log density holds the GIL: more threads only contend for it
-        seed=int(seed),
-        progress_bar=False,
-        save_warmup=True,
-    )
+    try:
+        idata = nutpie.sample(
+            model,
+            draws=settings.draws,
+            tune=settings.tune,
+            chains=settings.chains,
+            cores=1,  # the log density holds the GIL: more threads only contend for it
+            seed=int(seed),
+            progress_bar=False,
+            save_warmup=True,
+        )
+    except (KeyboardInterrupt, SystemExit, MemoryError):
+        raise
+    except BaseException as exc:  # nutpie's Rust panics derive from BaseException
+        raise RczoneError(
+            f"the sampler (nutpie {nutpie.__version__}) failed: {' '.join(str(exc).split())[:200]}; try"
+            " more warm-up draws (--tune) or fit by ML first"
+        ) from None
     seconds = time.perf_counter() - t0
     z = np.asarray(idata.posterior["z"].values, dtype=float)
     return _Run(z, idata, seconds, f"nutpie {nutpie.__version__} (NUTS)")

@@ -16,11 +16,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from rczone import validation
 from rczone.errors import ParameterError, did_you_mean
 from rczone.estimation.freeset import check_free_and_fixed, fixed_value, resolve_free
 from rczone.estimation.methods import DEFAULT_METHOD, MethodOptions, method_of
 from rczone.estimation.optimize import OPTIMIZERS
 from rczone.simulation.simulate import HOLDS
+
+#: Most local searches of one fit (a typo of a few zeros should not ask for days of searching).
+MAX_STARTS = 1000
 
 #: Process-noise placements of an ML or MAP fit (:func:`rczone.estimation.fit.default_free`).
 NOISE_PLACEMENTS = ("measured", "all")
@@ -99,14 +103,15 @@ class FitSettings:
             )
         if self.noise not in NOISE_PLACEMENTS:
             raise ParameterError(f"noise must be one of {', '.join(NOISE_PLACEMENTS)}, got {self.noise!r}")
-        if self.n_starts is not None and (
-            isinstance(self.n_starts, bool) or not isinstance(self.n_starts, int) or self.n_starts < 1
-        ):
-            raise ParameterError(
-                f"n_starts must be None (automatic) or a positive integer, got {self.n_starts!r}"
+        if self.n_starts is not None:
+            object.__setattr__(
+                self,
+                "n_starts",
+                validation.integer(
+                    self.n_starts, "n_starts", low=1, high=MAX_STARTS, besides="None (automatic) or "
+                ),
             )
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int):
-            raise ParameterError(f"seed must be an integer, got {self.seed!r}")
+        object.__setattr__(self, "seed", validation.seed(self.seed))
         if self.free is not None:
             if isinstance(self.free, str):
                 raise ParameterError(f"free must be a sequence of names, got the string {self.free!r}")

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from rczone import __version__
+from rczone import __version__, validation
 from rczone.errors import (
     DataError,
     InputShapeError,
@@ -45,7 +45,7 @@ from rczone.errors import (
 from rczone.files.atomic import write_json_atomic
 from rczone.network import BilinearStateSpace, LinearStateSpace, RCNetwork
 from rczone.network.serialize import network_from_dict, network_to_dict
-from rczone.network.stochastic import is_reserved
+from rczone.network.stochastic import is_noise_name, is_reserved
 from rczone.simulation import SimulationResult, simulate
 from rczone.simulation.discretize import interval_discretization
 
@@ -187,6 +187,10 @@ class ZoneModel:
                 isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
             ):
                 raise ModelFileError(f"noise value {k!r} = {v!r}: expected sigma_*/x0_* with a finite number")
+            if is_noise_name(k) and not 0.0 <= v <= validation.MAX_NOISE:
+                raise ModelFileError(
+                    f"noise level {k!r} = {v:g}: expected a standard deviation from 0 to {validation.MAX_NOISE:g}"
+                )
         object.__setattr__(self, "theta", MappingProxyType({k: float(vals[k]) for k in theta if k in vals}))
         object.__setattr__(self, "provenance", MappingProxyType(dict(self.provenance)))
         object.__setattr__(
@@ -248,9 +252,10 @@ class ZoneModel:
             if name in constants:
                 cols[name] = np.full(len(frame), float(constants[name]))
             elif name in frame:
-                cols[name] = frame[name].to_numpy(float)
+                cols[name] = validation.numeric_column(frame, name)
             elif name in self.inputs.mean_of and all(c in frame for c in self.inputs.mean_of[name]):
-                cols[name] = frame[list(self.inputs.mean_of[name])].to_numpy(float).mean(axis=1)
+                means = [validation.numeric_column(frame, c) for c in self.inputs.mean_of[name]]
+                cols[name] = np.mean(means, axis=0)
             elif name in self.inputs.defaults:
                 cols[name] = np.full(len(frame), self.inputs.defaults[name])
             else:
@@ -262,11 +267,34 @@ class ZoneModel:
                     + did_you_mean(o, frame.columns)
                     + " (map it in a column map)"
                 )
-        t = frame["time"].to_numpy(float)
+        t = validation.time_axis(validation.numeric_column(frame, "time"))
+        self.check_time_scales(validation.sampling_period(t))
         u = np.column_stack([cols[n] for n in net.input_names]) if net.input_names else np.zeros((len(t), 0))
         m = np.column_stack([cols[n] for n in net.flow_names]) if net.flow_names else np.zeros((len(t), 0))
-        y = frame[list(net.outputs)].to_numpy(float)
+        y = (
+            np.column_stack([validation.numeric_column(frame, o) for o in net.outputs])
+            if net.outputs
+            else np.zeros((len(t), 0))
+        )
         return t, u, m, y
+
+    def check_time_scales(self, dt: float) -> None:
+        """Refuse a latent force whose period is shorter than the sampling interval ``dt`` (s).
+
+        A period below the interval is aliased (Shannon's sampling theorem): the data cannot tell it
+        from a slower one, and the filter's discretization of a resonator that turns millions of
+        times per sample takes minutes for a meaningless answer.
+        """
+        params = self.network.parameters
+        for d in self.network.disturbances:
+            if d.period is None:
+                continue
+            value = params[d.period].value if isinstance(d.period, str) else float(d.period)
+            if not value >= dt:
+                raise ParameterError(
+                    f"disturbance {d.name!r}: period {value:g} s is shorter than the sampling interval"
+                    f" {dt:g} s; the data cannot resolve it (give a period of at least two samples)"
+                )
 
     def signal_quantities(self) -> dict[str, str]:
         """Quantity of every signal the model reads from data (for loading a trend log).
@@ -334,10 +362,14 @@ class ZoneModel:
 
         A constant of an unknown name (a typo) or of an output would otherwise be ignored in silence.
         """
-        constants = dict(constants or {})
+        constants = dict(validation.mapping(constants or {}, "constants"))
         inputs = (*self.network.input_names, *self.network.flow_names)
+        quantities = self.signal_quantities()
         for name in constants:
             if name in inputs:
+                constants[name] = validation.input_value(
+                    constants[name], f"constant {name}", quantities.get(name, "power")
+                )
                 continue
             if name in self.network.outputs or name in self.network.state_names:
                 raise ParameterError(

@@ -244,6 +244,7 @@ class LatentForce:
                 raise NetworkError(
                     f"disturbance {name!r}: {what} must be a number or a parameter name, got {v!r}"
                 )
+            _check_number(name, what, v)
         set_ = object.__setattr__
         set_(self, "name", name)
         set_(self, "kind", kind)
@@ -265,6 +266,22 @@ class LatentForce:
             ("length_scale", self.length_scale),
         )
         return out + ((("period", self.period),) if self.period is not None else ())
+
+
+def _check_number(name: str, what: str, v: object) -> None:
+    """A hyper-parameter given as a number: finite; a magnitude >= 0, a length scale or period > 0 s.
+
+    The same values a model file refuses when the network is built (:meth:`RCNetwork.state_space`),
+    refused when the disturbance is declared.
+    """
+    if isinstance(v, str):
+        return
+    x = float(v)  # type: ignore[arg-type]
+    positive = what in ("length_scale", "period")
+    signed = not positive and what != "magnitude"  # a gain
+    if not math.isfinite(x) or (not signed and x < 0) or (positive and x == 0):
+        expected = "> 0 s" if positive else ">= 0 W" if what == "magnitude" else "finite"
+        raise NetworkError(f"disturbance {name!r}: {what} must be {expected}, got {x:g}")
 
 
 #: Parameter kind each hyper-parameter role must have when given by name.

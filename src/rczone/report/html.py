@@ -134,9 +134,19 @@ class Report:
             f"<h1>{html.escape(self.title)}</h1>" + "\n".join(self.parts) + "</body></html>\n"
         )
 
-    def write(self, folder: str | os.PathLike) -> Path:
-        """Write ``report.html`` and every figure's PNG into ``folder`` (atomically each, never outside it)."""
+    def write(self, folder: str | os.PathLike, *, under: str | None = None) -> Path:
+        """Write ``report.html`` and every figure's PNG into ``folder`` (atomically each, never outside it).
+
+        Parameters
+        ----------
+        folder : str or path
+            The user's folder (it may be a link).
+        under : str, optional
+            A subfolder rczone names itself (``"holdout"``): opened like the files, so a symbolic
+            link planted at its name is refused, never followed.
+        """
         folder = Path(folder)
+        prefix = f"{under}/" if under else ""
         for name, png in self.figures.items():
-            write_bytes_in(folder, f"{name}.png", png)
-        return write_text_in(folder, "report.html", self.render())
+            write_bytes_in(folder, f"{prefix}{name}.png", png)
+        return write_text_in(folder, f"{prefix}report.html", self.render())

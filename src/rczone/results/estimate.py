@@ -91,7 +91,8 @@ class Estimate(NamedTuple):
         if not (math.isfinite(se) and math.isfinite(v)):
             return math.nan, math.nan
         if self.log_scale and v > 0:
-            return v * math.exp(-z * se / v), v * math.exp(z * se / v)
+            spread = z * se / v  # a standard error far above the value: the upper end is unbounded
+            return v * math.exp(-min(spread, 745.0)), (v * math.exp(spread) if spread < 709.0 else math.inf)
         return v - z * se, v + z * se
 
     @property

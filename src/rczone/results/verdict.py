@@ -53,12 +53,41 @@ class Verdict(NamedTuple):
         }
 
 
+#: A fit on less than this fraction of the samples (the rest dropped for missing inputs) is flagged.
+FLAGGED_USED_FRACTION = 0.9
+
+
+def dropped_samples(data_used: Mapping[str, Any] | None) -> str | None:
+    """The reason a fit on part of its data is flagged, naming the inputs and the times; None if it is not.
+
+    Parameters
+    ----------
+    data_used : mapping, optional
+        The fitted model's ``provenance["stretch"]``: ``samples``, ``of``, ``fraction`` and ``missing``
+        (:func:`rczone.calibration.dataset.missing_inputs`).
+    """
+    if not data_used or data_used.get("fraction", 1.0) >= FLAGGED_USED_FRACTION:
+        return None
+    where = "; ".join(
+        f"{m['channel']} is missing at {m['samples']} sample(s) between t = {m['first_s']:.10g} s and"
+        f" {m['last_s']:.10g} s"
+        for m in data_used.get("missing") or ()
+    )
+    return (
+        f"fitted on {data_used['samples']} of {data_used['of']} samples ({data_used['fraction']:.0%}), the"
+        f" longest stretch where every input is known{': ' + where if where else ''}; fill the gaps or select"
+        " the stretch with the column map's [time] start and end"
+    )
+
+
 def verdict_of(
     result,
     identifiability=None,
     checks: Mapping[str, Any] | None = None,
     *,
     data: Sequence[str] = (),
+    data_used: Mapping[str, Any] | None = None,
+    notes: Sequence[str] = (),
 ) -> Verdict:
     """The one verdict on a fit from its own flags and the checks made after it.
 
@@ -80,15 +109,23 @@ def verdict_of(
     data : sequence of str
         The data's signals outside their plausible range (:attr:`rczone.estimation.Dataset.warnings`):
         temperatures in degF read as degC fit as well as any, so each is a reason not to trust the fit.
+    data_used : mapping, optional
+        The samples the fit used (:func:`dropped_samples`): fewer than
+        :data:`FLAGGED_USED_FRACTION` of the record flag the fit.
+    notes : sequence of str
+        Notes the caller adds (a fit that held every R and C is an evaluation).
 
     Returns
     -------
     Verdict
     """
     reasons = list(result.flags) + [f"implausible data: {line}" for line in data]
+    dropped = dropped_samples(data_used)
+    if dropped:
+        reasons.append(dropped)
     suspect = [n for n, e in result.parameters.items() if e.at_bound and result.issues]
     checked = ["fit"]
-    notes: list[str] = []
+    notes = list(notes)
     if checks:
         if checks.get("other_fits"):
             checked.append("other data")

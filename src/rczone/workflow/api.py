@@ -13,8 +13,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
+from rczone import validation
 from rczone.calibration import Calibration, Prediction, as_model, frame_from, prediction
 from rczone.calibration.dataset import time_index
 from rczone.errors import ParameterError
@@ -209,14 +211,16 @@ def predict(
     Prediction
         ``to_frame()`` is indexed by the data's time stamps.
     """
-    if steps is not None and (isinstance(steps, bool) or not isinstance(steps, int) or steps < 1):
-        raise ParameterError(f"steps must be a positive integer, got {steps!r}")
+    if steps is not None:
+        validation.integer(steps, "steps", low=1)
     zm = as_model(model)
     frame, name = frame_and_label(data, columns, zm)
     start = None
     if warmup is not None:  # a split needs the time axis
         frame = frame_from(frame)
         start = split_time(frame, warmup, model=zm, columns=columns, warmup=True)
+    if steps is not None:
+        validation.steps_ahead(steps, len(frame))
     return prediction(
         zm,
         frame,
@@ -354,12 +358,14 @@ def simulate(
     missing = [o for o in zm.network.outputs if o not in given]  # a simulation needs no measurement
     given = given.assign(**{o: float("nan") for o in missing}) if missing else given
     t, u, m, _ = zm.signals(given, dict(constants) if constants else None)
+    validation.finite_inputs(t, np.column_stack([u, m]), [*zm.network.input_names, *zm.network.flow_names])
     m = m if m.shape[1] else None
     ss = zm.state_space()
     start = None
     first = {o: given[o].iloc[0] for o in zm.network.outputs if o not in missing and o in ss.state_names}
     x0 = {**{o: float(v) for o, v in first.items() if pd.notna(v)}, **dict(x0 or {})}
     if x0:
+        x0 = {k: validation.temperature(v, f"x0 of {k}") for k, v in validation.mapping(x0, "x0").items()}
         unknown = sorted(set(x0) - set(ss.state_names))
         if unknown:
             raise ParameterError(
@@ -371,7 +377,7 @@ def simulate(
             if name in x0:
                 start[i] = float(x0[name])
     res = simulate_state_space(ss, t, u, m, start, hold)
-    out = res.to_frame()
+    out = validation.finite_result(res.to_frame(), f"the simulation of {zm.label!r}")
     index = time_index(frame, t)
     if index is not None:
         out.index = index
@@ -429,6 +435,7 @@ def diagnose(
 
     from rczone.diagnostics import diagnose as run
 
+    validation.seed(seed)
     zm = as_model(model)
     frame, name = frame_and_label(data, columns, zm)
     rep = run(
@@ -546,6 +553,7 @@ def select_models(
     from rczone.selection import select_models as run
     from rczone.selection.text import fit_arguments
 
+    validation.seed(seed)
     zms = [as_model(m) for m in models]
     if isinstance(data, pd.DataFrame):
         frame, name, source = data, str(data.attrs.get("name", "data")), ""

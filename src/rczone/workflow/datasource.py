@@ -156,6 +156,11 @@ class VirtualNight:
     mode: str = "closed-loop"
     seed: int = 0
 
+    def __post_init__(self) -> None:
+        from rczone.validation import seed
+
+        object.__setattr__(self, "seed", seed(self.seed))
+
     @property
     def label(self) -> str:
         """``virtual:<season>/<mode>/<seed>``."""

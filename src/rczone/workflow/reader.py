@@ -49,7 +49,14 @@ def read_frame(
     for name in outputs:
         if name not in frame:
             continue
-        measured = int(np.isfinite(frame[name].to_numpy(float)).sum())
+        values = frame[name].to_numpy(float)
+        measured = int(np.isfinite(values).sum())
+        if measured >= MIN_MEASURED and np.nanmin(values) == np.nanmax(values):
+            raise DataError(
+                f"{path}: the measured {name} is {np.nanmin(values):g} at every sample: a constant carries"
+                " nothing to fit (a column map that maps it to a value, or a stuck sensor); map the"
+                " measured column"
+            )
         if measured < MIN_MEASURED:
             raise DataError(
                 f"{path}: only {measured} of {len(frame)} samples have a measured {name};"

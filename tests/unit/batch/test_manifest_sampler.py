@@ -66,7 +66,7 @@ def test_without_a_sampler_table_a_sampling_method_takes_the_defaults_of_fit(tmp
         ("sampler = { draws = 5 }", r"option draws must be an integer from 10 to 1,000,000, got 5"),
         ("sampler = { draws = 100.0 }", r"option draws must be an integer .* got 100.0"),
         ("sampler = { chains = true }", r"option chains must be an integer from 1 to 64, got True"),
-        ("sampler = { tune = 100000000000 }", r"option tune must be an integer from 0 to 1,000,000"),
+        ("sampler = { tune = 100000000000 }", r"option tune must be an integer from 10 to 1,000,000"),
     ],
 )
 def test_bad_sampler_tables_are_one_line(tmp_path, text, match):

@@ -20,8 +20,10 @@ import numpy as np
 from rczone.estimation.methods.base import FitProblem, Method, MethodOptions, positive_int
 
 #: Smallest and largest value of each option (a typo of a few zeros in a manifest should not ask
-#: for days of sampling or the memory of a billion draws).
-LIMITS = {"draws": (10, 1_000_000), "tune": (0, 1_000_000), "chains": (1, 64)}
+#: for days of sampling or the memory of a billion draws). NUTS adapts its step size and mass matrix
+#: in windows of the warm-up (Hoffman & Gelman 2014, sec. 3.2; nutpie's first window is 30 % of it):
+#: without warm-up draws nutpie's adaptation panics, so at least as many as the draws' minimum.
+LIMITS = {"draws": (10, 1_000_000), "tune": (10, 1_000_000), "chains": (1, 64)}
 
 
 @dataclass(frozen=True, kw_only=True)
