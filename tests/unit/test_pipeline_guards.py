@@ -26,6 +26,8 @@ FIELDS = {f.name for f in dataclasses.fields(FitSettings)}
 
 #: (module, function) -> why it takes settings fields one by one.
 SETTINGS_EXCEPTIONS = {
+    ("batch/manifest.py", "_free_problem"): "a cache (functools.lru_cache) of the free-set check per model"
+    " file: its key must be hashable, and FitSettings holds mappings; it builds the FitSettings itself",
     ("diagnostics/identifiability.py", "diagnose"): "a diagnosis, not a fit: free names the parameters whose"
     " identifiability is asked, seed, hold and constants are its own; it builds one FitSettings for its quick fit",
     ("estimation/parameters.py", "make_spec"): "builds the parameter spec from names and values already"
