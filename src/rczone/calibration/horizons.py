@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -94,7 +94,9 @@ class HorizonScores(Result):
     table : DataFrame
         One row per horizon, predictor and output: ``horizon`` (label), ``steps`` (None: open
         loop), ``horizon_s``, ``predictor``, ``output``, ``n``, ``rmse_K``, ``mae_K``, ``bias_K``
-        (measured minus predicted), ``coverage_2sigma`` (model only; NaN without a band).
+        (measured minus predicted), ``coverage_2sigma`` (model only; NaN without a band),
+        ``stable`` (False for an ARX baseline with a pole on or outside the unit circle: its
+        scores are shown as "unstable" and never ranked).
     t : ndarray, shape (N,)
         The scored samples' times, s.
     measured : ndarray, shape (N, ny)
@@ -111,6 +113,8 @@ class HorizonScores(Result):
     warmup_samples : int
     ignored_channels : tuple of str
         Channels the data's column map mapped that the model does not use.
+    unstable : dict of str to float
+        Baselines whose predictor is unstable, with the largest modulus of their poles.
     """
 
     table: pd.DataFrame
@@ -127,6 +131,7 @@ class HorizonScores(Result):
     data_label: str = "data"
     warmup_samples: int = 0
     ignored_channels: tuple[str, ...] = ()
+    unstable: dict = field(default_factory=dict)
 
     def _repr_line(self) -> str:
         return (
@@ -153,20 +158,22 @@ class HorizonScores(Result):
         table.add_column("inside ±2σ")
         for _, r in self.table.iterrows():
             cov = "" if not math.isfinite(r.coverage_2sigma) else f"{r.coverage_2sigma:.0%}"
-            table.add_row(
-                r.horizon,
-                *([esc(r.output)] if many else []),
-                r.predictor,
-                f"{r.rmse_K:.3f}",
-                f"{r.mae_K:.3f}",
-                f"{r.bias_K:+.3f}",
-                cov,
+            scores = (
+                (f"{r.rmse_K:.3f}", f"{r.mae_K:.3f}", f"{r.bias_K:+.3f}")
+                if r.stable
+                else (f"[yellow]unstable[/] (pole {self.unstable[r.predictor]:.4g})", "", "")
             )
+            table.add_row(r.horizon, *([esc(r.output)] if many else []), r.predictor, *scores, cov)
         lines: list = [table]
         if None in self.horizons:
             lines.append(f"open-loop start: {esc(self.start_note)}")
         lines.append(f"band: {esc(self.band_source)}")
         lines.append(f"baselines: {esc(self.baseline_note)}")
+        for name, pole in self.unstable.items():
+            lines.append(
+                f"[yellow]{esc(name)} is unstable[/] (a pole of modulus {pole:.4g}, outside the unit circle):"
+                " its predictions grow without bound, so it is shown but not ranked"
+            )
         return lines
 
     def to_dict(self) -> dict:
@@ -176,6 +183,8 @@ class HorizonScores(Result):
             for row in self.table.to_dict(orient="records")
         ]
         for row in rows:
+            if not row["stable"]:  # an unstable baseline's numbers are no score
+                row.update(rmse_K=None, mae_K=None, bias_K=None)
             row["steps"] = None if row["steps"] is None or row["steps"] != row["steps"] else int(row["steps"])
             row["n"] = int(row["n"])
         return {
@@ -188,6 +197,7 @@ class HorizonScores(Result):
             "baselines": self.baseline_note,
             "scores": rows,
             "ignored_channels": list(self.ignored_channels),
+            "unstable": {k: float(v) for k, v in self.unstable.items()},
         }
 
     def series_frame(self) -> pd.DataFrame:
@@ -340,8 +350,11 @@ def horizon_scores(
         sources.append("the estimates' covariance")
     predicted = {MODEL: y_hat}
     note = "not asked for"
+    unstable: dict[str, float] = {}
     if baselines:
         arx, note = saved_arx(setup)
+        if arx is not None and not arx.stable:
+            unstable[ARX_NAME] = arx.largest_pole()
         ks = [h for h in horizons if h is not None]
         kb = k_step_baselines(data.y, data.u, ks, arx) if ks else {}
         ol = open_loop_baselines(data.y, data.u, max(first, 1), arx)
@@ -364,6 +377,7 @@ def horizon_scores(
                         "predictor": name,
                         "output": o,
                         **_scores(e, sd[h, first:, j] if name == MODEL else None),
+                        "stable": name not in unstable,
                     }
                 )
     return HorizonScores(
@@ -381,6 +395,7 @@ def horizon_scores(
         data_label=label,
         warmup_samples=first,
         ignored_channels=ignored_channels(frame),
+        unstable=unstable,
     )
 
 
