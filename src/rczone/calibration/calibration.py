@@ -23,6 +23,7 @@ from rczone.calibration.dataset import (
     frame_from,
     ignored_channels,
 )
+from rczone.data.excitation import input_excitation
 from rczone.estimation import Dataset, FitResult, fit
 from rczone.estimation.fit import default_free
 from rczone.estimation.innovations import (
@@ -41,6 +42,7 @@ from rczone.estimation.openloop import (
     open_loop_error,
     per_output_errors,
 )
+from rczone.estimation.robust import robust_errors, robust_lines
 from rczone.estimation.sampling import SamplerSettings
 from rczone.models import ZoneModel
 from rczone.models.plausibility import Plausibility, operating_flow, plausibility
@@ -87,6 +89,15 @@ class Calibration(Result):
     plausibility : Plausibility or None
         UA, time constants and solar aperture of the fitted model against the model's values
         before the fit, with warnings (:mod:`rczone.models.plausibility`); None when not made.
+    robust : RobustErrors or None
+        Sandwich standard errors of an ML fit (:mod:`rczone.estimation.robust`); the verdict
+        reads them when the innovations are not white.
+    evidence : HeldOutEvidence or None
+        The held-out checks of ``--holdout`` (:mod:`rczone.calibration.evidence`), set by
+        :func:`rczone.calibration.evidence.with_holdout`; they enter the verdict.
+    excitation : Excitation or None
+        Whether the inputs were excited apart (:mod:`rczone.data.excitation`); collinear inputs
+        are named in the verdict's notes.
     verdict : Verdict
         The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
@@ -100,10 +111,23 @@ class Calibration(Result):
     checks: dict | None = None
     identifiability: Any = None
     plausibility: Plausibility | None = None
+    robust: Any = None
+    evidence: Any = None
+    excitation: Any = None
     verdict: Verdict = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "verdict", verdict_of(self.result, self.identifiability, self.checks))
+        white = self.innovations.white if self.innovations is not None else None
+        verdict = verdict_of(
+            self.result,
+            self.identifiability,
+            self.checks,
+            robust=self.robust,
+            white=white,
+            evidence=self.evidence,
+            excitation=self.excitation,
+        )
+        object.__setattr__(self, "verdict", verdict)
 
     @property
     def data_label(self) -> str:
@@ -167,6 +191,8 @@ class Calibration(Result):
                 + "; ".join(f"{esc(o)} RMSE {rmse:.3f} K, max {worst:.3f} K" for o, rmse, worst in per_output)
             )
         lines += residual_lines(self.innovations or self.open_loop_residuals)
+        lines += robust_lines(self.robust, self.result)
+        lines += self.excitation.summary_lines() if self.excitation is not None else []
         used = self.model.provenance.get("constants") or {}
         if used:
             lines.append("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in used.items()))
@@ -213,6 +239,8 @@ class Calibration(Result):
             else {},
             checks=self.checks,
             plausibility=self.plausibility.to_dict() if self.plausibility is not None else None,
+            robust_std_errors=self.robust.to_dict() if self.robust is not None else None,
+            excitation=self.excitation.to_dict() if self.excitation is not None else None,
             trustworthy=self.verdict.trustworthy,
             verdict=self.verdict.to_dict(),
             exit_code=self.exit_code,
@@ -362,8 +390,18 @@ def calibrate(
             inn = innovation_analysis(net, values, data, res.hold)
     if analyses:
         plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
+    robust = robust_errors(net, res, data) if analyses and kind.stochastic else None  # issue 38
+    excitation = input_excitation(np.column_stack([data.u, data.m]), (*data.input_names, *data.flow_names))
     return Calibration(
-        res, fitted, ol, ljung_box(ol.error[:, 0], n_lags=n_lags), inn, olr, plausibility=plaus
+        res,
+        fitted,
+        ol,
+        ljung_box(ol.error[:, 0], n_lags=n_lags),
+        inn,
+        olr,
+        plausibility=plaus,
+        robust=robust,
+        excitation=excitation if analyses else None,
     )
 
 

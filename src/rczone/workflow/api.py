@@ -68,7 +68,7 @@ def fit(
     noise: str = "measured",
     constants: Mapping[str, float] | None = None,
     columns: PathLike | None = None,
-    check_on: Sequence[pd.DataFrame | PathLike] = (),
+    check_on: Sequence[pd.DataFrame | PathLike | tuple[PathLike, PathLike]] = (),
     checks: bool = True,
     profiles: bool = True,
     hold: str = "zoh",
@@ -78,6 +78,7 @@ def fit(
     draws: int = 1000,
     tune: int = 1000,
     chains: int = 4,
+    floor_area: float | None = None,
 ) -> Calibration:
     """Fit a model to data: ``rczone fit`` in Python.
 
@@ -107,7 +108,8 @@ def fit(
     columns : str or path, optional
         A column map for ``data`` and ``check_on`` given as files.
     check_on : sequence, optional
-        Other data: fitted too, their estimates compared, and predicted with this fit.
+        Other data: fitted too, their estimates compared, and predicted with this fit. An item
+        ``(file, column_map)`` reads the file with its own map (``--check-on FILE:MAP``).
     checks : bool
         Make the checks after the fit (identifiability at the estimates, profiles), as
         ``rczone fit --json`` does; they enter the one verdict.
@@ -124,6 +126,9 @@ def fit(
     draws, tune, chains : int
         ``method="mcmc"``: draws kept per chain, warm-up draws per chain, chains
         (:class:`~rczone.estimation.sampling.SamplerSettings`; ``seed`` seeds the sampler).
+    floor_area : float, optional
+        Heated floor area, m2 (``--floor-area``): the plausibility is judged against reference
+        ranges per m2 (:func:`rczone.models.plausibility.reference_ranges`).
 
     Returns
     -------
@@ -149,9 +154,15 @@ def fit(
     frame, name = frame_and_label(data, columns, zm)
     others = {}
     for k, other in enumerate(check_on):
-        f, other_name = frame_and_label(other, columns, zm)
+        other, own = other if isinstance(other, tuple) else (other, columns)  # (file, its own map)
+        f, other_name = frame_and_label(other, own, zm)
         others[other_name if other_name not in others and other_name != "data" else f"data {k + 1}"] = f
-    return fit_and_check(zm, frame, settings, label=label or name, others=others)
+    cal = fit_and_check(zm, frame, settings, label=label or name, others=others)
+    if floor_area is not None and cal.plausibility is not None:
+        from rczone.calibration.reference import with_floor_area
+
+        cal = with_floor_area(cal, zm, frame, floor_area)
+    return cal
 
 
 def predict(

@@ -15,6 +15,7 @@ from collections.abc import Callable, Mapping
 import pandas as pd
 
 from rczone.calibration import Calibration, calibrate, predict
+from rczone.calibration.evidence import verdict_fit
 from rczone.estimation import Dataset
 from rczone.models import ZoneModel
 from rczone.workflow.settings import FitSettings
@@ -125,23 +126,25 @@ def check_fit(
     if settings.profiles and len(zm.network.outputs) == 1:
         progress("profiling the estimates")
         prof = {k: v.to_dict() for k, v in profile_checks(zm, frame, r, constants=used).items()}
-    fits = {label: r}
+    fits = {label: verdict_fit(cal)}  # robust errors when the innovations are not white (issue 38)
     validation = {}
     for name, f in (others or {}).items():
         progress(f"fitting {name} for comparison")
-        fits[name] = calibrate(
-            zm,
-            f,
-            settings.method,
-            settings.free_for(zm.network),
-            settings.optimizer,
-            constants=settings.constants or None,
-            noise=settings.noise,
-            sampler=settings.sampler,
-            hold=settings.hold,
-            bounds=settings.bounds or None,
-            fixed=settings.fixed,
-        ).result
+        fits[name] = verdict_fit(
+            calibrate(
+                zm,
+                f,
+                settings.method,
+                settings.free_for(zm.network),
+                settings.optimizer,
+                constants=settings.constants or None,
+                noise=settings.noise,
+                sampler=settings.sampler,
+                hold=settings.hold,
+                bounds=settings.bounds or None,
+                fixed=settings.fixed,
+            )
+        )
         ol = predict(zm, f, settings.constants or None)
         validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}
     checks = {
