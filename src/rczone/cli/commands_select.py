@@ -206,8 +206,17 @@ def select(
     payload = sel.to_dict()
     best = sel.best
     if at is not None:
-        held = _score_holdout(best.calibration.model, full, at, const, label, out, report_dir)
-        payload["holdout"] = held.to_dict()
+        from rczone.calibration.evidence import held_out_evidence
+
+        held = _score_holdout(best.calibration.model, full, at, const, label, report_dir)
+        for line in held.summary_lines():
+            out.print(line)
+        if report_dir:
+            out.print(f"held-out report written to [bold]{esc(report_dir / 'holdout' / 'report.html')}[/]")
+        evidence = held_out_evidence(held, best.calibration.innovations)
+        for line in (*evidence.reasons, *evidence.notes):  # the selected model's held-out checks, said
+            out.print(esc(line))
+        payload["holdout"] = {**held.to_dict(), "evidence": evidence.to_dict()}
     write_json(json_out, payload)
     if save_model:
         _save(best.calibration.model, save_model)
