@@ -132,3 +132,15 @@ def test_an_unstable_saved_arx_is_marked_and_not_scored(tmp_path):
     assert row["rmse_K"] is None and not row["stable"]
     text = " ".join(str(x) for x in scores.summary_lines())
     assert "arx is unstable" in text
+    # the same through the CLI: the saved model's unstable ARX is marked in the table and the JSON
+    import json
+
+    from rczone.cli.main import main
+
+    zm.save(tmp_path / "unstable.json")
+    frame.to_csv(tmp_path / "zone.csv", index=False)
+    out = tmp_path / "p.json"
+    args = ["predict", str(tmp_path / "unstable.json"), str(tmp_path / "zone.csv"), "--horizons", "open"]
+    assert main([*args, "--baselines", "--warmup", "6h", "--json", str(out)]) == 0
+    rows = json.loads(out.read_text())["scores"]
+    assert [r["rmse_K"] for r in rows if r["predictor"] == "arx"] == [None]

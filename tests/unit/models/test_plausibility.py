@@ -116,3 +116,16 @@ def test_a_floor_area_judges_ua_and_capacity_against_the_reference_ranges() -> N
     assert ok.warnings == ()  # 100 W/K, 2e7 J/K, 56 h: a plausible 100 m2 house
     with pytest.raises(ParameterError, match="floor area must be a positive number"):
         reference_ranges(-5.0)
+
+
+def test_rczone_fit_floor_area_judges_against_the_reference_ranges(zone, tmp_path, capsys) -> None:
+    (tmp_path / "room.toml").write_text(MODEL)
+    args = ["fit", str(zone / "zone.csv"), "--model", str(tmp_path / "room.toml"), "--method", "ls"]
+    main([*args, "--starts", "1", "--floor-area", "2", "--json", str(tmp_path / "fit.json"), "--no-profiles"])
+    out = " ".join(capsys.readouterr().out.split())
+    d = json.loads((tmp_path / "fit.json").read_text())["plausibility"]
+    assert d["reference"] == "judged against the reference ranges for 2 m2 of floor" and d["reference"] in out
+    # UA of tens of W/K is far above 10 W/(m2 K) times 2 m2: the warning names the range
+    assert any("outside the reference range for 2 m2 of floor" in w for w in d["warnings"])
+    assert main([*args, "--floor-area", "-3"]) == 2
+    assert "floor area must be a positive number" in capsys.readouterr().err
