@@ -391,7 +391,8 @@ def calibrate(
     if analyses:
         plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
     robust = robust_errors(net, res, data) if analyses and kind.stochastic else None  # issue 38
-    excitation = input_excitation(np.column_stack([data.u, data.m]), (*data.input_names, *data.flow_names))
+    signals = (np.column_stack([data.u, data.m]), (*data.input_names, *data.flow_names))
+    excitation = input_excitation(*signals) if analyses else None  # issue 38
     return Calibration(
         res,
         fitted,
@@ -401,7 +402,7 @@ def calibrate(
         olr,
         plausibility=plaus,
         robust=robust,
-        excitation=excitation if analyses else None,
+        excitation=excitation,
     )
 
 
