@@ -155,3 +155,8 @@ def test_fit_holdout_of_a_wrong_model_exits_3_and_says_which_check_failed(wrong_
     held = res["verdict"]["held_out"]
     assert held["failed"] and res["exit_code"] == 3 and not res["trustworthy"]
     assert "verdict: flagged" in text and all(name in text for name in held["failed"])
+    # the robust errors beside the Hessian's, and the verdict reads them when the innovations are not white
+    robust = res["robust_std_errors"]
+    assert set(robust) == set(res["parameters"]) and "robust (sandwich) standard errors" in text
+    white = res["innovations"]["white"]
+    assert res["verdict"]["standard_errors"] == ("hessian" if white else "robust")
