@@ -24,6 +24,7 @@ from rczone.calibration.dataset import (
     ignored_channels,
     missing_inputs,
 )
+from rczone.data.excitation import input_excitation
 from rczone.estimation import Dataset, FitResult, fit
 from rczone.estimation.innovations import (
     ResidualAnalysis,
@@ -41,6 +42,7 @@ from rczone.estimation.openloop import (
     open_loop_error,
     per_output_errors,
 )
+from rczone.estimation.robust import robust_errors, robust_lines
 from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.models.plausibility import Plausibility, operating_flow, plausibility
@@ -98,6 +100,15 @@ class Calibration(FitAccessors, Result):
     data_warnings : tuple of str
         The data's signals outside their plausible range (``Dataset.warnings``: degF read as
         degC, ...); each flags the fit.
+    robust : RobustErrors or None
+        Sandwich standard errors of an ML fit (:mod:`rczone.estimation.robust`); the verdict
+        reads them when the innovations are not white.
+    evidence : HeldOutEvidence or None
+        The held-out checks of ``--holdout`` (:mod:`rczone.calibration.evidence`), set by
+        :func:`rczone.calibration.evidence.with_holdout`; they enter the verdict.
+    excitation : Excitation or None
+        Whether the inputs were excited apart (:mod:`rczone.data.excitation`); collinear inputs
+        are named in the verdict's notes.
     verdict : Verdict
         The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
     """
@@ -113,21 +124,26 @@ class Calibration(FitAccessors, Result):
     plausibility: Plausibility | None = None
     holdout: Any = None
     data_warnings: tuple[str, ...] = ()
+    robust: Any = None
+    evidence: Any = None
+    excitation: Any = None
     verdict: Verdict = field(init=False)
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self,
-            "verdict",
-            verdict_of(
-                self.result,
-                self.identifiability,
-                self.checks,
-                data=self.data_warnings,
-                data_used=self.model.provenance.get("stretch"),
-                notes=self._evaluation_note(),
-            ),
+        white = self.innovations.white if self.innovations is not None else None
+        verdict = verdict_of(
+            self.result,
+            self.identifiability,
+            self.checks,
+            data=self.data_warnings,
+            data_used=self.model.provenance.get("stretch"),
+            notes=self._evaluation_note(),
+            robust=self.robust,
+            white=white,
+            evidence=self.evidence,
+            excitation=self.excitation,
         )
+        object.__setattr__(self, "verdict", verdict)
 
     def _evaluation_note(self) -> tuple[str, ...]:
         """A note when every R, C and gain was held: the fit estimated noise levels only (issue 39)."""
@@ -245,6 +261,8 @@ class Calibration(FitAccessors, Result):
                 + "; ".join(f"{esc(o)} RMSE {rmse:.3f} K, max {worst:.3f} K" for o, rmse, worst in per_output)
             )
         lines += residual_lines(self.innovations or self.open_loop_residuals)
+        lines += robust_lines(self.robust, self.result)
+        lines += self.excitation.summary_lines() if self.excitation is not None else []
         used = self.model.provenance.get("constants") or {}
         if used:
             lines.append("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in used.items()))
@@ -257,6 +275,10 @@ class Calibration(FitAccessors, Result):
             )
         if self.holdout is not None:
             lines += self.holdout.summary_lines()
+        if self.evidence is not None:
+            from rczone.calibration.evidence import verdict_line
+
+            lines.append(verdict_line(self))
         return lines
 
     def to_dict(self) -> dict:
@@ -293,6 +315,8 @@ class Calibration(FitAccessors, Result):
             else {},
             checks=self.checks,
             plausibility=self.plausibility.to_dict() if self.plausibility is not None else None,
+            robust_std_errors=self.robust.to_dict() if self.robust is not None else None,
+            excitation=self.excitation.to_dict() if self.excitation is not None else None,
             trustworthy=self.verdict.trustworthy,
             verdict=self.verdict.to_dict(),
             exit_code=self.exit_code,
@@ -421,6 +445,9 @@ def calibrate(
             inn = innovation_analysis(net, values, data, res.hold)
     if analyses:
         plaus = plausibility(fitted, zm, flow=operating_flow(data.m, net.flow_names))
+    robust = robust_errors(net, res, data) if analyses and kind.stochastic else None  # issue 38
+    signals = (np.column_stack([data.u, data.m]), (*data.input_names, *data.flow_names))
+    excitation = input_excitation(*signals) if analyses else None  # issue 38
     return Calibration(
         res,
         fitted,
@@ -430,6 +457,8 @@ def calibrate(
         olr,
         plausibility=plaus,
         data_warnings=data.warnings,
+        robust=robust,
+        excitation=excitation,
     )
 
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -111,7 +111,9 @@ class HorizonScores(Result):
         loop), ``horizon_s``, ``predictor``, ``output``, ``n``, ``rmse_K``, ``mae_K``, ``bias_K``
         (measured minus predicted), ``coverage_2sigma`` and ``interval_score_K`` (model only; NaN
         without a band; the interval score of Gneiting & Raftery 2007 of the band at its nominal
-        95.45 %, :func:`~rczone.calibration.conformal.interval_score`).
+        95.45 %, :func:`~rczone.calibration.conformal.interval_score`), ``stable`` (False for an ARX
+        baseline with a pole on or outside the unit circle: its scores are shown as "unstable" and
+        never ranked).
     t : ndarray, shape (N,)
         The scored samples' times, s.
     measured : ndarray, shape (N, ny)
@@ -133,6 +135,8 @@ class HorizonScores(Result):
         half-width, so that ``+-2 sd`` is the band).
     drift : DriftCheck, optional
         The drift tests, with a conformal band.
+    unstable : dict of str to float
+        Baselines whose predictor is unstable, with the largest modulus of their poles.
     """
 
     table: pd.DataFrame
@@ -151,6 +155,7 @@ class HorizonScores(Result):
     ignored_channels: tuple[str, ...] = ()
     conformal: ConformalBand | None = None
     drift: DriftCheck | None = None
+    unstable: dict = field(default_factory=dict)
 
     def _repr_line(self) -> str:
         return (
@@ -179,15 +184,12 @@ class HorizonScores(Result):
             cov = "" if not math.isfinite(r.coverage_2sigma) else f"{r.coverage_2sigma:.0%}"
             if not math.isnan(r.interval_score_K):
                 cov += f" (score {r.interval_score_K:.3f})"
-            table.add_row(
-                r.horizon,
-                *([esc(r.output)] if many else []),
-                r.predictor,
-                f"{r.rmse_K:.3f}",
-                f"{r.mae_K:.3f}",
-                f"{r.bias_K:+.3f}",
-                cov,
+            scores = (
+                (f"{r.rmse_K:.3f}", f"{r.mae_K:.3f}", f"{r.bias_K:+.3f}")
+                if r.stable
+                else (f"[yellow]unstable[/] (pole {self.unstable[r.predictor]:.4g})", "", "")
             )
+            table.add_row(r.horizon, *([esc(r.output)] if many else []), r.predictor, *scores, cov)
         lines: list = [table]
         if None in self.horizons:
             lines.append(f"open-loop start: {esc(self.start_note)}")
@@ -199,6 +201,11 @@ class HorizonScores(Result):
         lines.append(f"baselines: {esc(self.baseline_note)}")
         if self.drift is not None:
             lines.append(f"drift: {esc(self.drift.describe())}")
+        for name, pole in self.unstable.items():
+            lines.append(
+                f"[yellow]{esc(name)} is unstable[/] (a pole of modulus {pole:.4g}, outside the unit circle):"
+                " its predictions grow without bound, so it is shown but not ranked"
+            )
         return lines
 
     def to_dict(self) -> dict:
@@ -208,6 +215,8 @@ class HorizonScores(Result):
             for row in self.table.to_dict(orient="records")
         ]
         for row in rows:
+            if not row["stable"]:  # an unstable baseline's numbers are no score
+                row.update(rmse_K=None, mae_K=None, bias_K=None)
             row["steps"] = None if row["steps"] is None or row["steps"] != row["steps"] else int(row["steps"])
             row["n"] = int(row["n"])
         return {
@@ -222,6 +231,7 @@ class HorizonScores(Result):
             "conformal": None if self.conformal is None else self.conformal.to_dict(),
             "drift": None if self.drift is None else self.drift.to_dict(),
             "ignored_channels": list(self.ignored_channels),
+            "unstable": {k: float(v) for k, v in self.unstable.items()},
         }
 
     def series_frame(self) -> pd.DataFrame:
@@ -399,8 +409,11 @@ def horizon_scores(
         ]
     predicted = {MODEL: y_hat}
     note = "not asked for"
+    unstable: dict[str, float] = {}
     if baselines:
         arx, note = saved_arx(setup)
+        if arx is not None and not arx.stable:
+            unstable[ARX_NAME] = arx.largest_pole()
         ks = [h for h in horizons if h is not None]
         kb = k_step_baselines(data.y, data.u, ks, arx) if ks else {}
         ol = open_loop_baselines(data.y, data.u, max(first, 1), arx)
@@ -423,6 +436,7 @@ def horizon_scores(
                         "predictor": name,
                         "output": o,
                         **_scores(e, sd[h, first:, j] if name == MODEL else None),
+                        "stable": name not in unstable,
                     }
                 )
     return HorizonScores(
@@ -440,6 +454,7 @@ def horizon_scores(
         data_label=label,
         warmup_samples=first,
         ignored_channels=ignored_channels(frame),
+        unstable=unstable,
         conformal=cband,
         drift=drift,
     )

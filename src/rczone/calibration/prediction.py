@@ -49,6 +49,7 @@ from rczone.network.stochastic import (
 )
 from rczone.results import Result
 from rczone.results.accessors import PredictionFrames
+from rczone.results.protocol import json_number
 from rczone.simulation.simulate import HOLDS
 
 
@@ -234,10 +235,16 @@ class Prediction(PredictionFrames, Result):
                 )
             )
         for j, o in enumerate(self.outputs):
+            cover = self.coverage[j]
+            band = (
+                f"{cover:.0%} of the measurements inside the 2-sigma band ({esc(self.band_source)})"
+                if np.isfinite(cover)
+                else "no 2-sigma band: the model has no noise levels or standard errors (a model fitted"
+                " with rczone fit --save-model has them)"
+            )
             lines.append(
                 f"{esc(self.data_label)}: {esc(o)} {self.horizon} RMSE {self.rmse_K[j]:.3f} K, max error"
-                f" {self.max_abs_K[j]:.3f} K; {self.coverage[j]:.0%} of the measurements inside the 2-sigma band"
-                f" ({esc(self.band_source)})"
+                f" {self.max_abs_K[j]:.3f} K; {band}"
             )
         return lines
 
@@ -269,7 +276,7 @@ class Prediction(PredictionFrames, Result):
             }
             if start is not None
             else None,
-            "coverage_2sigma": dict(zip(self.outputs, map(float, self.coverage))),
+            "coverage_2sigma": {o: json_number(float(c)) for o, c in zip(self.outputs, self.coverage)},
             "mean_sd_K": {
                 part: {o: float(np.nanmean(a[:, j])) for j, o in enumerate(self.outputs)}
                 for part, a in (("noise", self.sd_noise), ("estimates", self.sd_parameters))

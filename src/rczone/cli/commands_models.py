@@ -88,6 +88,20 @@ def generate(
         ),
     ] = None,
     mass: Annotated[bool, typer.Option("--mass", help="An internal-mass node in every room.")] = False,
+    solar: Annotated[
+        bool,
+        typer.Option(
+            "--solar", help="Solar irradiance Ps (W/m2) into every room through an aperture Aw_<room>."
+        ),
+    ] = False,
+    boundary: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--boundary",
+            help="A measured neighbouring space and the rooms sharing a wall with it, NAME=A,B (NAME is its"
+            " temperature column, e.g. Tcorr=1,2); repeat for each.",
+        ),
+    ] = None,
     measured: Annotated[
         str | None,
         typer.Option("--measured", help="Rooms whose air temperature is measured (default all): A,B."),
@@ -104,7 +118,7 @@ def generate(
         int | None, typer.Option("--floor", help="With --from: the floor (1 is the lowest).")
     ] = None,
 ) -> None:
-    """Generate a multi-zone model file (TOML): rooms, the walls between them and the heating circuits."""
+    """Generate a multi-zone model file (TOML): rooms, the walls between them, the heating circuits, the sun and measured neighbours."""
     from rczone.errors import ParameterError
     from rczone.models import model_to_toml
     from rczone.models.multizone import multizone
@@ -151,6 +165,12 @@ def generate(
             if not sep or not key.strip():
                 raise ParameterError(f"--circuit {c!r}: give NAME=ROOM,ROOM (Ph1=1,2)")
             circuits[key.strip()] = names(served, f"--circuit {key.strip()}")
+    zones = {}
+    for b in boundary or []:
+        key, sep, served = b.partition("=")
+        if not sep or not key.strip():
+            raise ParameterError(f"--boundary {b!r}: give NAME=ROOM,ROOM (Tcorr=1,2)")
+        zones[key.strip()] = names(served, f"--boundary {key.strip()}")
     net = multizone(
         room_list,
         walls,
@@ -158,6 +178,8 @@ def generate(
         mass=mass,
         measured=names(measured, "--measured") if measured else None,
         name=name,
+        solar=solar,
+        boundary_zones=zones,
     )
     text = model_to_toml(net, header=f"rczone model file, generated: {net.description}\nValues in SI units.")
     _emit(text, out)

@@ -306,6 +306,24 @@ def write_json(json_out: Path | None, payload: Any) -> None:
         write_json_atomic(json_out, payload)
 
 
+def check_on_items(text: str | None, column_map: Path | None) -> list[tuple[str, Path | None]]:
+    """``--check-on "a.csv,b.csv:b.toml"`` -> ``[("a.csv", column_map), ("b.csv", Path("b.toml"))]``.
+
+    Each item is a file (or a built-in set) read with the fit's own column map, or ``FILE:MAP``
+    read with its own map (a twin building whose trend log names its columns otherwise). A colon
+    followed by something that does not end in ``.toml`` is part of the file's name.
+    """
+    out = []
+    for item in split(text) or []:
+        # the first colon after which a .toml path follows, not a drive letter's (C:/...)
+        cut = next(
+            (i for i, c in enumerate(item) if c == ":" and i > 1 and item[i + 1 :].lower().endswith(".toml")),
+            None,
+        )
+        out.append((item[:cut], Path(item[cut + 1 :])) if cut is not None else (item, column_map))
+    return out
+
+
 def data_label(path: Path) -> str:
     """The name shown in titles: the file name without its folders, or the built-in set's name."""
     return Path(str(path)).name

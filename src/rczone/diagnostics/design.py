@@ -180,6 +180,14 @@ class DesignResult(Result):
         """The inputs the test drives."""
         return tuple(self.limits.ranges)
 
+    @property
+    def excitation(self):
+        """Whether the schedule drives the actuated inputs apart (:mod:`rczone.data.excitation`)."""
+        from rczone.data.excitation import input_excitation
+
+        frame = self.samples()
+        return input_excitation(frame[list(self.actuated)].to_numpy(float), self.actuated)
+
     def _setpoint_units(self) -> dict[str, str]:
         return {a: self.display_units[a] for a in self.actuated if a in self.display_units}
 
@@ -207,7 +215,8 @@ class DesignResult(Result):
             self.predicted[[self.predicted.argmin(), self.predicted.argmax()]], t_unit, "temperature"
         )
         se = ", ".join(f"{esc(k)} ±{v:.0%}" for k, v in self.expected_se.items())
-        return [table, f"predicted {esc(self.output)} {lo:.1f}..{hi:.1f} {esc(t_unit)}; expected {se}"]
+        lines = [table, f"predicted {esc(self.output)} {lo:.1f}..{hi:.1f} {esc(t_unit)}; expected {se}"]
+        return lines + self.excitation.summary_lines()
 
     def samples(self, dt: float = 60.0) -> pd.DataFrame:
         """The commands sampled every ``dt`` seconds (what a BMS plays), SI units."""
@@ -279,6 +288,7 @@ class DesignResult(Result):
             "units": dict(self.display_units),
             "start": str(self.start),
             "setpoints": self.to_frame().to_dict(orient="list"),
+            "excitation": self.excitation.to_dict(),
         }
 
 

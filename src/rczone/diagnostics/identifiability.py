@@ -42,6 +42,7 @@ References
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from collections.abc import Mapping, Sequence
@@ -50,6 +51,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from rczone.data.excitation import Excitation, input_excitation
 from rczone.diagnostics.fisher import (
     check_free,
     marginal_fisher,
@@ -228,6 +230,8 @@ class IdentifiabilityReport(Result):
         SI unit of each free parameter.
     model_label, data_label : str
         Names of the model and the data, for titles (``rczone diagnose`` sets them).
+    excitation : Excitation or None
+        Whether the inputs are excited apart (:mod:`rczone.diagnostics.excitation`).
     """
 
     parameters: dict[str, ParameterVerdict]
@@ -246,6 +250,7 @@ class IdentifiabilityReport(Result):
     units: Mapping[str, str] = field(default_factory=dict)
     model_label: str = "model"
     data_label: str = "data"
+    excitation: Excitation | None = None
 
     def to_frame(self) -> pd.DataFrame:
         """One row per free parameter: verdict, value and its unit, expected relative standard error and bias, reason."""
@@ -299,6 +304,8 @@ class IdentifiabilityReport(Result):
         held = self.settings.get("constants") or {}
         if held:
             lines.append("held constant: " + ", ".join(f"{esc(k)} = {v:g}" for k, v in held.items()))
+        if self.excitation is not None:
+            lines += self.excitation.summary_lines()
         lines += [f"[bold]{esc(name)}[/]: {esc(v.advice)}" for name, v in self.parameters.items() if v.advice]
         return lines
 
@@ -319,6 +326,7 @@ class IdentifiabilityReport(Result):
             "n_effective": self.n_effective,
             "indicators": self.indicators.to_dict(),
             "settings": self.settings,
+            "excitation": self.excitation.to_dict() if self.excitation is not None else None,
         }
 
 
@@ -480,6 +488,59 @@ def parameters_at_bound(
     eta = spec.to_eta(th)
     mid = 0.5 * (spec.eta_lower + spec.eta_upper)
     return {n: ("upper" if e > c else "lower") for n, e, c, hit in zip(spec.names, eta, mid, near) if hit}
+
+
+def parameters_near_bound(
+    network: RCNetwork, names: Sequence[str], theta: Mapping[str, float], margin: float = VERDICT_MARGIN
+) -> dict[str, str]:
+    """Which of ``names`` lie within ``margin`` (relative) of a positive bound of the search box, and which bound.
+
+    A value 2.972 under an upper bound of 3 is 1 % from it: the data may well want it beyond, so
+    it is not "identifiable" whatever the local quantities say (issue 38). The box is the one of
+    :func:`parameters_at_bound`.
+    """
+    from rczone.estimation.parameters import make_spec
+
+    names = [n for n in names if n in network.parameters and network.parameters[n].expr is None]
+    if not names:
+        return {}
+    try:
+        spec = make_spec(network, names)
+    except ParameterError:
+        return {}
+    values = network.values(theta)
+    out = {}
+    for n, lo, hi in zip(spec.names, spec.lower, spec.upper, strict=True):
+        v = values[n]
+        if hi > 0 and v > 0 and v * (1 + margin) >= hi:
+            out[n] = "upper"
+        elif lo > 0 and v <= lo * (1 + margin):
+            out[n] = "lower"
+    return out
+
+
+def _with_excitation(
+    verdicts: dict[str, ParameterVerdict], network: RCNetwork, exc: Excitation, near: Mapping[str, str]
+) -> dict[str, ParameterVerdict]:
+    """The verdicts with the collinear inputs and the near-bound values: never "identifiable", and the cause named."""
+    from rczone.diagnostics.excitation import parameters_of
+
+    owners = parameters_of(network, [n for g in exc.groups for n in g])
+    out = {}
+    for name, v in verdicts.items():
+        group = next((g for g in exc.groups if set(owners.get(name, ())) & set(g)), None)
+        reasons, advice, verdict = [v.reason], v.advice, v.verdict
+        if group is not None:
+            reasons.insert(0, exc.finding(group))
+            advice = exc.finding(group).split("; ", 1)[1]
+            verdict = WEAK if verdict == IDENTIFIABLE else verdict
+        side = near.get(name)
+        if side and not v.at_bound:
+            reasons.insert(0, f"its value {v.value:.4g} lies within {VERDICT_MARGIN:.0%} of its {side} bound")
+            verdict = WEAK if verdict == IDENTIFIABLE else verdict
+        changed = dict(reason="; ".join(r for r in reasons if r), advice=advice, verdict=verdict)
+        out[name] = dataclasses.replace(v, **changed) if (group is not None or side) else v
+    return out
 
 
 def _pinned_words(pinned: Mapping[str, str]) -> str:
@@ -696,6 +757,10 @@ def diagnose(
             model_error_K,
             at_bound=op.at_bound.get(name),
         )
+    exc = input_excitation(np.column_stack([u, data.m]), (*data.input_names, *data.flow_names))
+    verdicts = _with_excitation(verdicts, net, exc, parameters_near_bound(net, free, theta))
+    if exc.collinear and op.at_bound:  # wider bounds cannot separate inputs that move together
+        op = dataclasses.replace(op, reason=op.reason + "; " + "; ".join(exc.findings()))
     return IdentifiabilityReport(
         verdicts,
         tuple(free),
@@ -721,6 +786,7 @@ def diagnose(
         },
         units={n: net.parameters[n].unit or "" for n in free},
         model_label=zm.label,
+        excitation=exc,
     )
 
 

@@ -78,6 +78,33 @@ class ARX(NamedTuple):
             ) from None
         return cls(na, nb, coef)
 
+    def poles(self) -> np.ndarray:
+        """Poles of the autoregressive part: eigenvalues of its block companion matrix.
+
+        With ``A_i`` the ``(ny, ny)`` coefficients of ``y_{t-i}``, the homogeneous recursion
+        ``y_t = sum_i A_i y_{t-i}`` is ``z_t = F z_{t-1}`` for ``z_t = [y_t, ..., y_{t-na+1}]`` and the
+        block companion matrix ``F`` (Ljung 1999, section 4.2); its eigenvalues are the poles.
+
+        Returns
+        -------
+        ndarray of complex, shape (na * ny,)
+        """
+        ny = self.coef.shape[1]
+        F = np.zeros((self.na * ny, self.na * ny))
+        for i in range(self.na):
+            F[:ny, i * ny : (i + 1) * ny] = self.coef[i * ny : (i + 1) * ny].T
+        F[ny:, :-ny] = np.eye((self.na - 1) * ny)
+        return np.linalg.eigvals(F)
+
+    def largest_pole(self) -> float:
+        """Largest modulus of the poles; at least 1 means the predictor is unstable."""
+        return float(np.max(np.abs(self.poles())))
+
+    @property
+    def stable(self) -> bool:
+        """Every pole strictly inside the unit circle: its open-loop and long-horizon predictions stay bounded."""
+        return self.largest_pole() < 1.0
+
 
 def _regressors(y: np.ndarray, u: np.ndarray, t: np.ndarray, na: int, nb: int) -> np.ndarray:
     """The regressor rows of samples ``t`` (NaN where a lag falls before the data)."""

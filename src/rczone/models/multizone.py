@@ -13,7 +13,13 @@ generator declares the same network from its description:
 * a heating circuit that serves several rooms is one heat input (W) split over them by heat
   shares: ``s_<circuit>_<r>`` for every room but the last, which takes the rest
   (``1 - s_1 - ...``, a tied parameter), so the shares add up to one by construction; a circuit
-  serving one room puts all its heat there.
+  serving one room puts all its heat there;
+* ``solar=True`` adds the irradiance ``Ps`` (W/m2) into every room's air through its own
+  effective aperture ``Aw_<r>`` (m2; the ``+solar`` option of the family, Bacher & Madsen 2011);
+* a *boundary zone* is a neighbouring space that is not modelled but measured (a corridor, the
+  flat next door): its temperature is a boundary input like ``To``, and each room that shares a
+  wall with it exchanges heat through ``Rb_<r>_<zone>`` (the paper's treatment of the office's
+  neighbours, Lin et al. 2012, as inputs).
 
 Everything else (measured rooms, bounds, fixed values) is an ordinary model: the network can be
 written as a model file (:func:`rczone.models.model_to_toml`, or ``rczone models generate``) and
@@ -76,6 +82,8 @@ def multizone(
     mass: bool = False,
     measured: Sequence[str] | None = None,
     name: str = "multizone",
+    solar: bool = False,
+    boundary_zones: Mapping[str, Sequence[str]] | None = None,
 ) -> RCNetwork:
     """The network of ``rooms`` coupled through ``walls`` and heated by ``circuits`` (see the module notes).
 
@@ -94,6 +102,11 @@ def multizone(
         Rooms whose air temperature is measured (the outputs ``T<r>``); default every room.
     name : str
         Name of the model.
+    solar : bool
+        Solar irradiance ``Ps`` into every room through an aperture ``Aw_<r>``.
+    boundary_zones : mapping of str to sequence of str, optional
+        Measured neighbouring spaces (a data column each, degC) to the rooms that share a wall
+        with them, e.g. ``{"Tcorr": ["1", "2"]}``.
 
     Returns
     -------
@@ -145,18 +158,64 @@ def multizone(
             )
         )
     heat, shares = _circuits(rooms, circuits)
+    if solar:
+        heat.append(HeatInput("Ps", {f"T{r}": f"Aw_{r}" for r in rooms}, unit="W/m2"))
+        params += [
+            Parameter(
+                f"Aw_{r}",
+                "gain",
+                2.0,
+                unit="m2",
+                description=f"solar aperture of room {r}",
+                bounds=(0.0, 500.0),
+            )
+            for r in rooms
+        ]
+    zones, walls_b, params_b = _boundary_zones(rooms, boundary_zones, {n.name for n in nodes})
     measured = rooms if measured is None else tuple(_room(str(m), rooms, "measured") for m in measured)
     return RCNetwork(
         name,
         nodes,
-        ["To"],
-        resistors,
-        params + shares,
+        ["To", *zones],
+        resistors + walls_b,
+        params + shares + params_b,
         heat_inputs=heat,
         outputs=[f"T{r}" for r in measured],
         description=f"{len(rooms)} rooms, {len(seen)} walls between them"
-        + (", internal mass in each" if mass else ""),
+        + (", internal mass in each" if mass else "")
+        + (", solar gains" if solar else "")
+        + (f", measured neighbours {', '.join(zones)}" if zones else ""),
     )
+
+
+def _boundary_zones(
+    rooms: Sequence[str], zones: Mapping[str, Sequence[str]] | None, nodes: set[str]
+) -> tuple[list[str], list[Resistor], list[Parameter]]:
+    """The boundary temperatures of measured neighbouring spaces, their walls and resistances."""
+    names, walls, params = [], [], []
+    for zone, served in (zones or {}).items():
+        zone = str(zone)
+        if not _ROOM_NAME.fullmatch(zone) or zone == "To" or zone in nodes:
+            raise ParameterError(
+                f"boundary zone {zone!r}: give the name of its temperature column (letters and digits),"
+                " other than To and the rooms' nodes"
+            )
+        served = [_room(str(r), rooms, f"boundary zone {zone}") for r in served]
+        if not served or len(set(served)) != len(served):
+            raise ParameterError(f"boundary zone {zone}: give the rooms it shares a wall with, each once")
+        names.append(zone)
+        for r in served:
+            walls.append(Resistor(f"T{r}", zone, f"Rb_{r}_{zone}"))
+            params.append(
+                Parameter(
+                    f"Rb_{r}_{zone}",
+                    "resistance",
+                    WALL[0],
+                    description=f"wall between room {r} and {zone} (measured)",
+                    bounds=WALL[1],
+                )
+            )
+    return names, walls, params
 
 
 def _circuits(

@@ -17,8 +17,20 @@ summarize the fitted network:
 
 Warnings name what is implausible: a measured room node holding more heat than the envelope it
 sits in (its capacity above the summed capacity of the unmeasured nodes joined to a boundary),
-and a ``UA`` or time constant more than ``factor`` (10) times from the construction guess, the
-model's values before the fit. They inform; they do not change a fit's verdict.
+and a ``UA`` or time constant judged against a *reference* that the message names:
+
+* with a **floor area** (``rczone fit --floor-area``): the documented ranges per m2 of floor,
+  :data:`UA_PER_AREA` (0.15 to 10 W/(m2 K): from half a passive house's 0.3 to twice an
+  uninsulated house's 5, heat loss by transmission and ventilation, ISO 13790 sec. 8) and
+  :data:`CAPACITY_PER_AREA` (40 to 740 kJ/(m2 K): half the "very light" 80 to twice the "very
+  heavy" 370 of ISO 13790 Table 12) for the summed capacity; the slowest time constant must lie
+  between their ratios (:func:`reference_ranges`);
+* else the values **the user declared** (a model file, a saved model, or a built-in model whose
+  values were changed): ``UA`` or a time constant more than ``factor`` (10) times from them;
+* else (a built-in model at rczone's generic starting values, which describe no building) no UA or
+  time constant is judged, and the line says how to give a reference.
+
+They inform; they do not change a fit's verdict.
 
 References
 ----------
@@ -38,8 +50,12 @@ import numpy as np
 
 from rczone.models.zone import ZoneModel
 
-#: A UA or time constant this many times from the construction guess (either way) is warned about.
+#: A UA or time constant this many times from the declared values (either way) is warned about.
 FACTOR = 10.0
+#: Plausible overall heat-loss coefficient per m2 of floor, W/(m2 K) (module notes).
+UA_PER_AREA = (0.15, 10.0)
+#: Plausible summed heat capacity per m2 of floor, J/(m2 K) (module notes).
+CAPACITY_PER_AREA = (4.0e4, 7.4e5)
 
 
 @dataclass(frozen=True)
@@ -61,6 +77,8 @@ class Plausibility:
         The same of the construction guess (empty without one).
     warnings : tuple of str
         What is implausible, in words.
+    reference : str
+        What UA and the time constants were judged against, in words (module notes).
     """
 
     ua: float
@@ -69,6 +87,7 @@ class Plausibility:
     guess_ua: float = math.nan
     guess_time_constants: tuple[float, ...] = ()
     warnings: tuple[str, ...] = ()
+    reference: str = ""
 
     def line(self) -> str:
         """The one line ``rczone fit`` prints (``UA 250 W/K; time constants 41 h, 2.1 h; ...``)."""
@@ -78,6 +97,8 @@ class Plausibility:
         parts.append("time constants " + ", ".join(_duration(t) for t in self.time_constants))
         if self.solar_aperture is not None:
             parts.append(f"solar aperture {self.solar_aperture:.3g} m2")
+        if self.reference:
+            parts.append(self.reference)
         return "plausibility: " + "; ".join(parts)
 
     def to_dict(self) -> dict:
@@ -89,6 +110,7 @@ class Plausibility:
             "guess_ua_W_per_K": _num(self.guess_ua),
             "guess_time_constants_s": [_num(t) for t in self.guess_time_constants],
             "warnings": list(self.warnings),
+            "reference": self.reference,
         }
 
 
@@ -217,26 +239,93 @@ def _far(value: float, guess: float, factor: float) -> bool:
     )
 
 
+def generic_values(zm: ZoneModel) -> bool:
+    """Whether ``zm`` is a built-in model at rczone's generic starting values (they describe no building).
+
+    Parameters
+    ----------
+    zm : ZoneModel
+    """
+    from rczone.errors import RczoneError
+
+    source = str(zm.source or "")
+    if not source or source.lower().endswith((".toml", ".json")):
+        return False
+    from rczone.models import load_model
+
+    try:
+        builtin = load_model(source)
+    except (RczoneError, OSError, ValueError):
+        return False
+    return dict(builtin.theta) == dict(zm.theta)
+
+
+def reference_ranges(floor_area: float) -> dict[str, tuple[float, float]]:
+    """The plausible UA (W/K), summed capacity (J/K) and slowest time constant (s) of ``floor_area`` m2.
+
+    Parameters
+    ----------
+    floor_area : float
+        Heated floor area, m2 (positive, finite).
+
+    Returns
+    -------
+    dict
+        ``{"ua": (lo, hi), "capacity": (lo, hi), "time_constant": (lo, hi)}``.
+    """
+    from rczone.errors import ParameterError
+
+    if not (isinstance(floor_area, (int, float)) and math.isfinite(floor_area) and floor_area > 0):
+        raise ParameterError(f"the floor area must be a positive number of m2, got {floor_area!r}")
+    ua = (UA_PER_AREA[0] * floor_area, UA_PER_AREA[1] * floor_area)
+    cap = (CAPACITY_PER_AREA[0] * floor_area, CAPACITY_PER_AREA[1] * floor_area)
+    return {"ua": ua, "capacity": cap, "time_constant": (cap[0] / ua[1], cap[1] / ua[0])}
+
+
+def _against_area(fitted: ZoneModel, ua: float, tau: tuple[float, ...], floor_area: float) -> list[str]:
+    ranges = reference_ranges(floor_area)
+    total = sum(_capacities(fitted).values())
+    where = f"the reference range for {floor_area:g} m2 of floor"
+    out = []
+    for what, value, (lo, hi), unit in (
+        ("UA", ua, ranges["ua"], "W/K"),
+        ("the summed heat capacity", total, ranges["capacity"], "J/K"),
+    ):
+        if math.isfinite(value) and not lo <= value <= hi:
+            out.append(f"{what} {value:.3g} {unit} is outside {where}, {lo:.3g} to {hi:.3g} {unit}")
+    lo, hi = ranges["time_constant"]
+    if tau and math.isfinite(tau[0]) and not lo <= tau[0] <= hi:
+        out.append(
+            f"the slowest time constant ({_duration(tau[0])}) is outside {where}, {_duration(lo)} to {_duration(hi)}"
+        )
+    return out
+
+
 def plausibility(
     fitted: ZoneModel,
     guess: ZoneModel | None = None,
     *,
     flow: float | Sequence[float] | None = None,
     factor: float = FACTOR,
+    floor_area: float | None = None,
 ) -> Plausibility:
-    """The plausibility line of ``fitted``, against the construction ``guess`` (see the module notes).
+    """The plausibility line of ``fitted``, judged against the reference the module notes give.
 
     Parameters
     ----------
     fitted : ZoneModel
         The fitted model.
     guess : ZoneModel, optional
-        The model before the fit (same network): its values are the construction guess.
+        The model before the fit (same network): its values are the user's declared ones unless it
+        is a built-in model at its generic values (:func:`generic_values`).
     flow : float or sequence of float, optional
         Operating supply-air flow(s), kg/s, e.g. the mean flow of the data (required when the
         model has supply air).
     factor : float
-        A UA or time constant more than ``factor`` times from the guess is warned about.
+        A UA or time constant more than ``factor`` times from the declared values is warned about.
+    floor_area : float, optional
+        Heated floor area, m2: UA, the capacity and the slowest time constant are judged against
+        :func:`reference_ranges` instead.
 
     Returns
     -------
@@ -247,14 +336,27 @@ def plausibility(
     g_ua, g_tau = math.nan, ()
     if guess is not None:
         g_ua, g_tau = heat_loss_coefficient(guess, flow), time_constants(guess, flow)
+    if floor_area is not None:
+        warnings += _against_area(fitted, ua, tau, floor_area)
+        reference = f"judged against the reference ranges for {floor_area:g} m2 of floor"
+    elif guess is not None and not generic_values(guess):
+        declared = f"the values declared in {guess.label}"
         if _far(ua, g_ua, factor):
-            warnings.append(f"UA {ua:.3g} W/K is {ua / g_ua:.2g} times the construction guess {g_ua:.3g} W/K")
+            warnings.append(f"UA {ua:.3g} W/K is {ua / g_ua:.2g} times {declared} ({g_ua:.3g} W/K)")
         for k, (t, g) in enumerate(zip(tau, g_tau)):
             if _far(t, g, factor):
                 warnings.append(
-                    f"time constant {k + 1} ({_duration(t)}) is {t / g:.2g} times the construction guess ({_duration(g)})"
+                    f"time constant {k + 1} ({_duration(t)}) is {t / g:.2g} times {declared} ({_duration(g)})"
                 )
-    return Plausibility(ua, tau, solar_aperture(fitted), g_ua, tuple(g_tau), tuple(warnings))
+        reference = f"judged against {declared}"
+    else:
+        reference = (
+            "UA and time constants not judged: the model's values are rczone's generic start, no building's"
+            " (give --floor-area, or a model file with your values)"
+            if guess is not None
+            else ""
+        )
+    return Plausibility(ua, tau, solar_aperture(fitted), g_ua, tuple(g_tau), tuple(warnings), reference)
 
 
 def operating_flow(m: np.ndarray | None, names: Sequence[str]) -> np.ndarray | None:

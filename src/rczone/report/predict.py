@@ -120,6 +120,8 @@ def horizons_figure(scores: HorizonScores) -> Figure:
     pos = np.arange(len(labels))
     styles = {"model": ("#2b6cb0", "o"), "persistence": ("#718096", "s"), "arx": ("#c05621", "^")}
     for (name, output), rows in table.groupby(["predictor", "output"], sort=False):
+        if not rows["stable"].all():  # an unstable baseline is not ranked (issue 38)
+            continue
         x = [labels.index(h) for h in rows["horizon"]]
         colour, marker = styles.get(name, ("black", "x"))
         tag = name if len(scores.outputs) == 1 else f"{name} ({output})"
@@ -158,9 +160,9 @@ def horizons_report(scores: HorizonScores) -> Report:
             "horizon": r.horizon,
             **({"output": r.output} if len(scores.outputs) > 1 else {}),
             "predictor": r.predictor,
-            "RMSE (K)": r.rmse_K,
-            "MAE (K)": r.mae_K,
-            "bias (K)": r.bias_K,
+            "RMSE (K)": r.rmse_K if r.stable else "unstable",
+            "MAE (K)": r.mae_K if r.stable else "",
+            "bias (K)": r.bias_K if r.stable else "",
             "inside ±2σ": f"{r.coverage_2sigma:.0%}" if np.isfinite(r.coverage_2sigma) else "",
             "interval score (K)": r.interval_score_K,
         }

@@ -34,6 +34,11 @@ class Verdict(NamedTuple):
         ``"other data"`` when those checks ran.
     notes : tuple of str
         Findings that do not make the fit untrustworthy (a parameter identified only weakly).
+    held_out : mapping or None
+        The held-out checks (``coverage``, ``baselines``, ``innovations``: outcome and detail),
+        ``failed`` and the thresholds; None without ``--holdout``.
+    standard_errors : {"hessian", "robust"}
+        Which standard errors the verdict read (robust when the innovations are not white).
     """
 
     trustworthy: bool
@@ -41,6 +46,8 @@ class Verdict(NamedTuple):
     suspect: tuple[str, ...]
     checked: tuple[str, ...]
     notes: tuple[str, ...] = ()
+    held_out: Mapping[str, Any] | None = None
+    standard_errors: str = "hessian"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready fields."""
@@ -50,6 +57,8 @@ class Verdict(NamedTuple):
             "suspect": list(self.suspect),
             "checked": list(self.checked),
             "notes": list(self.notes),
+            "held_out": dict(self.held_out) if self.held_out is not None else None,
+            "standard_errors": self.standard_errors,
         }
 
 
@@ -80,6 +89,50 @@ def dropped_samples(data_used: Mapping[str, Any] | None) -> str | None:
     )
 
 
+#: A robust relative standard error (of log theta) at or above this leaves an R, C or gain
+#: undetermined: the data cannot tell it from a value e times smaller or larger (the threshold of
+#: "not identifiable" of :mod:`rczone.diagnostics.identifiability`, ``SE_NOT_IDENTIFIABLE``).
+ROBUST_REL_SE_MAX = 1.0
+#: Kinds whose robust errors the verdict judges (noise levels and initial states are nuisances).
+JUDGED_KINDS = ("resistance", "capacitance", "gain")
+
+
+def robust_findings(result, robust, white: bool | None) -> tuple[list[str], list[str], list[str]]:
+    """``(reasons, suspect, notes)`` from the sandwich standard errors when the innovations are not white.
+
+    Parameters
+    ----------
+    result : FitResult
+        The fit.
+    robust : RobustErrors or None
+        Its sandwich standard errors (:mod:`rczone.estimation.robust`).
+    white : bool or None
+        Whether the innovations are white (None: no innovations). Only ``False`` makes the verdict
+        read the robust errors: for a model that is right the two agree.
+    """
+    if robust is None or white is not False:
+        return [], [], []
+    reasons, suspect = [], []
+    widened = []
+    for n, e in result.parameters.items():
+        se = robust.std_errors.get(n, float("nan"))
+        if e.kind not in JUDGED_KINDS or not se == se or not e.value > 0:
+            continue
+        rel, rel_h = se / e.value, e.std_error / e.value
+        widened.append(f"{n} ±{rel_h:.1%} -> ±{rel:.1%}")
+        if rel >= ROBUST_REL_SE_MAX:
+            reasons.append(
+                f"{n}: its robust standard error is {rel:.0%} of the estimate (the Hessian's {rel_h:.1%}):"
+                " with innovations that are not white, these data do not determine it"
+            )
+            suspect.append(n)
+    note = (
+        "the innovations are not white, so the Hessian's standard errors are too small; the verdict reads"
+        " the robust (sandwich) ones"
+    )
+    return reasons, suspect, [note + (": " + ", ".join(widened) if widened else "")]
+
+
 def verdict_of(
     result,
     identifiability=None,
@@ -88,6 +141,10 @@ def verdict_of(
     data: Sequence[str] = (),
     data_used: Mapping[str, Any] | None = None,
     notes: Sequence[str] = (),
+    robust=None,
+    white: bool | None = None,
+    evidence=None,
+    excitation=None,
 ) -> Verdict:
     """The one verdict on a fit from its own flags and the checks made after it.
 
@@ -114,6 +171,17 @@ def verdict_of(
         :data:`FLAGGED_USED_FRACTION` of the record flag the fit.
     notes : sequence of str
         Notes the caller adds (a fit that held every R and C is an evaluation).
+    robust : RobustErrors, optional
+        The sandwich standard errors; read instead of the Hessian's when ``white`` is False
+        (:func:`robust_findings`).
+    white : bool, optional
+        Whether the fit's innovations are white.
+    evidence : HeldOutEvidence, optional
+        The held-out checks (:mod:`rczone.calibration.evidence`): coverage per horizon, the
+        baselines, the innovations; each failed one is a reason.
+    excitation : Excitation, optional
+        Whether the inputs were excited apart (:mod:`rczone.data.excitation`): each group of
+        collinear inputs is a note, named as the likely cause of estimates at a bound.
 
     Returns
     -------
@@ -156,4 +224,30 @@ def verdict_of(
                     f" confirm {'it' if len(names) == 1 else 'them'} on other data (--check-on) before relying on"
                     f" {'it' if len(names) == 1 else 'them'}"
                 )
-    return Verdict(not reasons, tuple(reasons), tuple(dict.fromkeys(suspect)), tuple(checked), tuple(notes))
+    exc = excitation if excitation is not None else getattr(identifiability, "excitation", None)
+    if exc is not None and exc.collinear:
+        cause = (
+            " (the likely cause of the estimates at a bound)"
+            if any(e.at_bound for e in result.parameters.values())
+            else ""
+        )
+        notes += [f"{f}{cause}" for f in exc.findings()]
+    more, names, robust_notes = robust_findings(result, robust, white)
+    reasons += more
+    suspect += names
+    notes += robust_notes
+    held_out = None
+    if evidence is not None:
+        checked.append("held-out data")
+        reasons += evidence.reasons
+        notes += evidence.notes
+        held_out = evidence.to_dict()
+    return Verdict(
+        not reasons,
+        tuple(reasons),
+        tuple(dict.fromkeys(suspect)),
+        tuple(checked),
+        tuple(notes),
+        held_out,
+        "robust" if robust_notes else "hessian",
+    )

@@ -320,10 +320,23 @@ class Selection(Result):
 
     def summary_lines(self) -> list:
         """What ``rczone select`` prints after fitting the candidates."""
+        from rich.markup import escape
+
         from rczone.selection.text import selection_lines
 
-        held = self.holdout.summary_lines() if self.holdout is not None else []
+        held = []
+        if self.holdout is not None:  # the selected model's held-out scores and checks, said
+            evidence = self.held_out_evidence()
+            held = [*self.holdout.summary_lines(), *(escape(x) for x in (*evidence.reasons, *evidence.notes))]
         return [*selection_lines(self), *held]
+
+    def held_out_evidence(self):
+        """The held-out checks of the selected model (:func:`rczone.calibration.evidence.held_out_evidence`); None without."""
+        if self.holdout is None:
+            return None
+        from rczone.calibration.evidence import held_out_evidence
+
+        return held_out_evidence(self.holdout, self.best.calibration.innovations)
 
     def table(self) -> list[dict]:
         """One row per fitted candidate: log L, k, AIC, BIC and their differences to the best, whiteness."""
@@ -376,7 +389,11 @@ class Selection(Result):
             else None,
             "exit_code": self.exit_code,
             "ignored_channels": list(self.ignored_channels),
-            **({"holdout": self.holdout.to_dict()} if self.holdout is not None else {}),
+            **(
+                {"holdout": {**self.holdout.to_dict(), "evidence": self.held_out_evidence().to_dict()}}
+                if self.holdout is not None
+                else {}
+            ),
         }
 
 

@@ -71,7 +71,7 @@ def fit(
     noise: str = "measured",
     constants: Mapping[str, float] | None = None,
     columns: PathLike | None = None,
-    check_on: Sequence[pd.DataFrame | PathLike] = (),
+    check_on: Sequence[pd.DataFrame | PathLike | tuple[PathLike, PathLike]] = (),
     checks: bool = True,
     profiles: bool = True,
     hold: str = "zoh",
@@ -80,6 +80,7 @@ def fit(
     label: str | None = None,
     options: MethodOptions | Mapping[str, Any] | None = None,
     holdout: str | float | None = None,
+    floor_area: float | None = None,
 ) -> Calibration:
     """Fit a model to data: ``rczone fit`` in Python.
 
@@ -109,7 +110,8 @@ def fit(
     columns : str or path, optional
         A column map for ``data`` and ``check_on`` given as files.
     check_on : sequence, optional
-        Other data: fitted too, their estimates compared, and predicted with this fit.
+        Other data: fitted too, their estimates compared, and predicted with this fit. An item
+        ``(file, column_map)`` reads the file with its own map (``--check-on FILE:MAP``).
     checks : bool
         Make the checks after the fit (identifiability at the estimates, profiles), as
         ``rczone fit --json`` does; they enter the one verdict.
@@ -132,6 +134,9 @@ def fit(
         or all but this last fraction of the samples (``0.25``), then score the rest at one step,
         1 h, 6 h, 24 h and open loop next to persistence and ARX (``--holdout``;
         :attr:`Calibration.holdout`).
+    floor_area : float, optional
+        Heated floor area, m2 (``--floor-area``): the plausibility is judged against reference
+        ranges per m2 (:func:`rczone.models.plausibility.reference_ranges`).
 
     Returns
     -------
@@ -157,13 +162,19 @@ def fit(
     frame, name = frame_and_label(data, columns, zm)
     others = {}
     for k, other in enumerate(check_on):
-        f, other_name = frame_and_label(other, columns, zm)
+        other, own = other if isinstance(other, tuple) else (other, columns)  # (file, its own map)
+        f, other_name = frame_and_label(other, own, zm)
         others[other_name if other_name not in others and other_name != "data" else f"data {k + 1}"] = f
     at = None
     if holdout is not None:  # a split needs the time axis
         frame = frame_from(frame)
         at = split_time(frame, holdout, model=zm, columns=columns)
-    return fit_and_check(zm, frame, settings, label=label or name, others=others, holdout=at)
+    cal = fit_and_check(zm, frame, settings, label=label or name, others=others, holdout=at)
+    if floor_area is not None and cal.plausibility is not None:
+        from rczone.calibration.reference import with_floor_area
+
+        cal = with_floor_area(cal, zm, before(frame, at), floor_area)
+    return cal
 
 
 def predict(

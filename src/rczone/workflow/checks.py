@@ -15,6 +15,7 @@ from collections.abc import Callable, Mapping
 import pandas as pd
 
 from rczone.calibration import Calibration, calibrate, predict
+from rczone.calibration.evidence import verdict_fit, with_holdout
 from rczone.estimation import Dataset
 from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
@@ -82,9 +83,8 @@ def fit_and_check(
         cal = check_fit(cal, frame, settings, others=others, progress=progress)
     if holdout is not None:
         progress("scoring the held-out data")
-        cal = dataclasses.replace(
-            cal, holdout=score_held_out(cal.model, full, holdout, settings.constants, label)
-        )
+        held = score_held_out(cal.model, full, holdout, settings.constants, label)
+        cal = with_holdout(dataclasses.replace(cal, holdout=held), held)
     return cal
 
 
@@ -127,11 +127,11 @@ def check_fit(
     if settings.profiles and len(zm.network.outputs) == 1:
         progress("profiling the estimates")
         prof = {k: v.to_dict() for k, v in profile_checks(zm, frame, r, constants=used).items()}
-    fits = {label: r}
+    fits = {label: verdict_fit(cal)}  # robust errors when the innovations are not white (issue 38)
     validation = {}
     for name, f in (others or {}).items():
         progress(f"fitting {name} for comparison")
-        fits[name] = calibrate(zm, f, settings).result
+        fits[name] = verdict_fit(calibrate(zm, f, settings))
         ol = predict(zm, f, settings.constants or None)
         validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}
     checks = {

@@ -97,3 +97,12 @@ def test_the_scores_follow_the_results_protocol(zone):  # noqa: F811
     assert "<table" in scores._repr_html_() and "\n" not in repr(scores)
     assert list(scores.to_frame().columns[:4]) == ["horizon", "steps", "horizon_s", "predictor"]
     assert json.loads(json.dumps(scores.to_dict()))["scores"][0]["predictor"] == "model"
+
+
+def test_predict_of_an_unfitted_model_says_it_has_no_band_instead_of_nan(zone, tmp_path, capsys):  # noqa: F811
+    d, _, _, _, _ = zone
+    out = tmp_path / "p.json"
+    assert main(["predict", str(d / "zone.toml"), str(d / "zone.csv"), "--json", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "nan%" not in printed and "no 2-sigma band" in printed
+    assert json.loads(out.read_text())["coverage_2sigma"] == {"Ti": None}

@@ -116,7 +116,7 @@ def test_sampler_options_without_mcmc_are_refused_not_ignored(zone, capsys) -> N
 
 
 def test_fit_many_samples_with_the_manifest_sampler_table(zone, tmp_path, capsys) -> None:
-    """fit-many hands the manifest's draws/tune/chains to the sampler (the SamplerSettings of fit)."""
+    """fit-many hands the manifest's draws/tune/chains to the sampler (the McmcOptions of fit)."""
     manifest = tmp_path / "m.toml"
     manifest.write_text(
         f'model = "{(zone / "zone.toml").as_posix()}"\nmethods = ["mcmc"]\ndiagnose = false\n'

@@ -255,3 +255,16 @@ def test_a_design_prints_and_serializes_as_the_command(tmp_path, capsys, monkeyp
     assert json.loads(json.dumps(_jsonable(res.to_dict()))) == written
     assert printed == res.summary(width=100) + f"schedule written to {tmp_path / 's.csv'}\n"
     assert "commands of Ts, m" in repr(res) and len(repr(res)) < 200
+
+
+def test_the_design_reports_whether_it_drives_its_inputs_apart(design):
+    _, res = design
+    exc = res.excitation
+    s = res.samples()
+    varying = [a for a in res.actuated if s[a].std() > 1e-9]  # a constant column's std is rounding
+    assert exc.inputs == tuple(varying)
+    if len(varying) == 2:  # the statistic is numpy's correlation of the played samples
+        r = np.corrcoef(s[varying[0]], s[varying[1]])[0, 1]
+        assert exc.correlation[0, 1] == pytest.approx(r, abs=1e-12)
+        assert exc.collinear == (abs(r) >= 0.95)
+    assert res.to_dict()["excitation"]["inputs"] == list(varying)

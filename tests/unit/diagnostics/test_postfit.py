@@ -121,3 +121,38 @@ def test_profiles_work_for_any_model_and_every_output():
     assert far_from_construction(cal.result, factor=1.2) == pytest.approx(
         {"Ci": cal.result.estimates["Ci"] / 1e6, "Rea": cal.result.estimates["Rea"] / 0.02}
     )
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("a.csv", [("a.csv", "own")]),
+        ("a.csv,b.csv:twin.toml", [("a.csv", "own"), ("b.csv", "twin.toml")]),
+        ("C:/data/b.csv", [("C:/data/b.csv", "own")]),  # a drive letter is not a map
+        ("C:/data/b.csv:C:/maps/b.TOML", [("C:/data/b.csv", "C:/maps/b.TOML")]),
+    ],
+)
+def test_check_on_items_split_a_file_from_its_own_map(text, expected):
+    from pathlib import Path
+
+    from rczone.cli.common import check_on_items
+
+    got = check_on_items(text, Path("own"))
+    assert [(f, str(m)) for f, m in got] == expected
+
+
+def test_cli_fit_check_on_a_twin_with_its_own_column_map(tmp_path):
+    night("forced", seed=3, hours=6, theta=TRUE).to_csv(tmp_path / "a.csv", index=False)
+    twin = night("forced", seed=4, hours=6, theta=TRUE)
+    names = {"Ti": "room", "To": "outdoor", "Tsd": "corridor", "Ts": "supply", "m": "flow", "Q": "gains"}
+    twin.rename(columns=names).to_csv(tmp_path / "twin.csv", index=False)
+    (tmp_path / "twin.toml").write_text(
+        "[columns]\n" + "".join(f'{k} = "{v}"\n' for k, v in names.items()) + '[time]\ncolumn = "time"\n'
+    )
+    out = tmp_path / "fit.json"
+    other = f"{tmp_path / 'twin.csv'}:{tmp_path / 'twin.toml'}"
+    args = ["fit", str(tmp_path / "a.csv"), "--method", "ls", "--starts", "1", "--no-profiles"]
+    main([*args, "--check-on", other, "--json", str(out)])
+    checks = json.loads(out.read_text())["checks"]
+    assert set(checks["other_fits"]) == {str(tmp_path / "twin.csv")}
+    assert checks["validation"][str(tmp_path / "twin.csv")]["rmse_K"] < 0.3  # the twin read right, predicted

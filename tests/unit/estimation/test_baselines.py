@@ -76,3 +76,71 @@ def test_rollout_refuses_coefficients_of_other_signals_and_fit_refuses_too_few_s
         fit_arx(y[:6], u[:6])
     with pytest.raises(DataError, match="ARX baseline is malformed"):
         ARX.from_dict({"na": 2, "nb": 2, "coef": [[1.0], ["x"]]})
+
+
+def test_poles_are_the_roots_of_the_characteristic_polynomial():
+    # y_t = 1.5 y_{t-1} - 0.56 y_{t-2}: z^2 - 1.5 z + 0.56 = (z - 0.8)(z - 0.7)
+    arx = ARX(2, 2, np.array([[A[0]], [A[1]], [0.0], [0.0], [0.0], [0.0], [C]]))
+    np.testing.assert_allclose(np.sort(np.abs(arx.poles())), np.sort(np.abs(np.roots([1, -A[0], -A[1]]))))
+    assert arx.stable and arx.largest_pole() == pytest.approx(0.8)
+
+
+def test_a_pole_outside_the_unit_circle_makes_the_arx_unstable_and_its_rollout_grows():
+    # two outputs, the second coupled to the first; the oracle is the rollout itself growing
+    coef = np.zeros((2 * 2 + 2 * 1 + 1, 2))
+    coef[0, 0], coef[0, 1], coef[1, 1] = 1.006, 0.3, 0.5  # y1_t = 1.006 y1_{t-1}; y2_t = 0.3 y1 + 0.5 y2
+    arx = ARX(2, 2, coef)
+    assert not arx.stable and arx.largest_pole() == pytest.approx(1.006)
+    y, u = np.ones((3000, 2)), np.zeros((3000, 1))
+    roll = arx_rollout(arx, y, u, np.array([1]), 2990)[0]
+    assert roll[-1, 0] > 1e7  # 1.006 ** 2990
+
+
+def test_an_unstable_saved_arx_is_marked_and_not_scored(tmp_path):
+    import dataclasses
+
+    from rczone.calibration.horizons import horizon_scores
+    from tests.unit.selection.synthetic import prbs_zone
+
+    frame = prbs_zone(days=1, seed=3)
+    from rczone.models import load_model
+
+    zm = load_model("Ti+heater")
+    n_in = len(zm.network.input_names)
+    coef = np.zeros((2 + 2 * n_in + 1, 1))
+    coef[0, 0] = 1.006
+    zm = dataclasses.replace(
+        zm,
+        provenance={
+            **zm.provenance,
+            "baselines": {
+                "arx": {
+                    "na": 2,
+                    "nb": 2,
+                    "coef": coef.tolist(),
+                    "inputs": list(zm.network.input_names),
+                    "dt_s": 300.0,
+                }
+            },
+        },
+    )
+    scores = horizon_scores(zm, frame, horizons=[None], start=float(frame["time"].iloc[100]))
+    arx_rows = scores.table[scores.table.predictor == "arx"]
+    assert not arx_rows.stable.any() and scores.table[scores.table.predictor != "arx"].stable.all()
+    assert scores.unstable["arx"] == pytest.approx(1.006)
+    row = next(r for r in scores.to_dict()["scores"] if r["predictor"] == "arx")
+    assert row["rmse_K"] is None and not row["stable"]
+    text = " ".join(str(x) for x in scores.summary_lines())
+    assert "arx is unstable" in text
+    # the same through the CLI: the saved model's unstable ARX is marked in the table and the JSON
+    import json
+
+    from rczone.cli.main import main
+
+    zm.save(tmp_path / "unstable.json")
+    frame.to_csv(tmp_path / "zone.csv", index=False)
+    out = tmp_path / "p.json"
+    args = ["predict", str(tmp_path / "unstable.json"), str(tmp_path / "zone.csv"), "--horizons", "open"]
+    assert main([*args, "--baselines", "--warmup", "6h", "--json", str(out)]) == 0
+    rows = json.loads(out.read_text())["scores"]
+    assert [r["rmse_K"] for r in rows if r["predictor"] == "arx"] == [None]

@@ -118,3 +118,65 @@ def test_mistakes_are_one_line_and_exit_2(args, message, capsys) -> None:
 def test_the_python_api_rejects_what_the_cli_rejects() -> None:
     with pytest.raises(ParameterError, match="a wall joins two rooms"):
         multizone(2, [("1", "2", "3")])
+
+
+def test_solar_and_a_measured_neighbour_are_the_hand_built_elements(tmp_path, capsys) -> None:
+    """Two rooms, the sun through Aw_1 and Aw_2, and a corridor Tc (measured) behind room 2."""
+    out = tmp_path / "two.toml"
+    args = [
+        "models",
+        "generate",
+        "--rooms",
+        "2",
+        "--wall",
+        "1-2",
+        "--solar",
+        "--boundary",
+        "Tc=2",
+        "-o",
+        str(out),
+    ]
+    assert main(args) == 0, capsys.readouterr()
+    gen = read_model_file(out).network
+    nodes = [Node("T1", "Ci_1"), Node("Te1", "Ce_1"), Node("T2", "Ci_2"), Node("Te2", "Ce_2")]
+    resistors = [
+        Resistor("T1", "Te1", "Rie_1"), Resistor("Te1", "To", "Rea_1"),
+        Resistor("T2", "Te2", "Rie_2"), Resistor("Te2", "To", "Rea_2"),
+        Resistor("T1", "T2", "Rw_1_2"), Resistor("T2", "Tc", "Rb_2_Tc"),
+    ]  # fmt: skip
+    params = [Parameter(f"C{k}_{r}", "capacitance", 1e6) for k in "ie" for r in "12"]
+    params += [Parameter(f"R{k}_{r}", "resistance", 0.01) for k in ("ie", "ea") for r in "12"]
+    params += [Parameter("Rw_1_2", "resistance", 0.05), Parameter("Rb_2_Tc", "resistance", 0.05)]
+    params += [Parameter(f"Aw_{r}", "gain", 2.0, unit="m2") for r in "12"]
+    heat = [
+        HeatInput("Q1", {"T1": 1.0}),
+        HeatInput("Q2", {"T2": 1.0}),
+        HeatInput("Ps", {"T1": "Aw_1", "T2": "Aw_2"}, unit="W/m2"),
+    ]
+    hand = RCNetwork("hand", nodes, ["To", "Tc"], resistors, params, heat_inputs=heat, outputs=["T1", "T2"])
+    assert set(gen.parameters) == set(hand.parameters) and set(gen.input_names) == {
+        "To",
+        "Tc",
+        "Q1",
+        "Q2",
+        "Ps",
+    }
+    theta = _random_theta(hand)
+    sa, sb = gen.state_space(theta), hand.state_space(theta)
+    order = [sa.input_names.index(n) for n in sb.input_names]
+    np.testing.assert_allclose(sa.A, sb.A, rtol=1e-12)
+    np.testing.assert_allclose(sa.B[:, order], sb.B, rtol=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--rooms", "2", "--boundary", "T1=2"], "boundary zone 'T1'"),
+        (["--rooms", "2", "--boundary", "Tc=3"], "unknown room '3'"),
+        (["--rooms", "2", "--boundary", "Tc"], "give NAME=ROOM,ROOM"),
+    ],
+)
+def test_boundary_zone_mistakes_are_one_line(args, message, capsys) -> None:
+    assert main(["models", "generate", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]

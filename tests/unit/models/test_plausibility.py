@@ -8,6 +8,7 @@ import math
 import pytest
 
 from rczone.cli.main import main
+from rczone.errors import ParameterError
 from rczone.models import load_model
 from rczone.models.plausibility import plausibility
 from rczone.network.network import CP_AIR
@@ -56,13 +57,14 @@ def test_a_room_heavier_than_its_envelope_is_warned_about() -> None:
     assert "room node Ti holds more heat (5e+07 J/K) than the envelope Te (1e+06 J/K)" in w
 
 
-def test_ua_and_time_constants_far_from_the_guess_are_warned_about() -> None:
-    guess = load_model("Ti+heater").with_values({"Ci": 1.0e6, "Ria": 0.01})
+def test_ua_and_time_constants_far_from_the_declared_values_are_warned_about() -> None:
+    guess = load_model("Ti+heater").with_values({"Ci": 2.0e6, "Ria": 0.005})  # the user's values
     near = plausibility(guess.with_values({"Ci": 3.0e6, "Ria": 0.02}), guess)
-    assert near.warnings == () and near.guess_ua == pytest.approx(100.0)
+    assert near.warnings == () and near.guess_ua == pytest.approx(200.0)
+    assert near.reference == "judged against the values declared in Ti+heater"
     far = plausibility(guess.with_values({"Ci": 1.0e6, "Ria": 0.2}), guess)
     assert [w.split(" is ")[0] for w in far.warnings] == ["UA 5 W/K", "time constant 1 (2.31 d)"]
-    assert "0.05 times the construction guess 100 W/K" in far.warnings[0]
+    assert "0.025 times the values declared in Ti+heater (200 W/K)" in far.warnings[0]
     d = far.to_dict()
     assert d["ua_W_per_K"] == pytest.approx(5.0) and d["guess_time_constants_s"] == pytest.approx([1.0e4])
     assert json.loads(json.dumps(d)) == d
@@ -86,3 +88,44 @@ def test_rczone_fit_prints_writes_and_reports_the_plausibility_line(zone, tmp_pa
     assert d["plausibility"]["warnings"] == [] and d["plausibility"]["solar_aperture_m2"] is None
     assert f"plausibility: UA {ua:.4g} W/K" in out
     assert "plausibility: UA" in (tmp_path / "rep" / "report.html").read_text()
+
+
+def test_generic_values_of_a_built_in_model_are_not_a_reference() -> None:
+    generic = load_model("Ti+heater")  # rczone's starting values: no building's
+    fitted = generic.with_values({"Ci": 1.0e6, "Ria": 0.6})  # UA 1.7 W/K, 60 times the generic 100
+    p = plausibility(fitted, generic)
+    assert p.warnings == () and "not judged" in p.reference and "--floor-area" in p.reference
+    assert "not judged" in p.line()
+
+
+def test_a_floor_area_judges_ua_and_capacity_against_the_reference_ranges() -> None:
+    from rczone.models.plausibility import CAPACITY_PER_AREA, UA_PER_AREA, reference_ranges
+
+    generic = load_model("Ti+heater")
+    area = 100.0
+    ranges = reference_ranges(area)
+    assert ranges["ua"] == pytest.approx((UA_PER_AREA[0] * area, UA_PER_AREA[1] * area))
+    assert ranges["time_constant"][0] == pytest.approx(CAPACITY_PER_AREA[0] / UA_PER_AREA[1])
+    # UA 1 / Ria: 100 W/K is inside 15..1000 W/K; a capacity of 1e6 J/K is below 4e6 J/K
+    p = plausibility(generic.with_values({"Ci": 1.0e6, "Ria": 0.01}), generic, floor_area=area)
+    assert "100 m2 of floor" in p.reference
+    assert len(p.warnings) == 1 and "summed heat capacity 1e+06 J/K is outside" in p.warnings[0]
+    slow = plausibility(generic.with_values({"Ci": 7.0e7, "Ria": 1.0}), generic, floor_area=area)
+    assert any("slowest time constant" in w for w in slow.warnings)  # 7e7 s, beyond 4.9e6 s
+    ok = plausibility(generic.with_values({"Ci": 2.0e7, "Ria": 0.01}), generic, floor_area=area)
+    assert ok.warnings == ()  # 100 W/K, 2e7 J/K, 56 h: a plausible 100 m2 house
+    with pytest.raises(ParameterError, match="floor area must be a positive number"):
+        reference_ranges(-5.0)
+
+
+def test_rczone_fit_floor_area_judges_against_the_reference_ranges(zone, tmp_path, capsys) -> None:
+    (tmp_path / "room.toml").write_text(MODEL)
+    args = ["fit", str(zone / "zone.csv"), "--model", str(tmp_path / "room.toml"), "--method", "ls"]
+    main([*args, "--starts", "1", "--floor-area", "2", "--json", str(tmp_path / "fit.json"), "--no-profiles"])
+    out = " ".join(capsys.readouterr().out.split())
+    d = json.loads((tmp_path / "fit.json").read_text())["plausibility"]
+    assert d["reference"] == "judged against the reference ranges for 2 m2 of floor" and d["reference"] in out
+    # UA of tens of W/K is far above 10 W/(m2 K) times 2 m2: the warning names the range
+    assert any("outside the reference range for 2 m2 of floor" in w for w in d["warnings"])
+    assert main([*args, "--floor-area", "-3"]) == 2
+    assert "floor area must be a positive number" in capsys.readouterr().err
