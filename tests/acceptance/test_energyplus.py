@@ -206,3 +206,9 @@ def test_the_inlet_flows_of_a_floor_add_up_to_its_air_handler_supply():
         ]
         np.testing.assert_allclose(mine, ahu.to_numpy(), rtol=1e-9, atol=1e-12)
         assert ahu.max() > 1.0  # the AHU ran during the day
+
+
+def test_a_file_in_place_of_the_folder_is_one_line_before_energyplus_runs(tmp_path, capsys):
+    (tmp_path / "taken").write_text("x")
+    assert main(["emulate", "--building", "office_small", "-o", str(tmp_path / "taken")]) == 2
+    assert "is a file, not a folder" in capsys.readouterr().err

@@ -94,6 +94,7 @@ def emulate_to_folder(
 
         raise ParameterError(f"--test {test!r}: {did_you_mean(test, TESTS)}")
     em = EnergyPlusEmulator(building, weather, start=start, days=days, step_minutes=step_minutes)
+    folder = ensure_folder(out)  # a file in the way is one line before EnergyPlus runs, not after
     if test == "forced":
         from rczone.emulators.forced import forced_run
 
@@ -103,7 +104,6 @@ def emulate_to_folder(
             raise ParameterError("--zones is for --test forced (the zones the test drives)")
         run = em.run()
     files = export(run, seed=seed, test=test).files
-    folder = ensure_folder(out)
     for name, text in files.items():
         write_text_in(folder, name, text)
     return EmulateResult(run, Path(folder), tuple(files), test)
