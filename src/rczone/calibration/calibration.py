@@ -238,7 +238,7 @@ class Calibration(FitAccessors, Result):
         from rczone.models.library import is_family_name
 
         generic = is_family_name(self.model_label)  # generic starting values, not construction data
-        lines: list = [parameter_table(r, title, generic=generic), search_line(r)]
+        lines: list = [*self.header_lines(), parameter_table(r, title, generic=generic), search_line(r)]
         # an LS fit's own RMSE is the open-loop one: said once (issue 22, defect 8)
         own = "" if r.rmse_kind == "open-loop" else f" {r.rmse_kind} RMSE {r.rmse_K:.3f} K;"
         lines.append(

@@ -9,6 +9,8 @@ numbers inside user text).
 
 from __future__ import annotations
 
+import os
+
 from rich.console import Console
 from rich.markup import escape as _rich_escape
 
@@ -27,9 +29,10 @@ def unwrapped(out: Console) -> Console:
 
     rich wraps at 80 columns when it cannot ask a terminal its width, so ``rczone fit C > out``
     split ``4.499e+05`` and a table's header words across lines; a file or a pipe has no width,
-    and a script reading it wants each line whole. A terminal keeps its own width.
+    and a script reading it wants each line whole. A terminal keeps its own width, and so does a
+    width asked for with the ``COLUMNS`` environment variable.
     """
-    if not out.is_terminal:
+    if not out.is_terminal and not os.environ.get("COLUMNS"):  # an explicit width is the user's
         out.width = UNWRAPPED_WIDTH
     return out
 

@@ -125,23 +125,14 @@ class FitAccessors:
         """Estimated parameters (noise levels and initial states included)."""
         return int(self.result.n_params)
 
-    def summary(self, width: int = 100) -> str:
-        """The header block (model, data, method, observations, likelihood, criteria), then what
-        the command line prints (statsmodels' ``summary()`` opens the same way).
+    def header_lines(self) -> list[str]:
+        """The block above the parameter table, as statsmodels' ``summary()`` opens: one
+        ``Name: value`` line each (rich markup; user strings escaped), then an empty line."""
+        from rczone.results.fit_text import esc
 
-        Parameters
-        ----------
-        width : int
-            Width of the command line's part, characters.
-
-        Returns
-        -------
-        str
-        """
         rows = self.header_rows()
         wide = max(len(k) for k, _ in rows)
-        head = "\n".join(f"{k + ':':<{wide + 1}} {v}" for k, v in rows)
-        return head + "\n\n" + super().summary(width)  # type: ignore[misc]
+        return [f"{k + ':':<{wide + 1}} {esc(v)}" for k, v in rows] + [""]
 
     def header_rows(self) -> list[tuple[str, str]]:
         """The block above the parameter table, as statsmodels' ``summary()`` opens."""

@@ -36,7 +36,8 @@ def test_a_piped_table_keeps_each_row_on_one_line():
     assert max(len(x) for x in proc.stdout.splitlines()) > 80
 
 
-def test_a_redirected_fit_prints_whole_numbers(tmp_path, capsys):
+def test_a_redirected_fit_prints_whole_numbers(tmp_path, capsys, monkeypatch):
+    monkeypatch.delenv("COLUMNS", raising=False)
     path = tmp_path / "zone.csv"
     prbs_zone(days=1, seed=9).to_csv(path, index=False)
     assert main(["fit", str(path), "--model", "TiTe+heater", "--method", "ls", "--starts", "1"]) in (0, 3)
@@ -50,8 +51,11 @@ def test_a_redirected_fit_prints_whole_numbers(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("stderr", [False, True])
-def test_a_console_off_a_terminal_is_unwrapped(stderr):
+def test_a_console_off_a_terminal_is_unwrapped(stderr, monkeypatch):
+    monkeypatch.delenv("COLUMNS", raising=False)
     assert console(stderr=stderr).width == UNWRAPPED_WIDTH  # pytest's streams are no terminal
+    monkeypatch.setenv("COLUMNS", "100")  # a width asked for is kept
+    assert console(stderr=stderr).width == 100
 
     class Terminal:
         is_terminal, width = True, 93

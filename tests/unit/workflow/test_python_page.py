@@ -30,7 +30,7 @@ def test_the_python_page_runs_and_shows_what_it_prints(tmp_path, monkeypatch) ->
     # the page shows the fit's table and the prediction's line as they are printed
     fitted, prediction = namespace["fitted"], namespace["prediction"]
     for line in (
-        *fitted.summary(width=100).splitlines()[1:8],
+        *fitted.summary(width=100).splitlines()[1:24],  # the header block and the table
         prediction.summary(width=100).splitlines()[-2],
     ):
         assert line.rstrip() in text, line
