@@ -12,8 +12,8 @@ The estimator of :mod:`rczone.estimation.kstep`, in three steps:
    predictions do not move), and the estimates' covariance by the sandwich
    :func:`~rczone.estimation.kstep.sandwich_covariance` (the criterion is not a likelihood).
 
-Its bounds are the likelihood fit's. Not registered as a ``--method`` yet: the method plug-ins
-are being built; :func:`fit_kstep` is what a plug-in wraps.
+Its bounds are the likelihood fit's. The method ``kstep``
+(:mod:`rczone.estimation.methods.kstep`, ``--method kstep --option horizons=1,12,72``) wraps it.
 
 References
 ----------

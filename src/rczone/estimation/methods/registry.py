@@ -17,14 +17,16 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 
 from rczone.errors import ParameterError, did_you_mean
-from rczone.estimation.methods import ls, map, mcmc, ml
+from rczone.estimation.methods import kstep, ls, map, mcmc, ml
 from rczone.estimation.methods.base import Method
 
 #: Entry-point group of third-party methods.
 ENTRY_POINT_GROUP = "rczone.methods"
 
 #: The registered methods by name, built-in ones first (the first is listed first in help texts).
-REGISTRY: dict[str, Method] = {m.name: m for m in (ls.METHOD, ml.METHOD, map.METHOD, mcmc.METHOD)}
+REGISTRY: dict[str, Method] = {
+    m.name: m for m in (ls.METHOD, ml.METHOD, map.METHOD, mcmc.METHOD, kstep.METHOD)
+}
 
 #: The default method of the command line, the API and the batch manifest.
 DEFAULT_METHOD = "ml"
