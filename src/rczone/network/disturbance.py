@@ -63,7 +63,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rczone.errors import NetworkError, did_you_mean
+from rczone.errors import NetworkError, ParameterError, did_you_mean
 
 Value = str | float
 
@@ -281,7 +281,7 @@ def _check_number(name: str, what: str, v: object) -> None:
     signed = not positive and what != "magnitude"  # a gain
     if not math.isfinite(x) or (not signed and x < 0) or (positive and x == 0):
         expected = "> 0 s" if positive else ">= 0 W" if what == "magnitude" else "finite"
-        raise NetworkError(f"disturbance {name!r}: {what} must be {expected}, got {x:g}")
+        raise ParameterError(f"disturbance {name!r}: {what} must be {expected}, got {x:g}")
 
 
 #: Parameter kind each hyper-parameter role must have when given by name.

@@ -447,6 +447,8 @@ def diagnose(
     from rczone.diagnostics import diagnose as run
 
     validation.seed(seed)
+    sigma = validation.finite(sigma, "sigma")
+    model_error = validation.finite(model_error, "model_error")
     zm = as_model(model)
     frame, name = frame_and_label(data, columns, zm)
     rep = run(
@@ -565,6 +567,11 @@ def select_models(
     from rczone.selection.text import fit_arguments
 
     validation.seed(seed)
+    validation.finite(alpha, "alpha", low=0.0, high=1.0)
+    if n_starts is not None:
+        validation.integer(n_starts, "n_starts", low=1, besides="None (automatic) or ")
+    if not isinstance(criterion, str):
+        raise ParameterError(f"criterion must be 'bic' or 'aic', got {criterion!r}")
     zms = [as_model(m) for m in models]
     if isinstance(data, pd.DataFrame):
         frame, name, source = data, str(data.attrs.get("name", "data")), ""
