@@ -57,6 +57,7 @@ from rczone.kernels.arrays import (
     Start,
     dynamics_derivatives,
     dynamics_model,
+    writable,
 )
 from rczone.kernels.discretize import (
     interval_derivatives,
@@ -196,7 +197,7 @@ def _start(
     first_y = np.asarray(first.y0, dtype=float)[[direct[i] for i in states.tolist()]]
     q = directions.dA0.shape[0]
     mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, np.zeros(ss.n_states))
-    given = np.ascontiguousarray(given, dtype=bool)
+    given = writable(given, bool)
     mod.x0[given] = np.asarray(x0, dtype=float)[given]
     dx0 = np.zeros((q, ss.n_states))
     if given_direction is not None:
@@ -245,10 +246,8 @@ def trapezoid_sse(t: np.ndarray, e: np.ndarray) -> float:
         Errors; NaN where the measurement is missing. Outputs are summed.
     """
     N, ny = e.shape
-    f = np.ascontiguousarray
-    return float(
-        trapezoid(f(t, dtype=float), f(e, dtype=float), np.empty((N, ny, 0)), np.zeros(0), np.zeros(0))
-    )
+    f = writable  # read-only arrays would compile the kernels a second time
+    return float(trapezoid(f(t), f(e), np.empty((N, ny, 0)), np.zeros(0), np.zeros(0)))
 
 
 def simulate_output(
@@ -375,7 +374,7 @@ def general_cost(
     x0, dx0 = _initial_state_derivatives(ss, values, data, wrt, der)
     keys, which = data.intervals
     foh = hold == "foh"
-    f = np.ascontiguousarray
+    f = writable  # read-only arrays would compile the kernels a second time
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     how = Discretization(keys, np.empty(0) if scale is None else scale, foh, not ls)
     if q:
@@ -388,7 +387,7 @@ def general_cost(
                 no_sensitivities(keys.shape[0], n, p),
                 Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
                 Prior(x0, np.diag(sx**2), dx0, dP0),
-                Series(np.require(data.u, np.float64, "CW"), np.require(data.y, np.float64, "CW"), which),
+                Series(f(data.u), f(data.y), which),
                 FilterOptions(foh, False, STEADY_RTOL),
                 outputs(data.n_samples, n, ny, 0, False, False),
                 basis,
@@ -401,14 +400,14 @@ def general_cost(
         mats = matrices_kernel(n, scale is not None)(mod, how)
         dmats = no_sensitivities(keys.shape[0], n, p)
     # writable as the packed problem's (a Dataset's arrays are read-only): one compiled specialization
-    y = np.require(data.y, np.float64, "CW")
+    y = f(data.y)
     outs = outputs(data.n_samples, n, ny, q, ls, False)
     nll, n_obs, g, fim = kalman_filter(
         mats,
         dmats,
         Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
         Prior(x0, np.diag(sx**2), dx0, dP0),
-        Series(np.require(data.u, np.float64, "CW"), y, which),
+        Series(f(data.u), y, which),
         FilterOptions(foh, ls, STEADY_RTOL),
         outs,
     )
