@@ -372,9 +372,9 @@ def general_cost(
     mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, qc)
     der = dynamics_derivatives(dA0, dN, dB0, dM, dqc)
     x0, dx0 = _initial_state_derivatives(ss, values, data, wrt, der)
-    keys, which = data.intervals
+    f = writable  # read-only arrays (a Dataset's) would compile the kernels a second time
+    keys, which = f(data.intervals[0]), f(data.intervals[1], np.int64)
     foh = hold == "foh"
-    f = writable  # read-only arrays would compile the kernels a second time
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     how = Discretization(keys, np.empty(0) if scale is None else scale, foh, not ls)
     if q:
