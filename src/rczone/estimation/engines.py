@@ -60,7 +60,7 @@ from rczone.kernels.arrays import (
     writable,
 )
 from rczone.kernels.discretize import (
-    interval_derivatives,
+    derivatives_kernel,
     matrices_kernel,
     modal_matrices,
 )
@@ -378,7 +378,7 @@ def general_cost(
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     how = Discretization(keys, np.empty(0) if scale is None else scale, foh, not ls)
     if q:
-        mats, dmats = interval_derivatives(mod, der, how)
+        mats, dmats = derivatives_kernel(scale is not None)(mod, der, how)
     else:
         if scale is not None and not ls and modal_pays(which, n):
             mats, basis = modal_matrices(mod, how)
