@@ -58,9 +58,10 @@ from rczone.kernels.arrays import (
     Start,
     dynamics_derivatives,
     dynamics_model,
+    writable,
 )
 from rczone.kernels.discretize import (
-    interval_derivatives,
+    derivatives_kernel,
     matrices_kernel,
     modal_matrices,
 )
@@ -197,7 +198,7 @@ def _start(
     first_y = np.asarray(first.y0, dtype=float)[[direct[i] for i in states.tolist()]]
     q = directions.dA0.shape[0]
     mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, np.zeros(ss.n_states))
-    given = np.ascontiguousarray(given, dtype=bool)
+    given = writable(given, bool)
     mod.x0[given] = np.asarray(x0, dtype=float)[given]
     dx0 = np.zeros((q, ss.n_states))
     if given_direction is not None:
@@ -246,10 +247,8 @@ def trapezoid_sse(t: np.ndarray, e: np.ndarray) -> float:
         Errors; NaN where the measurement is missing. Outputs are summed.
     """
     N, ny = e.shape
-    f = np.ascontiguousarray
-    return float(
-        trapezoid(f(t, dtype=float), f(e, dtype=float), np.empty((N, ny, 0)), np.zeros(0), np.zeros(0))
-    )
+    f = writable  # read-only arrays would compile the kernels a second time
+    return float(trapezoid(f(t), f(e), np.empty((N, ny, 0)), np.zeros(0), np.zeros(0)))
 
 
 def simulate_output(
@@ -337,7 +336,8 @@ def general_cost(
     asm = assemble(network, values, data, hold, method, wrt)
     ss, mod, der, how = asm.ss, asm.mod, asm.der, asm.how
     n, p, ny = ss.n_states, ss.n_inputs, ss.C.shape[0]
-    q, ls, foh, which, keys = len(tuple(wrt)), method == "ls", hold == "foh", data.intervals[1], how.keys
+    q, ls, foh, keys = len(tuple(wrt)), method == "ls", hold == "foh", how.keys
+    which = writable(data.intervals[1], np.int64)
     scale = how.scale if how.scale.shape[0] else None
     if q:
         mats, dmats = interval_derivatives(mod, der, how)
@@ -452,7 +452,8 @@ def assemble(
     mod = dynamics_model(ss.A, ss.N, ss.B, ss.M, qc)
     der = dynamics_derivatives(dA0, dN, dB0, dM, dqc)
     x0, dx0 = _initial_state_derivatives(ss, values, data, wrt, der)
-    keys = data.intervals[0]
+    f = writable  # read-only arrays (a Dataset's) would compile the kernels a second time
+    keys = f(data.intervals[0])
     foh = hold == "foh"
     scale = symmetrizing_scale(ss.A, ss.N, ss.capacities)
     how = Discretization(keys, np.empty(0) if scale is None else scale, foh, not ls)
@@ -461,8 +462,6 @@ def assemble(
         mod,
         der,
         how,
-        Observation(
-            np.ascontiguousarray(ss.C), np.ascontiguousarray(ss.D), np.ascontiguousarray(r), dC, dD, dr
-        ),
+        Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
         Prior(x0, np.diag(sx**2), dx0, dP0),
     )

@@ -35,6 +35,7 @@ from rczone.estimation.costs import filter_arrays
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
 from rczone.estimation.openloop import open_loop_band
+from rczone.kernels.arrays import writable
 from rczone.kernels.forecast import Origins, Propagation, Readout, k_step_moments
 from rczone.network import RCNetwork
 
@@ -105,11 +106,11 @@ def k_step_bands(
     origin = origin[(origin >= 0) & (origin < N - reach[0])].astype(np.int64)
     slot = np.full(reach[-1] + 1, -1, dtype=np.int64)
     slot[reach] = np.arange(len(reach))
-    c = np.ascontiguousarray  # one array layout, one compiled specialization
+    c = writable  # one array type (np.diag of one output is a read-only view): one specialization
     y_hat, var = k_step_moments(
-        Propagation(c(Phi, float), c(Qd, float), c(which, np.int64), c(drive, float)),
-        Readout(c(C, float), c(u @ args.D.T, float), c(np.diag(R), float)),
-        Origins(c(out.x_filt, float), c(out.P_filt, float), origin, slot),
+        Propagation(c(Phi), c(Qd), c(which, np.int64), c(drive)),
+        Readout(c(C), c(u @ args.D.T), c(np.diag(R))),
+        Origins(c(out.x_filt), c(out.P_filt), c(origin, np.int64), c(slot, np.int64)),
     )
     for j, k in enumerate(reach):
         bands[k] = Band(y_hat[j], np.sqrt(var[j]))

@@ -40,7 +40,7 @@ from typing import NamedTuple
 import numpy as np
 
 from rczone.errors import InputShapeError
-from rczone.kernels.arrays import Dynamics, FilterOptions, FilterTrace, Observation, Prior, Series
+from rczone.kernels.arrays import Dynamics, FilterOptions, FilterTrace, Observation, Prior, Series, writable
 from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
 from rczone.network.statespace import BilinearStateSpace
@@ -173,25 +173,24 @@ def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, Filter
     """
     Phi, Gamma0, Gamma1, Qd, which = problem.Phi, problem.G0, problem.G1, problem.Qd, problem.which
     u, y, x0, P0, C, D, R = problem.u, problem.y, problem.x0, problem.P0, problem.C, problem.D, problem.R
-    f = np.ascontiguousarray
-    r = measurement_variances(R).astype(float)
+    f = writable  # read-only arrays (a Dataset's, np.diag's views) would compile a second specialization
+    r = f(measurement_variances(R))
     N, ny = y.shape
     n, p = x0.shape[0], u.shape[1]
     outs = outputs(N, n, ny, 0, False, keep)
     nll, n_obs, _, _ = kalman_filter(
-        Dynamics(*(f(a, dtype=float) for a in (Phi, Gamma0, Gamma1, Qd))),
+        Dynamics(*(f(a) for a in (Phi, Gamma0, Gamma1, Qd))),
         no_sensitivities(Phi.shape[0], n, p),
         Observation(
-            f(C, dtype=float),
-            f(D, dtype=float),
+            f(C),
+            f(D),
             r,
             np.empty((ny, 0, n)),
             np.empty((ny, 0, p)),
             np.empty((ny, 0)),
         ),
-        Prior(f(x0, dtype=float), f(P0, dtype=float), np.empty((0, n)), np.empty((0, n, n))),
-        # writable (a Dataset's arrays are read-only), as every caller's: one compiled specialization
-        Series(np.require(u, np.float64, "CW"), np.require(y, np.float64, "CW"), f(which, dtype=np.int64)),
+        Prior(f(x0), f(P0), np.empty((0, n)), np.empty((0, n, n))),
+        Series(f(u), f(y), f(which, np.int64)),
         FilterOptions(bool(np.any(Gamma1)), False, STEADY_RTOL),
         outs,
     )

@@ -24,6 +24,7 @@ import pandas as pd
 from rczone.estimation.data import Dataset
 from rczone.estimation.engines import filter_arrays
 from rczone.estimation.kalman import FilterOutput, FilterProblem, kalman_filter_arrays
+from rczone.kernels.arrays import writable
 from rczone.kernels.smoother import Moments, rts_smoother
 from rczone.network import RCNetwork
 from rczone.results.protocol import Result, json_number
@@ -77,8 +78,8 @@ def rts_smooth(problem: FilterProblem) -> SmootherOutput:
     """
     out = kalman_filter_arrays(problem)
     smoothed = rts_smoother(
-        np.ascontiguousarray(problem.Phi, dtype=float),
-        np.ascontiguousarray(problem.which, dtype=np.int64),
+        writable(problem.Phi),  # read-only arrays would compile a second specialization
+        writable(problem.which, np.int64),
         Moments(out.x_pred, out.P_pred),
         Moments(out.x_filt, out.P_filt),
     )

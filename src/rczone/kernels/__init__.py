@@ -6,3 +6,8 @@ with (:mod:`rczone.simulation.simulate`, :mod:`rczone.estimation.kalman`). Kerne
 and short because their compile time (paid once per machine, then cached on disk) counts
 against the test suite and the CLI start-up.
 """
+
+from rczone.kernels.cache import use_writable_cache
+
+# before any kernel module decorates its functions: numba picks each one's cache folder then
+use_writable_cache()

@@ -394,6 +394,15 @@ def dynamics_derivatives(
     )  # fmt: skip
 
 
-def _writable(a: np.ndarray) -> np.ndarray:
-    # contiguous, writable float64, as the packed problem's arrays: one compiled specialization
-    return np.require(a, np.float64, "CW")
+def writable(a: np.ndarray, dtype: type = np.float64) -> np.ndarray:
+    """``a`` as a C-contiguous, writable array of ``dtype``: a copy only where it is not one already.
+
+    What every caller hands a kernel. numba compiles one specialization per argument type, and
+    read-only is part of the type: a data set's frozen arrays, ``np.diag`` of a matrix (a
+    read-only view when it is contiguous, a writable copy when not) or a model's arrays would
+    otherwise compile a kernel again for the next model structure or data source.
+    """
+    return np.require(a, dtype, "CW")
+
+
+_writable = writable

@@ -1259,12 +1259,22 @@ def matrices_kernel(n: int, rc: bool):
     """The compiled function that discretizes every interval of an ``n``-state model, called from Python.
 
     :func:`rc2_interval_matrices` for a 2-state RC network, :func:`rc_interval_matrices` for a
-    larger one (``rc``: its ``scale`` symmetrizes ``A``), :func:`interval_matrices` otherwise: each
-    compiles only the route it runs (a first run's time).
+    larger one (``rc``: its ``scale`` symmetrizes ``A``), :func:`expm_interval_matrices` otherwise
+    (the output sensitivities' augmented system, for one): each compiles only the route it runs (a
+    first run's time).
     """
     if not rc:
-        return interval_matrices
+        return expm_interval_matrices
     return rc2_interval_matrices if n == 2 else rc_interval_matrices
+
+
+def derivatives_kernel(rc: bool):
+    """The compiled :func:`interval_derivatives` of one route, called from Python (the general engine).
+
+    :func:`rc_derivatives` for an RC network (``rc``: its ``scale`` symmetrizes ``A``; spectral
+    formulas only), :func:`expm_interval_derivatives` otherwise: each compiles only the route it runs.
+    """
+    return rc_derivatives if rc else expm_interval_derivatives
 
 
 @njit(cache=True, error_model="numpy", inline="always")
@@ -1315,9 +1325,18 @@ def interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
     -------
     Dynamics
     """
-    n = mod.A0.shape[0]
-    if how.scale.shape[0] == n:
+    if how.scale.shape[0] == mod.A0.shape[0]:
         return rc_interval_matrices(mod, how)
+    return expm_interval_matrices(mod, how)
+
+
+@njit(cache=True, error_model="numpy")
+def expm_interval_matrices(mod: Assembled, how: Discretization) -> Dynamics:
+    """:func:`interval_matrices` by block matrix exponentials only (``how.scale`` is not read).
+
+    For a model that is no RC network; called directly, it compiles no spectral route.
+    """
+    n = mod.A0.shape[0]
     keys = how.keys
     p = mod.B0.shape[1]
     K = keys.shape[0]
@@ -1438,9 +1457,24 @@ def interval_derivatives(
     DynamicsDerivatives
         Their derivatives along the ``q`` directions.
     """
-    n = mod.A0.shape[0]
-    if how.scale.shape[0] == n:
+    if how.scale.shape[0] == mod.A0.shape[0]:
         return rc_interval_derivatives(mod, der, how)
+    return expm_interval_derivatives(mod, der, how)
+
+
+@njit(cache=True, error_model="numpy")
+def rc_derivatives(
+    mod: Assembled, der: AssembledDerivatives, how: Discretization
+) -> tuple[Dynamics, DynamicsDerivatives]:
+    """:func:`rc_interval_derivatives` compiled on its own, for Python callers (:func:`derivatives_kernel`)."""
+    return rc_interval_derivatives(mod, der, how)
+
+
+@njit(cache=True, error_model="numpy")
+def expm_interval_derivatives(
+    mod: Assembled, der: AssembledDerivatives, how: Discretization
+) -> tuple[Dynamics, DynamicsDerivatives]:
+    """:func:`interval_derivatives` by block matrix exponentials and their Fréchet derivatives only."""
     mats, dmats = _stacks(mod, der, how.keys.shape[0])
     for k in range(how.keys.shape[0]):
         step, dstep, out, dout = _interval(mod, der, how.keys[k], mats, dmats, k)

@@ -61,7 +61,7 @@ from rczone.kernels.arrays import (
     Slots,
     Start,
 )
-from rczone.kernels.discretize import interval_derivatives, interval_matrices, modal_matrices
+from rczone.kernels.discretize import modal_matrices, rc_interval_derivatives, rc_interval_matrices
 from rczone.kernels.expm import lu_factor, lu_solve
 from rczone.kernels.kalman import kalman_filter, modal_pays, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
@@ -631,7 +631,8 @@ def value_general(theta: np.ndarray, prob) -> float:
         mats, basis = modal_matrices(mod, Discretization(keys, scale, foh, True))
         nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs, basis)
     else:
-        mats = interval_matrices(mod, Discretization(keys, scale, foh, kind != LS))
+        # a packed problem is an RC network: the spectral route only, not the matrix exponentials'
+        mats = rc_interval_matrices(mod, Discretization(keys, scale, foh, kind != LS))
         nll, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, Series(u, y, which), opts, outs)
         if n_obs >= 0 and kind == LS:
             return trapezoid(t, outs.e, outs.de, np.zeros(theta.shape[0]), np.zeros(theta.shape[0]))
@@ -662,7 +663,8 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
     n = mod.A0.shape[0]
     p = mod.B0.shape[1]
     ny = mod.C.shape[0]
-    mats, dmats = interval_derivatives(mod, der, Discretization(keys, np.sqrt(mod.cap), foh, kind != LS))
+    # an RC network (every packed problem): no Fréchet derivatives of matrix exponentials to compile
+    mats, dmats = rc_interval_derivatives(mod, der, Discretization(keys, np.sqrt(mod.cap), foh, kind != LS))
     obs = Observation(mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, d, n)), np.zeros((ny, d, p)), der.dr)
     outs = outputs(t.shape[0], n, ny, d, kind == LS, False)
     nll, n_obs, g, fim = kalman_filter(

@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from rczone.kernels.arrays import writable
+
 
 @njit(cache=True, error_model="numpy")
 def propagate_kernel(
@@ -51,12 +53,6 @@ def propagate(
     Phi: np.ndarray, G0: np.ndarray, G1: np.ndarray, which: np.ndarray, u: np.ndarray, x0: np.ndarray
 ) -> np.ndarray:
     """:func:`propagate_kernel` on contiguous float64 copies of the arguments (shapes as there)."""
-    f = np.ascontiguousarray
-    return propagate_kernel(
-        f(Phi, dtype=np.float64),
-        f(G0, dtype=np.float64),
-        f(G1, dtype=np.float64),
-        f(which, dtype=np.int64),
-        np.require(u, np.float64, "CW"),  # writable: read-only inputs would compile a second specialization
-        f(x0, dtype=np.float64),
-    )
+    # writable copies where needed: read-only inputs would compile a second specialization
+    f = writable
+    return propagate_kernel(f(Phi), f(G0), f(G1), f(which, np.int64), f(u), f(x0))

@@ -36,6 +36,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from rczone.kernels.arrays import writable
 from rczone.kernels.discretize import phi1, phi2
 
 _EPS = float(np.finfo(float).eps)
@@ -417,20 +418,10 @@ def simulate_rank_one(
     hold : {"zoh", "foh"}
     """
     sQ = form.Q.T * form.scale[None, :]  # Q' diag(s)
-    model = RankOneModel(
-        np.ascontiguousarray(form.d),
-        np.ascontiguousarray(form.z),
-        float(form.sigma),
-        np.ascontiguousarray(sQ @ B),
-        np.ascontiguousarray(sQ @ M),
-    )
+    f = writable  # a data set's read-only arrays would compile a second specialization
+    model = RankOneModel(f(form.d), f(form.z), float(form.sigma), f(sQ @ B), f(sQ @ M))
     xi = simulate_rank_one_kernel(
-        model,
-        np.ascontiguousarray(t, dtype=np.float64),
-        np.ascontiguousarray(m, dtype=np.float64),
-        np.ascontiguousarray(u, dtype=np.float64),
-        sQ @ np.asarray(x0, dtype=np.float64),
-        hold == "foh",
+        model, f(t), f(m), f(u), f(sQ @ np.asarray(x0, dtype=np.float64)), hold == "foh"
     )
     x = (xi @ form.Q.T) / form.scale[None, :]
     x[0] = x0  # exactly, rather than through the change of basis

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rczone.errors import InputShapeError
+from rczone.kernels.arrays import writable
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import (
     SYMMETRY_RTOL,
@@ -193,7 +194,7 @@ def _simulate_rank_one(
 def _float_array(a: object, shape: tuple[int, ...]) -> np.ndarray | None:
     """``a`` as a C-contiguous float64 array when it already is one of ``shape`` (no conversion), else None."""
     if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.shape == shape:
-        return np.ascontiguousarray(a)
+        return writable(a)  # read-only data would compile the kernel a second time
     return None
 
 
@@ -219,9 +220,8 @@ def _simulate_rc2(
         return None
     arrays = ss.__dict__.get("_rc2_arrays")
     if arrays is None:
-        f = np.ascontiguousarray
         arrays = ss.__dict__["_rc2_arrays"] = tuple(
-            f(a, dtype=np.float64) for a in (ss.A, ss.N, ss.B, ss.M, ss.capacities, ss.C, ss.D)
+            writable(a) for a in (ss.A, ss.N, ss.B, ss.M, ss.capacities, ss.C, ss.D)
         )
     from rczone.kernels.rc2 import simulate_rc2  # numba loads lazily, see propagate
 
