@@ -340,7 +340,7 @@ def general_cost(
     which = writable(data.intervals[1], np.int64)
     scale = how.scale if how.scale.shape[0] else None
     if q:
-        mats, dmats = interval_derivatives(mod, der, how)
+        mats, dmats = derivatives_kernel(scale is not None)(mod, der, how)
     else:
         if scale is not None and not ls and modal_pays(which, n):
             mats, basis = modal_matrices(mod, how)
