@@ -15,21 +15,31 @@ from rczone.report.html import Report
 
 
 def parameter_rows(cal: Calibration) -> list[dict[str, object]]:
-    """One row per free parameter: estimate, unit, standard error, construction value, ratio, flags."""
+    """One row per free parameter: estimate, unit, standard error, construction value, ratio, flags.
+
+    A built-in model of the Bacher & Madsen family starts from generic values, not construction
+    data: its column says "generic start" and no ratio is given.
+    """
+    from rczone.models.library import is_family_name
+
     r = cal.result
+    generic = is_family_name(cal.model_label)
     rows = []
     for n, e in r.parameters.items():
-        rows.append(
-            {
-                "parameter": n,
-                "estimate": e.value,
-                "unit": e.unit,
-                "std. error": e.std_error if math.isfinite(e.std_error) else None,
-                "construction": e.construction if math.isfinite(e.construction) else None,
-                "estimate / construction": e.ratio_to_construction if math.isfinite(e.construction) else None,
-                "at bound": "yes" if e.at_bound else "",
-            }
-        )
+        before = e.construction if math.isfinite(e.construction) else None
+        row = {
+            "parameter": n,
+            "estimate": e.value,
+            "unit": e.unit,
+            "std. error": e.std_error if math.isfinite(e.std_error) else None,
+        }
+        if generic:
+            row["generic start"] = before
+        else:
+            row["construction"] = before
+            row["estimate / construction"] = e.ratio_to_construction if before is not None else None
+        row["at bound"] = "yes" if e.at_bound else ""
+        rows.append(row)
     return rows
 
 
@@ -69,7 +79,13 @@ def fit_report(
             f"Open-loop simulation of the fitted model: {o}",
         )
         rep.paragraph(f"{html.escape(o)}: open-loop RMSE {rmse:.3f} K, largest error {worst:.3f} K.")
-    rep.table(parameter_rows(cal), "Estimates beside their construction (ASHRAE) values", digits=4)
+    rows = parameter_rows(cal)
+    caption = (
+        "Estimates beside the model's generic starting values"
+        if rows and "generic start" in rows[0]
+        else "Estimates beside their construction (ASHRAE) values"
+    )
+    rep.table(rows, caption, digits=4)
     if r.posterior is not None:
         from rczone.report.posterior import add_posterior
 

@@ -43,6 +43,8 @@ def test_ml_report_shows_innovations_profiles_and_units(zone, tmp_path):
 def test_ls_report_labels_open_loop_residuals(zone):
     cal = calibrate(TRUE_MODEL, zone, "ls", n_starts=1)
     html = fit_report(cal, zone, "zone", TRUE_MODEL, None).render()
+    row = parameter_rows(cal)[0]  # a family model starts from generic values, not construction data
+    assert "generic start" in row and "construction" not in row and "estimate / construction" not in row
     assert "Open-loop residuals (not innovations)" in html and "not expected" in html
     assert "Innovations: is anything" not in html
 
