@@ -13,13 +13,16 @@ samples the fit did not use:
   is the multi-horizon scheme of [2]_ without its Bonferroni correction (the coverage asked for
   is per horizon, not of the whole trajectory);
 * **adaptive conformal inference** (ACI, [3]_): while predicting, the level is updated after
-  every error that becomes known, ``alpha_{t+1} = alpha_t + gamma (alpha - err_t)`` (``err_t`` = 1
-  when the measurement fell outside its band), and the quantile is taken of the ``n`` most recent
-  scores known at the prediction's origin. A k-step band for target ``t`` is issued at ``t - k``,
-  so it uses the level and scores as they were after target ``t - k``. Whatever the data, the
-  long-run share of misses is within ``(max(alpha_1, 1 - alpha_1) + gamma) / (gamma T)`` of
-  ``alpha`` ([3]_, Proposition 4.1); a level below what ``n`` scores resolve gives an infinite
-  band, as in [3]_ (counted, never hidden).
+  every error that becomes known, ``alpha_{t+1} = alpha_t + (gamma / k)(alpha - err_t)``
+  (``err_t`` = 1 when the measurement fell outside its band), and the quantile is taken of the
+  ``n`` most recent scores known at the prediction's origin. A k-step band for target ``t`` is
+  issued at ``t - k``, so it uses the level and scores as they were after target ``t - k``. The
+  step is divided by ``k`` because k-step errors overlap and come in runs of about ``k``: with the
+  paper's ``gamma`` a run of misses drove the level below zero and the band to infinity on the
+  Bacher & Madsen house at 1 h and longer (docs/validation.md). Whatever the data, the long-run
+  share of misses is within ``(max(alpha_1, 1 - alpha_1) + gamma / k) / (gamma T / k)`` of
+  ``alpha`` ([3]_, Proposition 4.1, with the step ``gamma / k``); a level below what ``n`` scores
+  resolve gives an infinite band, as in [3]_ (counted, never hidden).
 
 The interval score [4]_, ``(u - l) + (2 / alpha)(l - y) 1{y < l} + (2 / alpha)(y - u) 1{y > u}``
 (K), is reported beside the coverage: it rewards a narrow band and punishes a miss by its
@@ -69,7 +72,7 @@ class ConformalSettings:
     online : bool
         Update the band while predicting (adaptive conformal inference).
     gamma : float
-        Step of the adaptive level.
+        Step of the adaptive level at one step ahead (``gamma / k`` at ``k`` steps).
     alpha : float
         Nominal miss rate (default that of a 2-sigma band).
     """
@@ -243,7 +246,7 @@ def adaptive_quantiles(
         s = scores[t]
         if math.isfinite(s):
             miss = 1.0 if s > q[t] else 0.0
-            level[t] = previous + settings.gamma * (settings.alpha - miss)
+            level[t] = previous + settings.gamma / steps * (settings.alpha - miss)
             known.append(float(s))
         else:
             level[t] = previous
