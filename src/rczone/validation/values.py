@@ -313,3 +313,41 @@ def finite_result(frame: Any, what: str) -> Any:
             f" ({values[i, j]:g}); check the initial state, the inputs and the model's values"
         )
     return frame
+
+
+def measured_outputs(frame: Any, outputs: Sequence[str], *, label: str = "data", minimum: int = 1) -> None:
+    """Refuse measured outputs that are infinite, measured fewer than ``minimum`` times, or constant.
+
+    A constant output (a column map that maps it to a value, a stuck sensor) carries nothing to fit
+    or score; an output never measured leaves every score NaN.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The data; outputs it lacks are left to the caller.
+    outputs : sequence of str
+        The model's measured outputs.
+    label : str
+        The data's name, for the message.
+    minimum : int
+        Fewest measured samples of each output.
+    """
+    for name in outputs:
+        if name not in frame:
+            continue
+        values = numeric_column(frame, name)
+        if np.isinf(values).any():
+            i = int(np.flatnonzero(np.isinf(values))[0])
+            raise DataError(f"{label}: the measured {name} is infinite at sample {i + 1}; remove that sample")
+        measured = int(np.isfinite(values).sum())
+        if measured < minimum:
+            raise DataError(
+                f"{label}: only {measured} of {len(values)} samples have a measured {name}; at least {minimum}"
+                " are needed: use a longer record with fewer gaps"
+            )
+        if measured >= 2 and np.nanmin(values) == np.nanmax(values):
+            raise DataError(
+                f"{label}: the measured {name} is {np.nanmin(values):g} at every sample: a constant carries"
+                " nothing to fit (a column map that maps it to a value, or a stuck sensor); map the"
+                " measured column"
+            )

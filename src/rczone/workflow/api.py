@@ -149,6 +149,7 @@ def fit(
         fixed=dict(fixed or {}),
     )
     frame, name = frame_and_label(data, columns, zm)
+    validation.measured_outputs(frame, zm.network.outputs, label=label or name)
     others = {}
     for k, other in enumerate(check_on):
         f, other_name = frame_and_label(other, columns, zm)
@@ -201,6 +202,7 @@ def predict(
         validation.integer(steps, "steps", low=1)
     zm = as_model(model)
     frame, name = frame_and_label(data, columns, zm)
+    validation.measured_outputs(frame, zm.network.outputs, label=label or name)
     if steps is not None:
         validation.steps_ahead(steps, len(frame))
     return prediction(
