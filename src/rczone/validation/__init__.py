@@ -19,12 +19,14 @@ from rczone.validation.values import (
     integer,
     mapping,
     measured_outputs,
+    name_list,
     numeric_column,
     sampling_period,
     seed,
     steps_ahead,
     temperature,
     time_axis,
+    within_limits,
 )
 
 __all__ = [
@@ -42,10 +44,12 @@ __all__ = [
     "integer",
     "mapping",
     "measured_outputs",
+    "name_list",
     "numeric_column",
     "sampling_period",
     "seed",
     "steps_ahead",
     "temperature",
     "time_axis",
+    "within_limits",
 ]

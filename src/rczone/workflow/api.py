@@ -140,7 +140,7 @@ def fit(
         n_starts=n_starts,
         seed=seed,
         noise=noise,
-        constants=dict(constants or {}),
+        constants=validation.mapping(constants or {}, "constants"),
         checks=checks,
         profiles=profiles,
         sampler=SamplerSettings(draws=draws, tune=tune, chains=chains),
@@ -346,6 +346,7 @@ def diagnose(
     from rczone.diagnostics import diagnose as run
 
     validation.seed(seed)
+    free = validation.name_list(free, "free") if free is not None else None
     sigma = validation.finite(sigma, "sigma")
     model_error = validation.finite(model_error, "model_error")
     zm = as_model(model)

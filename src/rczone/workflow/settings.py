@@ -109,14 +109,8 @@ class FitSettings:
         if self.free is not None:
             if isinstance(self.free, str):
                 raise ParameterError(f"free must be a sequence of names, got the string {self.free!r}")
-            try:
-                free = tuple(self.free)
-            except TypeError:
-                free = (self.free,)
-            if not all(isinstance(n, str) for n in free):
-                raise ParameterError(f"free must be a sequence of names (text), got {self.free!r}")
-            object.__setattr__(self, "free", free or None)
-        object.__setattr__(self, "constants", dict(self.constants or {}))
+            object.__setattr__(self, "free", tuple(validation.name_list(self.free, "free")) or None)
+        object.__setattr__(self, "constants", dict(validation.mapping(self.constants or {}, "constants")))
         if not isinstance(self.sampler, SamplerSettings):
             raise ParameterError(f"sampler must be a SamplerSettings, got {type(self.sampler).__name__}")
         self.sampler.checked()
