@@ -532,6 +532,19 @@ def design_test(
     from rczone.diagnostics.design import SI_UNIT, DesignLimits
     from rczone.diagnostics.design import design_test as run
 
+    hours = validation.finite(hours, "hours", low=0.0)
+    min_hold = validation.finite(min_hold, "min_hold", low=0.0)
+    initial = None if initial is None else validation.temperature(initial, "initial")
+    band = _pair(band, "band", validation.temperature)
+    actuate = {
+        k: _pair(v, f"actuate[{k!r}]", validation.finite)
+        for k, v in validation.mapping(actuate, "actuate").items()
+    }
+    conditions = {
+        k: validation.finite(v, f"conditions[{k!r}]")
+        for k, v in validation.mapping(conditions or {}, "conditions").items()
+    }
+    free = validation.name_list(free, "free") if free is not None else None
     zm = as_model(model)
     net = zm.network
     names = (
@@ -540,8 +553,15 @@ def design_test(
         else [n for n in net.default_free if net.parameters[n].kind in ("resistance", "capacitance")]
     )
     limits = DesignLimits(dict(actuate), tuple(band), min_hold * 60.0)
-    res = run(zm, names, hours * 3600.0, limits, conditions=dict(conditions or {}), ti0=initial)
+    res = run(zm, names, hours * 3600.0, limits, conditions=conditions, ti0=initial)
     units = {a: SI_UNIT[res.quantities.get(a, "temperature")] for a in res.actuated}
     return dataclasses.replace(
         res, model_label=zm.label, start=start, display_units={**units, res.output: "degC"}
     )
+
+
+def _pair(value: object, name: str, check) -> tuple[float, float]:
+    """Two numbers ``(low, high)``, each passed through ``check(value, name)``."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+        raise ParameterError(f"{name} must be a pair (low, high), got {value!r}")
+    return check(value[0], name), check(value[1], name)
