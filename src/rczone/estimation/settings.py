@@ -115,8 +115,8 @@ class FitSettings:
         if self.free is not None:
             if isinstance(self.free, str):
                 raise ParameterError(f"free must be a sequence of names, got the string {self.free!r}")
-            object.__setattr__(self, "free", tuple(self.free) or None)
-        object.__setattr__(self, "constants", dict(self.constants or {}))
+            object.__setattr__(self, "free", tuple(validation.name_list(self.free, "free")) or None)
+        object.__setattr__(self, "constants", dict(validation.mapping(self.constants or {}, "constants")))
         object.__setattr__(self, "options", method_of(self.method).make_options(self.options))
         _check_search(self)
         if self.hold not in HOLDS:

@@ -248,11 +248,14 @@ class ZoneModel:
                 "the data have no 'time' column (seconds); " + did_you_mean("time", frame.columns)
             )
         cols = {}
+        quantities = self.signal_quantities()
         for name in (*net.input_names, *net.flow_names):
             if name in constants:
                 cols[name] = np.full(len(frame), float(constants[name]))
             elif name in frame:
-                cols[name] = validation.numeric_column(frame, name)
+                cols[name] = validation.within_limits(
+                    validation.numeric_column(frame, name), name, quantities.get(name, "power")
+                )
             elif name in self.inputs.mean_of and all(c in frame for c in self.inputs.mean_of[name]):
                 means = [validation.numeric_column(frame, c) for c in self.inputs.mean_of[name]]
                 cols[name] = np.mean(means, axis=0)

@@ -18,12 +18,15 @@ from rczone.validation.values import (
     input_value,
     integer,
     mapping,
+    measured_outputs,
+    name_list,
     numeric_column,
     sampling_period,
     seed,
     steps_ahead,
     temperature,
     time_axis,
+    within_limits,
 )
 
 __all__ = [
@@ -40,10 +43,13 @@ __all__ = [
     "input_value",
     "integer",
     "mapping",
+    "measured_outputs",
+    "name_list",
     "numeric_column",
     "sampling_period",
     "seed",
     "steps_ahead",
     "temperature",
     "time_axis",
+    "within_limits",
 ]

@@ -313,3 +313,81 @@ def finite_result(frame: Any, what: str) -> Any:
             f" ({values[i, j]:g}); check the initial state, the inputs and the model's values"
         )
     return frame
+
+
+def measured_outputs(frame: Any, outputs: Sequence[str], *, label: str = "data", minimum: int = 1) -> None:
+    """Refuse measured outputs that are infinite, measured fewer than ``minimum`` times, or constant.
+
+    A constant output (a column map that maps it to a value, a stuck sensor) carries nothing to fit
+    or score; an output never measured leaves every score NaN.
+
+    Parameters
+    ----------
+    frame : DataFrame
+        The data; outputs it lacks are left to the caller.
+    outputs : sequence of str
+        The model's measured outputs.
+    label : str
+        The data's name, for the message.
+    minimum : int
+        Fewest measured samples of each output.
+    """
+    for name in outputs:
+        if name not in frame:
+            continue
+        values = within_limits(numeric_column(frame, name), name, "temperature")
+        measured = int(np.isfinite(values).sum())
+        if measured < minimum:
+            raise DataError(
+                f"{label}: only {measured} of {len(values)} samples have a measured {name}; at least {minimum}"
+                " are needed: use a longer record with fewer gaps"
+            )
+        if measured >= 2 and np.nanmin(values) == np.nanmax(values):
+            raise DataError(
+                f"{label}: the measured {name} is {np.nanmin(values):g} at every sample: a constant carries"
+                " nothing to fit (a column map that maps it to a value, or a stuck sensor); map the"
+                " measured column"
+            )
+
+
+def name_list(value: object, name: str) -> list[str]:
+    """A sequence of names (``["Ci", "Rw"]``), not a single string or a number.
+
+    Parameters
+    ----------
+    value : object
+        What the user gave.
+    name : str
+        The argument's name.
+    """
+    if isinstance(value, (str, bytes)) or not isinstance(value, (Sequence, set, frozenset)):
+        raise ParameterError(f"{name} must be a sequence of names, got {printable(repr(value))[:60]}")
+    bad = [v for v in value if not isinstance(v, str)]
+    if bad:
+        raise ParameterError(f"{name} must hold names (text), got {printable(repr(bad[0]))[:60]}")
+    return list(value)
+
+
+def within_limits(values: np.ndarray, name: str, quantity: str) -> np.ndarray:
+    """``values`` of a channel if every finite one is within :data:`INPUT_LIMITS` (missing ones may be NaN).
+
+    Parameters
+    ----------
+    values : ndarray
+        The channel's samples, SI units.
+    name : str
+        The channel, for the message.
+    quantity : str
+        ``"temperature"``, ``"flow"``, ``"power"`` or ``"irradiance"``.
+    """
+    limit = INPUT_LIMITS.get(quantity, INPUT_LIMITS["power"])
+    low = ABSOLUTE_ZERO if quantity == "temperature" else -limit
+    finite_values = np.where(np.isfinite(values), values, 0.0)
+    bad = np.isinf(values) | (finite_values <= low) | (finite_values > limit)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise DataError(
+            f"column {printable(str(name))!r} ({quantity}) is {values[i]:g} at sample {i + 1}, beyond what a"
+            f" building reaches ({low:g} to {limit:g} in SI units); check the unit and the sensor"
+        )
+    return values

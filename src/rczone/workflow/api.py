@@ -151,7 +151,7 @@ def fit(
         n_starts=n_starts,
         seed=seed,
         noise=noise,
-        constants=dict(constants or {}),
+        constants=validation.mapping(constants or {}, "constants"),
         checks=checks,
         profiles=profiles,
         options=options,
@@ -160,6 +160,7 @@ def fit(
         fixed=dict(fixed or {}),
     )
     frame, name = frame_and_label(data, columns, zm)
+    validation.measured_outputs(frame, zm.network.outputs, label=label or name)
     others = {}
     for k, other in enumerate(check_on):
         other, own = other if isinstance(other, tuple) else (other, columns)  # (file, its own map)
@@ -226,6 +227,7 @@ def predict(
         validation.integer(steps, "steps", low=1)
     zm = as_model(model)
     frame, name = frame_and_label(data, columns, zm)
+    validation.measured_outputs(frame, zm.network.outputs, label=label or name)
     start = None
     if warmup is not None:  # a split needs the time axis
         frame = frame_from(frame)
@@ -447,6 +449,7 @@ def diagnose(
     from rczone.diagnostics import diagnose as run
 
     validation.seed(seed)
+    free = validation.name_list(free, "free") if free is not None else None
     sigma = validation.finite(sigma, "sigma")
     model_error = validation.finite(model_error, "model_error")
     zm = as_model(model)
@@ -649,6 +652,19 @@ def design_test(
     from rczone.diagnostics.design import SI_UNIT, DesignLimits
     from rczone.diagnostics.design import design_test as run
 
+    hours = validation.finite(hours, "hours", low=0.0)
+    min_hold = validation.finite(min_hold, "min_hold", low=0.0)
+    initial = None if initial is None else validation.temperature(initial, "initial")
+    band = _pair(band, "band", validation.temperature)
+    actuate = {
+        k: _pair(v, f"actuate[{k!r}]", validation.finite)
+        for k, v in validation.mapping(actuate, "actuate").items()
+    }
+    conditions = {
+        k: validation.finite(v, f"conditions[{k!r}]")
+        for k, v in validation.mapping(conditions or {}, "conditions").items()
+    }
+    free = validation.name_list(free, "free") if free is not None else None
     zm = as_model(model)
     net = zm.network
     names = (
@@ -657,8 +673,15 @@ def design_test(
         else [n for n in net.default_free if net.parameters[n].kind in ("resistance", "capacitance")]
     )
     limits = DesignLimits(dict(actuate), tuple(band), min_hold * 60.0)
-    res = run(zm, names, hours * 3600.0, limits, conditions=dict(conditions or {}), ti0=initial)
+    res = run(zm, names, hours * 3600.0, limits, conditions=conditions, ti0=initial)
     units = {a: SI_UNIT[res.quantities.get(a, "temperature")] for a in res.actuated}
     return dataclasses.replace(
         res, model_label=zm.label, start=start, display_units={**units, res.output: "degC"}
     )
+
+
+def _pair(value: object, name: str, check) -> tuple[float, float]:
+    """Two numbers ``(low, high)``, each passed through ``check(value, name)``."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+        raise ParameterError(f"{name} must be a pair (low, high), got {value!r}")
+    return check(value[0], name), check(value[1], name)

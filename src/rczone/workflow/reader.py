@@ -10,9 +10,9 @@ import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
+from rczone import validation
 from rczone.errors import DataError
 from rczone.estimation.data import MIN_MEASURED
 
@@ -46,23 +46,7 @@ def read_frame(
             f"data file {str(path)!r} does not exist (built-in data sets: {', '.join(datasets.names())})"
         )
     frame = load_zone_data(path, column_map, signals=signals, required=required).to_frame()
-    for name in outputs:
-        if name not in frame:
-            continue
-        values = frame[name].to_numpy(float)
-        measured = int(np.isfinite(values).sum())
-        if measured >= MIN_MEASURED and np.nanmin(values) == np.nanmax(values):
-            raise DataError(
-                f"{path}: the measured {name} is {np.nanmin(values):g} at every sample: a constant carries"
-                " nothing to fit (a column map that maps it to a value, or a stuck sensor); map the"
-                " measured column"
-            )
-        if measured < MIN_MEASURED:
-            raise DataError(
-                f"{path}: only {measured} of {len(frame)} samples have a measured {name};"
-                f" at least {MIN_MEASURED} are needed (rczone.estimation.data.MIN_MEASURED): use a longer"
-                " record with fewer gaps"
-            )
+    validation.measured_outputs(frame, outputs, label=str(path), minimum=MIN_MEASURED)
     return frame
 
 

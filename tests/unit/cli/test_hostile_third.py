@@ -343,3 +343,22 @@ def test_a_fit_that_holds_every_r_and_c_says_it_is_an_evaluation():
     cal = rczone.fit("TiTe", zone_frame(), fixed=fixed, n_starts=1, checks=False)
     assert set(cal.result.parameters) <= {"sigma_v", "sigma_w_Ti"}
     assert any("evaluation of the model at its values" in n for n in cal.verdict.notes)
+
+
+TERMINATED = """
+import os, signal, sys
+from rczone.cli.interrupt import noting_ctrl_c
+with noting_ctrl_c() as ctrl_c:
+    try:
+        os.kill(os.getpid(), signal.SIGTERM)
+        signal.pause()
+    except KeyboardInterrupt:
+        sys.exit(130 if ctrl_c() else 1)
+sys.exit(0)
+"""
+
+
+@POSIX
+def test_sigterm_ends_a_command_as_ctrl_c_does():
+    done = subprocess.run([sys.executable, "-c", TERMINATED], env=_env(), timeout=120, capture_output=True)
+    assert done.returncode == 130, done.stderr
