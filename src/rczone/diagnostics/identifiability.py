@@ -533,7 +533,8 @@ def _with_excitation(
         if group is not None:
             reasons.insert(0, exc.finding(group))
             advice = exc.finding(group).split("; ", 1)[1]
-            verdict = WEAK if verdict == IDENTIFIABLE else verdict
+            if _degenerate(group, exc, owners, verdicts, near):
+                verdict = WEAK if verdict == IDENTIFIABLE else verdict
         side = near.get(name)
         if side and not v.at_bound:
             reasons.insert(0, f"its value {v.value:.4g} lies within {VERDICT_MARGIN:.0%} of its {side} bound")
@@ -541,6 +542,27 @@ def _with_excitation(
         changed = dict(reason="; ".join(r for r in reasons if r), advice=advice, verdict=verdict)
         out[name] = dataclasses.replace(v, **changed) if (group is not None or side) else v
     return out
+
+
+#: Inputs correlated at least this closely are treated as one: the Fisher information of their
+#: separate effects rests on the last percent of their difference, which any model error swamps.
+EXACT_COLLINEAR = 0.99
+
+
+def _degenerate(group, exc: Excitation, owners, verdicts, near: Mapping[str, str]) -> bool:
+    """Whether a collinear group makes the Fisher analysis of its parameters unreliable.
+
+    When the inputs move together almost exactly (``|r| >=`` :data:`EXACT_COLLINEAR`), or when a
+    parameter through which one of them acts sits at or near a bound (the analysis is then read at a
+    degenerate point), the expected standard errors say nothing about the separate effects. Otherwise
+    (two boundary temperatures that drift together at 0.95 over a night, say) the Fisher information
+    already carries the collinearity, and its verdict stands with the finding as a note.
+    """
+    inside = [abs(r) for a, b, r in exc.pairs if a in group and b in group]
+    if inside and max(inside) >= EXACT_COLLINEAR:
+        return True
+    members = [p for p, ins in owners.items() if set(ins) & set(group)]
+    return any(near.get(p) or (p in verdicts and verdicts[p].at_bound) for p in members)
 
 
 def _pinned_words(pinned: Mapping[str, str]) -> str:
