@@ -177,8 +177,8 @@ def result_or_one_line(call, *, nan_ok: tuple[str, ...] = ()):
 @given(st.sampled_from(["seed", "n_starts", "draws", "tune", "chains"]), bad_integers)
 def test_fit_refuses_hostile_integers(name, value):
     kw = {name: value}
-    if name in ("draws", "tune", "chains"):
-        kw["method"] = "mcmc"
+    if name in ("draws", "tune", "chains"):  # the sampler's own options
+        kw = {"method": "mcmc", "options": {name: value}}
     result_or_one_line(lambda: rczone.fit(MODEL, DATA, checks=False, **kw))
 
 

@@ -375,10 +375,12 @@ def simulate(
     m = m if m.shape[1] else None
     ss = zm.state_space()
     start = None
+    given_x0 = {
+        k: validation.temperature(v, f"x0 of {k}") for k, v in validation.mapping(x0 or {}, "x0").items()
+    }
     first = {o: given[o].iloc[0] for o in zm.network.outputs if o not in missing and o in ss.state_names}
-    x0 = {**{o: float(v) for o, v in first.items() if pd.notna(v)}, **dict(x0 or {})}
+    x0 = {**{o: float(v) for o, v in first.items() if pd.notna(v)}, **given_x0}
     if x0:
-        x0 = {k: validation.temperature(v, f"x0 of {k}") for k, v in validation.mapping(x0, "x0").items()}
         unknown = sorted(set(x0) - set(ss.state_names))
         if unknown:
             raise ParameterError(
