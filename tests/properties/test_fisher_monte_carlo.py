@@ -36,7 +36,7 @@ def test_expected_standard_errors_match_monte_carlo_spread():
     for _ in range(24):
         frame = base.copy()
         frame["Ti"] = clean + SIGMA * rng.standard_normal(t.size)
-        cal = calibrate(net, frame, "ls", free=["Cr", "Rw", "x0_Ti", "x0_Tw"], uncertainty=False)
+        cal = calibrate(net, frame, method="ls", free=["Cr", "Rw", "x0_Ti", "x0_Tw"], uncertainty=False)
         logs.append([np.log(cal.result.estimates[n]) for n in ("Cr", "Rw")])
     spread = np.std(np.array(logs), axis=0, ddof=1)
     frame = base.copy()

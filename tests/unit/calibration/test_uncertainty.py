@@ -17,7 +17,7 @@ def zone():
 
 @pytest.fixture(scope="module")
 def ml(zone):
-    return calibrate(TRUE_MODEL, zone.iloc[:400], "ml", n_starts=2)
+    return calibrate(TRUE_MODEL, zone.iloc[:400], method="ml", n_starts=2)
 
 
 def test_ml_fit_carries_its_innovations_and_ls_its_labelled_open_loop_residuals(zone, ml):
@@ -25,7 +25,7 @@ def test_ml_fit_carries_its_innovations_and_ls_its_labelled_open_loop_residuals(
     assert ml.open_loop_residuals.kind == "open-loop"
     # the open-loop error of even a good fit is far from white; the innovations are not
     assert ml.open_loop_residuals.outputs[0].acf[1] > 0.8 > abs(ml.innovations.outputs[0].acf[1])
-    ls = calibrate(TRUE_MODEL, zone.iloc[:400], "ls", n_starts=1)
+    ls = calibrate(TRUE_MODEL, zone.iloc[:400], method="ls", n_starts=1)
     assert ls.innovations is None and "not expected to be white" in ls.open_loop_residuals.note
 
 
@@ -61,7 +61,7 @@ def test_k_steps_need_noise_levels_and_a_malformed_covariance_is_an_error(zone, 
 def test_no_residual_analysis_on_a_handful_of_measurements(zone):
     few = zone.iloc[:200].copy()
     few.loc[few.index[8:], "Ti"] = np.nan  # eight measured samples
-    cal = calibrate(TRUE_MODEL, few, "ml", n_starts=1, uncertainty=False)
+    cal = calibrate(TRUE_MODEL, few, method="ml", n_starts=1, uncertainty=False)
     assert cal.innovations is None and cal.open_loop_residuals is None
 
 
@@ -98,7 +98,7 @@ def test_saved_draws_replace_the_covariance_in_the_band(zone, ml):
 def test_without_analyses_the_fit_and_its_open_loop_check_are_the_full_calibrations(zone, ml):
     # what batch calibration stores is computed as the full calibration computes it; only the analyses
     # a reader of one fit looks at are left out
-    lean = calibrate(TRUE_MODEL, zone.iloc[:400], "ml", n_starts=2, analyses=False)
+    lean = calibrate(TRUE_MODEL, zone.iloc[:400], method="ml", n_starts=2, analyses=False)
     assert lean.result.estimates == ml.result.estimates and lean.result.std_errors == ml.result.std_errors
     assert lean.result.flags == ml.result.flags and lean.result.llf == ml.result.llf
     np.testing.assert_array_equal(lean.open_loop.error, ml.open_loop.error)
@@ -113,7 +113,7 @@ def test_a_data_set_built_by_the_caller_gives_the_same_calibration(zone, ml):
     from rczone.calibration.dataset import dataset
 
     frame = zone.iloc[:400]
-    given = calibrate(TRUE_MODEL, frame, "ml", n_starts=2, data=dataset(TRUE_MODEL, frame))
+    given = calibrate(TRUE_MODEL, frame, method="ml", n_starts=2, data=dataset(TRUE_MODEL, frame))
     assert given.result.estimates == ml.result.estimates and given.result.std_errors == ml.result.std_errors
     np.testing.assert_array_equal(given.open_loop.error, ml.open_loop.error)
     assert given.model.provenance["stretch"] == ml.model.provenance["stretch"]

@@ -101,5 +101,5 @@ def test_a_batch_zone_from_a_frame_is_flagged(fahrenheit):
 
     with pytest.warns(RczoneWarning, match="degF"):
         data = dataset(MODEL, fahrenheit)
-    cal = calibrate(MODEL, fahrenheit, "ls", n_starts=1, analyses=False, data=data)
+    cal = calibrate(MODEL, fahrenheit, method="ls", n_starts=1, analyses=False, data=data)
     assert not cal.verdict.trustworthy and cal.data_warnings == data.warnings

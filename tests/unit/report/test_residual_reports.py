@@ -19,7 +19,7 @@ def zone():
 
 
 def test_ml_report_shows_innovations_profiles_and_units(zone, tmp_path):
-    cal = calibrate(TRUE_MODEL, zone, "ml", n_starts=1)
+    cal = calibrate(TRUE_MODEL, zone, method="ml", n_starts=1)
     prof = {
         k: v.to_dict()
         for k, v in profile_checks(cal.model, zone, cal.result, names=["Ci"], n_points=5).items()
@@ -41,7 +41,7 @@ def test_ml_report_shows_innovations_profiles_and_units(zone, tmp_path):
 
 
 def test_ls_report_labels_open_loop_residuals(zone):
-    cal = calibrate(TRUE_MODEL, zone, "ls", n_starts=1)
+    cal = calibrate(TRUE_MODEL, zone, method="ls", n_starts=1)
     html = fit_report(cal, zone, "zone", TRUE_MODEL, None).render()
     row = parameter_rows(cal)[0]  # a family model starts from generic values, not construction data
     assert "generic start" in row and "construction" not in row and "estimate / construction" not in row

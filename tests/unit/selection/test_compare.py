@@ -177,4 +177,4 @@ def test_a_warm_start_from_a_measurement_noise_at_its_floor_starts_inside_the_bo
     nest = nesting(simple.network, rich.network, candidate_free(simple.network), free)
     warm = _warm_start(rich, SimpleNamespace(calibration=SimpleNamespace(model=simple)), nest)
     assert warm.noise["sigma_v"] == pytest.approx(1.01 * floor, rel=1e-12)
-    assert calibrate(warm, zone, "ml", free, n_starts=1).result.llf > 0  # the start is accepted
+    assert calibrate(warm, zone, method="ml", free=free, n_starts=1).result.llf > 0  # the start is accepted
