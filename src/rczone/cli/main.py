@@ -23,12 +23,14 @@ from rczone.errors import RczoneError
 #: fit many zones, control; then the paper's demo, the reference checks and the version.
 WORKFLOW_ORDER = (
     "models",
+    "methods",
     "diagnose",
     "design",
     "fit",
     "predict",
     "select",
     "fit-many",
+    "emulate",
     "control-test",
     "demo",
     "validate",

@@ -255,7 +255,6 @@ def sample(logp: LogPosterior, *, settings: McmcOptions, rng: np.random.Generato
     """
     import arviz as az
 
-    settings = settings.checked()
     spec = logp.objective.spec
     t0 = time.perf_counter()
     mode = minimize_from(logp.objective, spec, spec.start, "lbfgs")
