@@ -210,7 +210,14 @@ def part2() -> None:
 
     def fit(df, meth):
         cal = calibrate(
-            net, df, method=meth, free=PAPER_FREE[meth], n_starts=3, seed=1, constants=const, uncertainty=False
+            net,
+            df,
+            method=meth,
+            free=PAPER_FREE[meth],
+            n_starts=3,
+            seed=1,
+            constants=const,
+            uncertainty=False,
         )
         return cal.result.estimates["Rw"], cal.open_loop.rmse_K, any(cal.result.at_bound.values())
 

@@ -178,8 +178,8 @@ def fit(
         noisy = [n for n in free if is_noise_name(n)]
         if noisy:
             raise ParameterError(
-                f"noise parameter(s) {noisy} cannot be estimated by {meth.title} (it has no noise model);"
-                " use method='ml' or 'map'"
+                f"noise parameter(s) {noisy} cannot be estimated by"
+                f" {'least squares' if meth.kernel == 'ls' else meth.title} (no noise model); use method='ml' or 'map'"
             )
     rng = np.random.default_rng(settings.seed) if rng is None else rng
     ss0 = network.state_space()

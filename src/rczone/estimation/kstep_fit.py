@@ -35,7 +35,7 @@ from rczone.estimation.data import Dataset
 from rczone.estimation.kstep import check_horizons, kstep_cost, noise_scale, sandwich_covariance
 from rczone.estimation.result import FitResult
 from rczone.network import RCNetwork
-from rczone.network.stochastic import MEASUREMENT_NOISE, is_noise_name, kind_of
+from rczone.network.stochastic import INITIAL_STATE, MEASUREMENT_NOISE, is_noise_name, kind_of
 from rczone.results import Result
 
 
@@ -166,7 +166,7 @@ def fit_kstep(
     elif ml.method != "ml":
         raise ParameterError(f"a k-step fit starts from a maximum-likelihood fit, got method {ml.method!r}")
     base = {**ml.fixed, **{n: e.value for n, e in ml.parameters.items()}}
-    names = [n for n in ml.parameters if kind_of(n) != MEASUREMENT_NOISE and not n.startswith("x0_")]
+    names = [n for n in ml.parameters if kind_of(n) not in (MEASUREMENT_NOISE, INITIAL_STATE)]
     if any(ml.parameters[n].value <= 0 for n in names):
         raise ParameterError(
             "a k-step fit searches the log of positive parameters; a free one is not positive"
@@ -194,7 +194,7 @@ def fit_kstep(
     values = {**base, **dict(zip(names, np.exp(res.x)))}
     at = kstep_cost(network, values, data, hs, wrt=names, hold=hold)
     scale = noise_scale(network, values, data, hold)
-    values = {k: (v * scale if is_noise_name(k) and k.startswith("sigma_") else v) for k, v in values.items()}
+    values = {k: (v * scale if is_noise_name(k) else v) for k, v in values.items()}
     cov = sandwich_covariance(at, hs[-1])
     se = {
         n: (scale if is_noise_name(n) else 1.0) * math.sqrt(cov[i, i]) if cov[i, i] >= 0 else math.nan

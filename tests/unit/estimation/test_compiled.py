@@ -105,7 +105,7 @@ def test_problems_the_compiled_path_cannot_take_go_the_general_way() -> None:
 @pytest.mark.parametrize("method", ["ls", "ml", "map"])
 def test_compiled_search_ends_where_scipy_ends(method, monkeypatch) -> None:
     data = noisy_data(seed=5)
-    kw = {"correlation_time_s": 3000.0} if method == "map" else {}
+    kw = {"options": {"correlation_time_s": 3000.0}} if method == "map" else {}
     compiled = fit(NET2, data, FREE[method], method=method, **kw)
     monkeypatch.setattr(compiled_module, "compiled_problem", lambda objective: None)  # the general engine
     python = fit(NET2, data, FREE[method], method=method, **kw)

@@ -97,7 +97,7 @@ def test_estimate_at_a_bound_is_flagged() -> None:
         ({"free": ["Cx"]}, ParameterError, r"unknown free parameter 'Cx'; did you mean .*'Cr'"),
         ({"method": "ols"}, ParameterError, "method must be one of"),
         ({"optimizer": "bfgs"}, ParameterError, "optimizer must be 'auto' or one of"),
-        ({"n_starts": 0}, ParameterError, "n_starts must be a positive integer"),
+        ({"n_starts": 0}, ParameterError, "n_starts must be None .automatic. or an integer from 1"),
         ({"initial_state": "rest"}, ParameterError, "initial_state must be"),
         ({"hold": "linear"}, ParameterError, "hold must be one of"),
         ({"free": ["Cr", "sigma_v"]}, ParameterError, "cannot be estimated by least squares"),

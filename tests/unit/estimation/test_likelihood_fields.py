@@ -39,7 +39,7 @@ def test_llf_is_the_likelihood_of_the_plain_filter_at_the_estimates(method, data
         optimizer="lbfgs",
         n_starts=1,
         fixed=FIXED,
-        options={"correlation_time_s": 6000.0},  # 10 samples
+        options={"correlation_time_s": 6000.0} if method == "map" else None,  # 10 samples
     )
     assert res.llf == pytest.approx(_reference_loglik(res, data), rel=1e-8)
     k, n = 3, int(np.isfinite(data.y).sum())
