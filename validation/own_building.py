@@ -165,6 +165,7 @@ def run_case(
             "neg_log_likelihood": d["objective_value"],
             "estimates": {k: v["estimate"] for k, v in d["parameters"].items()},
             "issues": d["issues"],
+            "reasons": d["verdict"]["reasons"],
             "search": d["search"]["reason"],
             "n_evals": d["n_evals"],
         }
