@@ -293,14 +293,21 @@ def test_a_manifest_is_validated_whole_before_anything_runs(tmp_path, capsys, zo
     assert not (tmp_path / "out" / "results").exists()
 
 
+# The coordinator's pid is taken before the fork, as the runner passes it (initargs=(os.getpid(),)):
+# read in the child with os.getppid(), it would name the reaper if the coordinator died first. The
+# worker says when it is watching, so the kill cannot come before the watch is in place.
 WATCHED = """
 import os, sys, time
 from rczone.batch.runner import _leave_ctrl_c_to_the_parent
+parent = os.getpid()
+r, w = os.pipe()
 child = os.fork()
 if child == 0:
-    _leave_ctrl_c_to_the_parent(os.getppid())
+    _leave_ctrl_c_to_the_parent(parent)
+    os.write(w, b"x")
     time.sleep(60)
     os._exit(0)
+os.read(r, 1)
 print(child, flush=True)
 time.sleep(60)
 """
