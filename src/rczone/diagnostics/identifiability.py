@@ -473,14 +473,8 @@ def parameters_at_bound(
     a factor 1000 around the declared value); "at" is within 0.1 % of its width in the optimizer's
     variable (:meth:`~rczone.estimation.parameters.ParameterSpec.near_bound`).
     """
-    from rczone.estimation.parameters import make_spec
-
-    names = [n for n in names if n in network.parameters and network.parameters[n].expr is None]
-    if not names:
-        return {}
-    try:
-        spec = make_spec(network, names)
-    except ParameterError:
+    spec = _search_box(network, names)
+    if spec is None:
         return {}
     values = network.values(theta)
     th = np.array([values[n] for n in spec.names], dtype=float)
@@ -488,6 +482,19 @@ def parameters_at_bound(
     eta = spec.to_eta(th)
     mid = 0.5 * (spec.eta_lower + spec.eta_upper)
     return {n: ("upper" if e > c else "lower") for n, e, c, hit in zip(spec.names, eta, mid, near) if hit}
+
+
+def _search_box(network: RCNetwork, names: Sequence[str]):
+    """The parameter spec (search box) of the untied ``names`` a fit would use; None when there is none."""
+    from rczone.estimation.parameters import make_spec
+
+    names = [n for n in names if n in network.parameters and network.parameters[n].expr is None]
+    if not names:
+        return None
+    try:
+        return make_spec(network, names)
+    except ParameterError:
+        return None
 
 
 def parameters_near_bound(
@@ -499,14 +506,8 @@ def parameters_near_bound(
     it is not "identifiable" whatever the local quantities say (issue 38). The box is the one of
     :func:`parameters_at_bound`.
     """
-    from rczone.estimation.parameters import make_spec
-
-    names = [n for n in names if n in network.parameters and network.parameters[n].expr is None]
-    if not names:
-        return {}
-    try:
-        spec = make_spec(network, names)
-    except ParameterError:
+    spec = _search_box(network, names)
+    if spec is None:
         return {}
     values = network.values(theta)
     out = {}
