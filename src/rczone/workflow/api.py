@@ -22,6 +22,7 @@ from rczone.calibration.dataset import time_index
 from rczone.errors import ParameterError
 from rczone.estimation.methods import DEFAULT_METHOD, MethodOptions
 from rczone.estimation.settings import FitSettings
+from rczone.kernels.blas import single_threaded
 from rczone.models import ZoneModel
 from rczone.workflow.checks import fit_and_check
 from rczone.workflow.datasource import DataSource, data_source, frame_and_label
@@ -59,6 +60,7 @@ def load_data(
     return data_source(source, columns).frame(zm)
 
 
+@single_threaded
 def fit(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -178,6 +180,7 @@ def fit(
     return cal
 
 
+@single_threaded
 def predict(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -247,6 +250,7 @@ def predict(
     )
 
 
+@single_threaded
 def score_horizons(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -316,6 +320,7 @@ def score_horizons(
     )
 
 
+@single_threaded
 def simulate(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -399,6 +404,7 @@ def simulate(
     return out
 
 
+@single_threaded
 def diagnose(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -504,6 +510,7 @@ def read_for_models(
     return read_frame(source, columns, signals, needed if required is None else list(required), outputs)
 
 
+@single_threaded
 def select_models(
     models: Sequence[ModelLike],
     data: pd.DataFrame | PathLike,
@@ -608,6 +615,7 @@ def select_models(
     )
 
 
+@single_threaded
 def design_test(
     model: ModelLike,
     *,
