@@ -7,6 +7,7 @@ command prints (``summary()``) and serializes to what its ``--json`` writes (``t
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import os
 from collections.abc import Mapping, Sequence
@@ -24,7 +25,7 @@ from rczone.estimation.methods import DEFAULT_METHOD, MethodOptions
 from rczone.estimation.settings import FitSettings
 from rczone.kernels.blas import single_threaded
 from rczone.models import ZoneModel
-from rczone.workflow.checks import fit_and_check
+from rczone.workflow.checks import defer_checks, fit_and_check
 from rczone.workflow.datasource import DataSource, data_source, frame_and_label
 from rczone.workflow.holdout import before, conformal_settings, score_held_out, split_time
 
@@ -116,7 +117,9 @@ def fit(
         ``(file, column_map)`` reads the file with its own map (``--check-on FILE:MAP``).
     checks : bool
         Make the checks after the fit (identifiability at the estimates, profiles), as
-        ``rczone fit --json`` does; they enter the one verdict.
+        ``rczone fit --json`` does; they enter the one verdict. They are made when first read
+        (``verdict``, ``checks``, ``identifiability``, ``summary()``, ``to_dict()``), so that a
+        user who wants the estimates pays for the estimates (:attr:`Calibration.pending`).
     profiles : bool
         With ``checks``: profile each R and C over a factor of ten.
     hold : {"zoh", "foh"}
@@ -172,11 +175,14 @@ def fit(
     if holdout is not None:  # a split needs the time axis
         frame = frame_from(frame)
         at = split_time(frame, holdout, model=zm, columns=columns)
-    cal = fit_and_check(zm, frame, settings, label=label or name, others=others, holdout=at)
+    now = dataclasses.replace(settings, checks=False)  # the checks are made when first read
+    cal = fit_and_check(zm, frame, now, label=label or name, holdout=at)
     if floor_area is not None and cal.plausibility is not None:
         from rczone.calibration.reference import with_floor_area
 
         cal = with_floor_area(cal, zm, before(frame, at), floor_area)
+    if checks or others:
+        cal = defer_checks(cal, before(frame, at), settings, others=others)
     return cal
 
 
