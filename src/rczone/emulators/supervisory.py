@@ -12,9 +12,10 @@ multi-zone test cases). :class:`SupervisoryMPC`, every plant step:
    flow with that heat at the room node is the fitted model: its supply-air term is that heat);
 2. **plans** over ``horizon`` steps the heating ``h_k >= 0`` and cooling ``c_k >= 0`` (W) that keep
    the predicted room temperature inside the comfort band narrowed by ``margin_K`` (soft, slack
-   penalised linearly and quadratically) at the least price-weighted energy, heating at
+   penalised by a convex piecewise-linear cost) at the least price-weighted energy, heating at
    ``heating_efficiency``, cooling at ``cooling_cop``, each at most its capacity: a linear model and
-   a convex QP (OSQP [3]_) in condensed form;
+   a linear program in condensed form, solved by HiGHS's dual simplex [3]_ (scipy's ``linprog``;
+   an ADMM QP solver needed thousands of iterations on this nearly linear problem);
 3. **acts**: the plan's room temperature at the end of the step becomes the heating set point if
    the plan heats in this step and the cooling set point if it cools; the other set point is the
    band's edge, so the building's thermostat still guards the band. Both are held to the plant's
@@ -31,8 +32,8 @@ References
 .. [2] D. Blum et al., "Building optimization testing framework (BOPTEST) for simulation-based
    benchmarking of control strategies in buildings", J. Building Performance Simulation 14(5)
    (2021) 586-610.
-.. [3] B. Stellato, G. Banjac, P. Goulart, A. Bemporad, S. Boyd, "OSQP: an operator splitting
-   solver for quadratic programs", Mathematical Programming Computation 12 (2020) 637-672.
+.. [3] Q. Huangfu, J. A. J. Hall, "Parallelizing the dual revised simplex method", Mathematical
+   Programming Computation 10 (2018) 119-142 (HiGHS).
 """
 
 from __future__ import annotations
@@ -44,11 +45,10 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
-import scipy.sparse as sp
+from scipy.optimize import linprog
 
 from rczone.control.disturbance import Disturbance
 from rczone.control.model import ControlModel
-from rczone.control.mpc import _osqp
 from rczone.control.observer import Estimate, KalmanObserver
 from rczone.errors import ParameterError, RczoneError
 from rczone.models.zone import ZoneModel
@@ -67,8 +67,10 @@ class SupervisorySettings:
         Largest heat the zone's HVAC can add or remove, W.
     heating_efficiency, cooling_cop : float
         Energy per heat: heating at ``1/heating_efficiency``, cooling at ``1/cooling_cop``.
-    comfort_weight, comfort_weight_quadratic : float
-        Cost per K and per K^2 outside the (narrowed) band, per step.
+    comfort_weight, comfort_weight_steep : float
+        Cost per K outside the (narrowed) band per step, and the cost added per K beyond
+        ``slack_tier_K`` (a convex piecewise-linear penalty: a linear program).
+    slack_tier_K : float
     margin_K : float
         The band the plan aims at is narrowed by this much on either side, K.
     """
@@ -79,7 +81,8 @@ class SupervisorySettings:
     heating_efficiency: float = 1.0
     cooling_cop: float = 3.0
     comfort_weight: float = 5.0
-    comfort_weight_quadratic: float = 50.0
+    comfort_weight_steep: float = 50.0
+    slack_tier_K: float = 0.3
     margin_K: float = 0.1
 
     def __post_init__(self) -> None:
@@ -89,7 +92,7 @@ class SupervisorySettings:
             v = getattr(self, k)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ParameterError(f"supervisory MPC setting {k} must be a finite number > 0, got {v!r}")
-        for k in ("comfort_weight", "comfort_weight_quadratic", "margin_K"):
+        for k in ("comfort_weight", "comfort_weight_steep", "slack_tier_K", "margin_K"):
             v = getattr(self, k)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ParameterError(f"supervisory MPC setting {k} must be a finite number >= 0, got {v!r}")
@@ -97,7 +100,7 @@ class SupervisorySettings:
 
 class HeatPlan(NamedTuple):
     """A plan: heating and cooling (H,) W, predicted room temperature (H + 1,) degC, slack (H,) K,
-    QP status and solve time (s)."""
+    solver status and solve time (s)."""
 
     heating: np.ndarray
     cooling: np.ndarray
@@ -200,39 +203,31 @@ class SupervisoryMPC:
         hi = np.asarray(upper, float)[1 : H + 1] - s.margin_K
         hi = np.maximum(hi, lo)
         free = np.array(free)
-        eye = sp.eye(H, format="csc")
-        Gs = sp.csc_matrix(G)
-        Acon = sp.vstack(
-            [
-                sp.hstack([Gs, -Gs, eye]),
-                sp.hstack([Gs, -Gs, -eye]),
-                sp.block_diag([eye, eye, eye]),
-            ],
-            format="csc",
-        )
-        l_ = np.r_[lo - free, np.full(H, -np.inf), np.zeros(3 * H)]
-        u_ = np.r_[
-            np.full(H, np.inf),
-            hi - free,
-            np.full(H, s.heating_capacity / 1e3),
-            np.full(H, s.cooling_capacity / 1e3),
-            np.full(H, np.inf),
-        ]
         w = np.asarray(price, float)[:H] * self.dt / 3600.0  # per kW held a step: kWh x price
-        q = np.r_[w / s.heating_efficiency, w / s.cooling_cop, np.full(H, s.comfort_weight)]
-        P = sp.block_diag([1e-4 * eye, 1e-4 * eye, 2 * s.comfort_weight_quadratic * eye], format="csc")
-        solver = _osqp().OSQP()
-        solver.setup(
-            P, q, Acon, l_, u_, verbose=False, eps_abs=1e-6, eps_rel=1e-6, max_iter=20000, polishing=True
+        cost = np.r_[
+            w / s.heating_efficiency,
+            w / s.cooling_cop,
+            np.full(H, s.comfort_weight),
+            np.full(H, s.comfort_weight + s.comfort_weight_steep),
+        ]
+        one = np.eye(H)
+        # G (h - c) + s1 + s2 >= lo - free;  G (h - c) - s1 - s2 <= hi - free
+        A_ub = np.block([[-G, G, -one, -one], [G, -G, -one, -one]])
+        b_ub = np.r_[free - lo, hi - free]
+        bounds = (
+            [(0.0, s.heating_capacity / 1e3)] * H
+            + [(0.0, s.cooling_capacity / 1e3)] * H
+            + [(0.0, s.slack_tier_K)] * H
+            + [(0.0, None)] * H
         )
         t0 = _time.perf_counter()
-        res = solver.solve(raise_error=False)
+        res = linprog(cost, A_ub=A_ub, b_ub=b_ub, bounds=bounds, method="highs")
         elapsed = _time.perf_counter() - t0
-        if res.x is None or not np.all(np.isfinite(res.x)):
-            raise RczoneError(f"the supervisory MPC's QP could not be solved ({res.info.status})")
-        h, c, sl = (np.clip(res.x[i * H : (i + 1) * H], 0.0, None) for i in range(3))
+        if res.status != 0 or res.x is None:
+            raise RczoneError(f"the supervisory MPC's linear program could not be solved ({res.message})")
+        h, c, s1, s2 = (np.clip(res.x[i * H : (i + 1) * H], 0.0, None) for i in range(4))
         y = np.r_[C @ x0 + D @ u[0], free + G @ (h - c)]
-        return HeatPlan(h * 1e3, c * 1e3, y, sl, str(res.info.status), elapsed)
+        return HeatPlan(h * 1e3, c * 1e3, y, s1 + s2, "optimal", elapsed)
 
     def act(self, t: float, measurements: Mapping[str, float], forecast: Mapping[str, np.ndarray]) -> dict:
         """Observe, plan, and give the thermostat its set points for the next step (module notes)."""
