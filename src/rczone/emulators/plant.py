@@ -33,7 +33,8 @@ column map of ``rczone emulate`` defines it).
 scenario (:mod:`rczone.emulators.forecasts`: none, low, medium, high), the price (``flat``,
 ``tou``, ``dr`` of :mod:`rczone.control.signals`, by the local hour), and the comfort band of the
 prototype's thermostat schedule (:data:`SCHEDULES`: occupied weekday hours and band; otherwise
-its setback band).
+its setback band). Schedules and prices follow the building's clock, an hour ahead of the plant's
+standard time during daylight saving, as EnergyPlus shifts the prototypes' schedules.
 
 **Scores** from EnergyPlus's own values: ``comfort_Kh`` (and ``comfort_Kh_<zone>``) from the true
 zone temperatures outside the band over the occupied hours; ``energy_kWh`` and ``cost`` (price
@@ -101,6 +102,27 @@ PRICE_SHIFT = 6 * 3600.0
 POWER_NOISE = 0.01
 
 
+def _nth_sunday(year: int, month: int, n: int) -> dt.date:
+    first = dt.date(year, month, 1)
+    return first + dt.timedelta(days=(6 - first.weekday()) % 7 + 7 * (n - 1))
+
+
+def daylight_saving(objects, year: int) -> tuple[dt.date, dt.date] | None:
+    """The prototype's daylight saving period (its ``RunPeriodControl:DaylightSavingTime``), or None.
+
+    EnergyPlus keeps its clock on standard time and shifts the schedules; the prototypes use the
+    US rule, second Sunday in March to first Sunday in November (the only one read here).
+    """
+    for o in objects:
+        if o.is_a("RunPeriodControl:DaylightSavingTime"):
+            if o.field(0).lower().startswith("2nd sunday in march") and o.field(1).lower().startswith(
+                "1st sunday in november"
+            ):
+                return _nth_sunday(year, 3, 2), _nth_sunday(year, 11, 1)
+            raise EmulatorError(f"unsupported daylight saving period {o.field(0)!r} to {o.field(1)!r}")
+    return None
+
+
 class EnergyPlusPlant:
     """An EnergyPlus prototype as a plant (see the module notes).
 
@@ -159,6 +181,7 @@ class EnergyPlusPlant:
         self._closed = False
         self._weather = outdoor_temperatures(self._em._epw)
         self.neighbours: dict[str, dict[str, float]] = {}
+        self._dst = daylight_saving(self._em._objects, self._em.start.year)
         #: The controlled zones' floor areas, m2 (known once EnergyPlus has started).
         self.floor_area: dict[str, float] = {}
 
@@ -351,7 +374,9 @@ class EnergyPlusPlant:
             self._error, t - now, self._forecast_rng
         )
         out = {"time": t, "To": to, "T_ahu": np.full_like(t, np.nan)}
-        out["price"] = forecast_price(self.price, now + PRICE_SHIFT, t + PRICE_SHIFT)
+        out["price"] = forecast_price(
+            self.price, self._clock(now) + PRICE_SHIFT, self._clock(t) + PRICE_SHIFT
+        )
         for z in self.zones:
             out[f"occupied_{z}"] = occ.astype(float)
             out[f"lower_{z}"], out[f"upper_{z}"] = lo, hi
@@ -374,8 +399,16 @@ class EnergyPlusPlant:
             out[f"cooling_max_{z}"] = lim[:, :, 3].min(axis=1)
         return out
 
-    def _occupied(self, t: np.ndarray) -> np.ndarray:
+    def _clock(self, t: np.ndarray) -> np.ndarray:
+        """Plant time (standard time) as the building's clock reads it: an hour on in daylight saving."""
         t = np.asarray(t, float)
+        if self._dst is None:
+            return t
+        day = [self._em.start + dt.timedelta(days=int(d)) for d in np.floor(t / 86400.0)]
+        return t + 3600.0 * np.array([self._dst[0] <= d < self._dst[1] for d in day], dtype=float)
+
+    def _occupied(self, t: np.ndarray) -> np.ndarray:
+        t = self._clock(t)
         day = np.floor(t / 86400.0).astype(int)
         weekday = np.array([(self._em.start + dt.timedelta(days=int(d))).weekday() < 5 for d in day])
         hour = (t % 86400.0) / 3600.0
@@ -391,7 +424,7 @@ class EnergyPlusPlant:
         t = np.array([r["time"] for r in rows]) - self.dt
         occ, lo, hi = self._band(t + self.dt)
         h, kwh = self.dt / 3600.0, self.dt / 3.6e6
-        price = price_signal(self.price, t + PRICE_SHIFT)
+        price = price_signal(self.price, self._clock(t) + PRICE_SHIFT)
         out: dict[str, Any] = {"emulator": "energyplus"}
         comfort, power, parts, violations = 0.0, np.zeros(len(rows)), dict.fromkeys(hvacmeters.PARTS, 0.0), 0
         flows, discharge = [], []

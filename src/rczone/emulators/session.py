@@ -139,7 +139,10 @@ class Session:
             self._lookup(state)
         if ex.warmup_flag(state) or ex.kind_of_sim(state) != RUN_PERIOD_WEATHER:
             return
-        t = (ex.day_of_year(state) - 1) * 86400.0 + round(ex.current_time(state) * 3600.0)
+        dt = ex.zone_time_step(state) * 3600.0
+        # the end of this zone time step (current_time is the last HVAC sub-step's when there are several)
+        t = (ex.day_of_year(state) - 1) * 86400.0 + ex.hour(state) * 3600.0
+        t += round(ex.zone_time_step_number(state) * dt)
         row = {"t": t}
         row.update({k: ex.get_variable_value(state, h) for k, h in self._handles.items()})
         for z, hs in self._gain_handles.items():
@@ -147,7 +150,6 @@ class Session:
         row.update(
             {k: ex.get_variable_value(state, h) if h >= 0 else 0.0 for k, h in self._extra_handles.items()}
         )
-        dt = ex.zone_time_step(state) * 3600.0
         for m in METERS:
             row[f"meter:{m}"] = (
                 ex.get_meter_value(state, self._meters[m]) / dt if self._meters[m] >= 0 else 0.0
