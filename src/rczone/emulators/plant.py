@@ -176,6 +176,7 @@ class EnergyPlusPlant:
         self._to_ep: queue.Queue = queue.Queue(maxsize=1)
         self._from_ep: queue.Queue = queue.Queue(maxsize=1)
         self._rows: list[dict[str, float]] = []
+        self._asked: list[dict[str, float]] = []  # the set points sent after each row (clipped)
         self._now: dict[str, float] | None = None
         self._thread: threading.Thread | None = None
         self._closed = False
@@ -348,6 +349,7 @@ class EnergyPlusPlant:
         """Hold ``actions`` for :attr:`dt` and return the measurements at the end of the step."""
         self._started()
         cmds = self._commands(actions)
+        self._asked.append({k: (np.nan if v is None else v) for k, v in cmds.items()})
         self._to_ep.put(cmds)
         return self._sensed(self._receive())
 
@@ -404,8 +406,9 @@ class EnergyPlusPlant:
         t = np.asarray(t, float)
         if self._dst is None:
             return t
-        day = [self._em.start + dt.timedelta(days=int(d)) for d in np.floor(t / 86400.0)]
-        return t + 3600.0 * np.array([self._dst[0] <= d < self._dst[1] for d in day], dtype=float)
+        day = [self._em.start + dt.timedelta(days=int(d)) for d in np.floor(t / 86400.0).ravel()]
+        shift = np.array([self._dst[0] <= d < self._dst[1] for d in day], dtype=float).reshape(t.shape)
+        return t + 3600.0 * shift
 
     def _occupied(self, t: np.ndarray) -> np.ndarray:
         t = self._clock(t)
@@ -476,7 +479,7 @@ class EnergyPlusPlant:
 
     def series(self, zone: str) -> dict[str, np.ndarray]:
         """The run so far: ``t`` (start of each step, s) and the zone's true ``Ti``, band, ``m``, ``Ts``,
-        set points in effect and attributed HVAC power (W)."""
+        set points in effect and asked for (NaN: the building's own), attributed HVAC power (W)."""
         rows = self._rows
         t = np.array([r["time"] for r in rows]) - self.dt
         occ, lo, hi = self._band(t + self.dt)
@@ -492,6 +495,10 @@ class EnergyPlusPlant:
             "Ts": np.array([r[f"Ts:{nodes[0]}"] for r in rows]),
             "heating_sp": np.array([r.get(f"sp_heating:{zone}", np.nan) for r in rows]),
             "cooling_sp": np.array([r.get(f"sp_cooling:{zone}", np.nan) for r in rows]),
+            **{
+                f"{side}_asked": np.array([np.nan] + [a[f"{side}_{zone}"] for a in self._asked])[: len(rows)]
+                for side in ("heating", "cooling")
+            },
             "power_W": sum(parts.values()),
         }
 
