@@ -11,7 +11,7 @@ fit`` identifies the paper's second-order model from that trend, and ``rczone co
 --emulator energyplus`` runs the zone for ``--days`` from a later weekday (:data:`SEASONS`) under a
 time-of-use price with BOPTEST's medium forecast error: ``baseline`` once (the building's own
 control does not read rczone's sensors or forecasts, so every seed gives the same run) and ``mpc``
-with seeds 0, 1, ... (sensor noise and forecast error). Every run is appended to
+with seeds 0, 1, ... (sensor noise and forecast error), aiming ``--margin`` K inside the band. Every run is appended to
 ``<out>/energyplus_closed_loop.json`` as it finishes (kept when the script is stopped); the table
 (:func:`table`) is written to ``<out>/energyplus_closed_loop.md`` and is the one in
 docs/energyplus.md.
@@ -53,25 +53,27 @@ def _model(out: Path, season: str) -> Path:
     return model
 
 
-def _run(out: Path, season: str, controller: str, seed: int, days: int, model: Path) -> dict:
-    path = out / f"run_{season}_{controller}_{seed}.json"
+def _run(out: Path, season: str, controller: str, seed: int, days: int, model: Path, margin: float) -> dict:
+    path = out / f"run_{season}_{controller}_{seed}_{margin:g}.json"
     args = ["control-test", "--emulator", "energyplus", "--building", BUILDING, "--weather", WEATHER]
     args += ["--zone", ZONE, "--start", SEASONS[season][1], "--days", str(days), "--step", str(STEP_MIN)]
     args += ["--price", "tou", "--forecast", "medium", "--seed", str(seed), "--controller", controller]
+    args += ["--margin", str(margin)] if controller == "mpc" else []
     if rczone([*args, "--model", str(model), "--json", str(path)]) != 0:
         raise SystemExit(f"the {controller} run of {season} (seed {seed}) failed")
     r = json.loads(path.read_text())
     keep = ("cost", "energy_kWh", "comfort_Kh", "peak_power_kW", "prediction_rmse_K", "building_hvac_kWh")
     row = {k: r[k] for k in keep}
     row["solve_ms"] = 1e3 * r["solve_time_s"]["mean"] if r["solve_time_s"] else None
-    return {"season": season, "controller": controller, "seed": seed, "days": days, **row}
+    m = margin if controller == "mpc" else None
+    return {"season": season, "controller": controller, "seed": seed, "days": days, "margin": m, **row}
 
 
 def table(results: list[dict]) -> str:
     """The markdown table of the runs, and per season the MPC's mean against the baseline."""
     head = (
-        "| season | controller | seed | HVAC cost | HVAC kWh | comfort K h per day | peak kW | "
-        "1-step RMSE K | LP ms |\n|---|---|---|---|---|---|---|---|---|\n"
+        "| season | controller | margin K | seed | HVAC cost | HVAC kWh | comfort K h per day | peak kW | "
+        "1-step RMSE K | LP ms |\n|---|---|---|---|---|---|---|---|---|---|\n"
     )
     lines, verdicts = [], []
     for season in SEASONS:
@@ -79,18 +81,19 @@ def table(results: list[dict]) -> str:
         for r in rows:
             ms = "" if r["solve_ms"] is None else f"{r['solve_ms']:.0f}"
             lines.append(
-                f"| {season} | {r['controller']} | {r['seed']} | {r['cost']:.2f} | {r['energy_kWh']:.2f} | "
+                f"| {season} | {r['controller']} | {'' if r['margin'] is None else r['margin']} | {r['seed']} | {r['cost']:.2f} | {r['energy_kWh']:.2f} | "
                 f"{r['comfort_Kh'] / r['days']:.2f} | {r['peak_power_kW']:.2f} | {r['prediction_rmse_K']:.3f} | {ms} |"
             )
         base = [r for r in rows if r["controller"] == "baseline"]
-        mpc = [r for r in rows if r["controller"] == "mpc"]
-        if base and mpc:
+        margins = sorted({r["margin"] for r in rows if r["controller"] == "mpc"})
+        for margin in margins if base else ():
+            mpc = [r for r in rows if r["controller"] == "mpc" and r["margin"] == margin]
             b, days = base[0], base[0]["days"]
             cost = np.array([r["cost"] for r in mpc])
             dcomfort = np.array([(r["comfort_Kh"] - b["comfort_Kh"]) / days for r in mpc])
             holds = bool(np.all(cost < b["cost"]) and np.all(dcomfort <= 0.5))
             verdicts.append(
-                f"- {season}: MPC cost {np.mean(cost):.2f} vs baseline {b['cost']:.2f} "
+                f"- {season}, margin {margin:g} K: MPC cost {np.mean(cost):.2f} vs baseline {b['cost']:.2f} "
                 f"({100 * (np.mean(cost) / b['cost'] - 1):+.1f} %, seeds {cost.min():.2f} to {cost.max():.2f}); "
                 f"comfort {np.mean(dcomfort):+.2f} K h per zone-day against the baseline; "
                 f"lower cost with at most +0.5 K h per zone-day on every seed: {'yes' if holds else 'no'}"
@@ -104,18 +107,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seasons", default="winter,summer")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--days", type=int, default=2)
+    ap.add_argument("--margin", type=float, default=0.1, help="how far inside the band the MPC aims, K")
     a = ap.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
     store = a.out / "energyplus_closed_loop.json"
     results = json.loads(store.read_text()) if store.exists() else []
-    done = {(r["season"], r["controller"], r["seed"], r["days"]) for r in results}
+    done = {(r["season"], r["controller"], r["seed"], r["days"], r["margin"]) for r in results}
     for season in a.seasons.split(","):
         model = _model(a.out, season)
         plan = [("baseline", 0)] + [("mpc", s) for s in range(a.seeds)]
         for controller, seed in plan:
-            if (season, controller, seed, a.days) in done:
+            if (season, controller, seed, a.days, a.margin if controller == "mpc" else None) in done:
                 continue
-            results.append(_run(a.out, season, controller, seed, a.days, model))
+            results.append(_run(a.out, season, controller, seed, a.days, model, a.margin))
             store.write_text(json.dumps(results, indent=1))
             (a.out / "energyplus_closed_loop.md").write_text(table(results))
             print(json.dumps(results[-1]), flush=True)

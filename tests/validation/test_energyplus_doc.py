@@ -16,7 +16,7 @@ def test_the_docs_table_is_the_scripts_table_of_the_recorded_runs() -> None:
 
 def test_the_verdict_line_follows_the_numbers() -> None:
     mod = load_script("energyplus_closed_loop")
-    base = {"season": "winter", "controller": "baseline", "seed": 0, "days": 2, "cost": 10.0}
+    base = {"season": "winter", "controller": "baseline", "seed": 0, "days": 2, "margin": None, "cost": 10.0}
     base |= {
         "energy_kWh": 5.0,
         "comfort_Kh": 1.0,
@@ -24,7 +24,7 @@ def test_the_verdict_line_follows_the_numbers() -> None:
         "prediction_rmse_K": 0.1,
         "solve_ms": None,
     }
-    cheaper = {**base, "controller": "mpc", "cost": 9.0, "comfort_Kh": 1.9, "solve_ms": 5.0}
+    cheaper = {**base, "controller": "mpc", "margin": 0.1, "cost": 9.0, "comfort_Kh": 1.9, "solve_ms": 5.0}
     warmer = {**cheaper, "seed": 1, "comfort_Kh": 2.2}  # +0.6 K h per zone-day
     assert "every seed: yes" in mod.table([base, cheaper])
     assert "every seed: no" in mod.table([base, cheaper, warmer])

@@ -69,6 +69,10 @@ def control_test(
         str | None, typer.Option("--zone", help="energyplus: the zone the controller runs.")
     ] = None,
     step: Annotated[int, typer.Option("--step", help="energyplus: the plant's step, minutes.")] = 15,
+    margin: Annotated[
+        float | None,
+        typer.Option("--margin", help="energyplus mpc: how far inside the comfort band it aims, K (0.1)."),
+    ] = None,
     noise_floor: Annotated[
         float,
         typer.Option(
@@ -116,7 +120,7 @@ def control_test(
             )
         options = dict(weather=weather, start=start, step_minutes=step, seed=seed, price=price)
         plant = _energyplus_plant(building, zone, days, forecast or "none", options)
-        res = energyplus_test(plant, controller, model=zm, noise_floor=noise_floor)
+        res = energyplus_test(plant, controller, model=zm, margin_K=margin, noise_floor=noise_floor)
         out.print(esc(res.summary()))
         write_json(json_out, res.to_dict())
         return

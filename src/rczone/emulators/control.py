@@ -26,7 +26,7 @@ CAPACITY_W_PER_M2 = 60.0
 
 def make_controller_for(
     name: str, plant: EnergyPlusPlant, model: ZoneModel | None, settings: SupervisorySettings | None
-):
+):  # settings None: the defaults with the capacity of the zone's floor area
     """The controller ``name`` for an EnergyPlus plant (see the module notes)."""
     if name == "baseline":
         return BuildingControl(plant.dt)
@@ -48,6 +48,7 @@ def energyplus_test(
     *,
     model: ZoneModel | None = None,
     settings: SupervisorySettings | None = None,
+    margin_K: float | None = None,
     noise_floor: float = SENSOR_RESOLUTION_K,
 ) -> ClosedLoopResult:
     """Run ``controller`` on ``plant`` (fresh) to its end and score it; EnergyPlus is closed after.
@@ -60,6 +61,10 @@ def energyplus_test(
     model : ZoneModel, optional
         The MPC's model; also the model whose prediction error is scored.
     settings : SupervisorySettings, optional
+        The MPC's; default :class:`SupervisorySettings` with the capacity of the zone's floor
+        area (:data:`CAPACITY_W_PER_M2`) and ``margin_K`` if given.
+    margin_K : float, optional
+        How far inside the band the MPC aims, K.
     noise_floor : float
         The prediction score's lowest sensor noise, K.
 
@@ -68,6 +73,11 @@ def energyplus_test(
     ClosedLoopResult
     """
     try:
+        if margin_K is not None and controller == "mpc":
+            plant.measure()  # starts EnergyPlus: the zone's floor area is read from its eio
+            cap = CAPACITY_W_PER_M2 * plant.floor_area[plant.zones[0]]
+            base = settings or SupervisorySettings(heating_capacity=cap, cooling_capacity=cap)
+            settings = replace(base, margin_K=margin_K)
         ctl = make_controller_for(controller, plant, model, settings)
         res = closed_loop_test(plant, ctl, model=model, noise_floor=noise_floor)
     finally:
