@@ -13,8 +13,10 @@ time-of-use price with BOPTEST's medium forecast error: ``baseline`` once (the b
 control does not read rczone's sensors or forecasts, so every seed gives the same run) and ``mpc``
 with seeds 0, 1, ... (sensor noise and forecast error), aiming ``--margin`` K inside the band. Every run is appended to
 ``<out>/energyplus_closed_loop.json`` as it finishes (kept when the script is stopped); the table
-(:func:`table`) is written to ``<out>/energyplus_closed_loop.md`` and is the one in
-docs/energyplus.md.
+(:func:`table`) is written to ``<out>/energyplus_closed_loop.md``. The runs of docs/energyplus.md
+are ``validation/energyplus_closed_loop.json`` (the seasons, run as two processes with ``--seasons
+winter`` and ``--seasons summer`` and ``--margin 0.1`` then ``--margin 0``, joined); a test keeps
+the page's table equal to :func:`table` of them.
 """
 
 from __future__ import annotations
