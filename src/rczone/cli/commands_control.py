@@ -55,7 +55,12 @@ def control_test(
         ),
     ] = None,
     emulator: Annotated[
-        str, typer.Option("--emulator", help="virtual (the built-in building) or energyplus.")
+        str,
+        typer.Option(
+            "--emulator",
+            help="virtual (the built-in building), energyplus, or a registered or plug-in emulator"
+            " (entry-point group rczone.emulators; given --days, --seed and --price).",
+        ),
     ] = "virtual",
     building: Annotated[
         str | None,
@@ -102,13 +107,9 @@ def control_test(
     """Closed-loop test: comfort (K h), energy (kWh), cost, peak, prediction RMSE, solve time."""
     from rczone.control.closedloop import closed_loop_test
     from rczone.control.virtualplant import VirtualPlant
+    from rczone.emulators.registry import EMULATORS
 
-    if emulator not in ("virtual", "energyplus"):
-        from rczone.errors import did_you_mean
-
-        raise ParameterError(
-            f"unknown emulator {emulator!r}; {did_you_mean(emulator, ('virtual', 'energyplus'))}"
-        )
+    EMULATORS.factory(emulator)  # an unknown name (or a plug-in that fails to load) is one line
     zm = model(model_spec)
     out = out_console(json_out)
     if emulator == "energyplus":
@@ -121,6 +122,16 @@ def control_test(
         options = dict(weather=weather, start=start, step_minutes=step, seed=seed, price=price)
         plant = _energyplus_plant(building, zone, days, forecast or "none", options)
         res = energyplus_test(plant, controller, model=zm, margin_K=margin, noise_floor=noise_floor)
+        out.print(esc(res.summary()))
+        write_json(json_out, res.to_dict())
+        return
+    if emulator != "virtual":  # a registered or plug-in emulator, with the options every plant has
+        from rczone.emulators.registry import make_plant
+
+        plant = make_plant(emulator, days=days, seed=seed, price=price)
+        res = closed_loop_test(
+            plant, controller, model=zm, disturbance=not no_disturbance, noise_floor=noise_floor
+        )
         out.print(esc(res.summary()))
         write_json(json_out, res.to_dict())
         return

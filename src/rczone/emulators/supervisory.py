@@ -49,8 +49,9 @@ from scipy.optimize import linprog
 
 from rczone.control.disturbance import Disturbance
 from rczone.control.model import ControlModel
-from rczone.control.observer import Estimate, KalmanObserver
+from rczone.control.observer import KalmanObserver
 from rczone.errors import ParameterError, RczoneError
+from rczone.kernels.arrays import StateMoments
 from rczone.models.zone import ZoneModel
 from rczone.network import CP_AIR
 
@@ -141,7 +142,7 @@ class SupervisoryMPC:
         self.observer = KalmanObserver(self.cm)
         self.solve_times: list[float] = []
         self.innovations: list[float] = []
-        self._est: Estimate | None = None
+        self._est: StateMoments | None = None
         self._u: np.ndarray | None = None
         self._d = self.cm.discrete(self.dt, 0.0)
         self.plan: HeatPlan | None = None

@@ -1,10 +1,12 @@
 """Emulators by name: the built-in ones, a user's registered in Python, and a plug-in's entry point."""
 
+import json
 import sys
 
 import pytest
 
 import rczone
+from rczone.cli.main import main
 from rczone.control.closedloop import closed_loop_test
 from rczone.control.virtualplant import VirtualPlant
 from rczone.emulators import registry
@@ -70,4 +72,14 @@ def test_a_plug_in_emulator_is_found_through_its_entry_point(tmp_path, monkeypat
     monkeypatch.syspath_prepend(str(tmp_path))
     assert "plugged" in emulator_names()
     assert isinstance(make_plant("plugged", days=0.05), ColdVirtualPlant)
+    out = tmp_path / "s.json"
+    args = ["control-test", "--emulator", "plugged", "--controller", "thermostat", "--days", "0.05"]
+    assert main([*args, "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["constraint_violations"] == 0
     sys.modules.pop("my_plant", None)
+
+
+def test_an_unknown_emulator_on_the_command_line_is_one_line_and_exit_2(capsys):
+    assert main(["control-test", "--emulator", "virtaul"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown emulator 'virtaul'" in err[0] and "virtual" in err[0]
