@@ -36,6 +36,7 @@ import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -216,6 +217,7 @@ class EnergyPlusEmulator:
         actuators: Mapping[str, Actuator] | None = None,
         *,
         report: Sequence[str] = (),
+        progress: Any = None,
     ) -> Emulation:
         """Run EnergyPlus once (an emulator object runs once).
 
@@ -231,6 +233,8 @@ class EnergyPlusEmulator:
         report : sequence of str
             EnergyPlus output variables to write into its own time-step report
             (:attr:`Emulation.reported`), for checks.
+        progress : object, optional
+            Told ``progress.advance(days_done, days)`` after each simulated day; None: nothing.
 
         Returns
         -------
@@ -252,7 +256,7 @@ class EnergyPlusEmulator:
             folder = Path(tmp)
             (folder / "in.idf").write_text(idf.write_idf(objects), encoding="latin-1")
             api = EnergyPlusAPI()
-            session = Session(api, self.hvac, dict(actuators or {}), controller)
+            session = Session(api, self.hvac, dict(actuators or {}), controller, progress, self.days)
             code = session.run(["-d", str(folder), "-w", str(self._epw), str(folder / "in.idf")])
             stopped = isinstance(session.error, Stop)
             if session.error is not None and not stopped:

@@ -43,10 +43,23 @@ class Session:
         What the controller may set, by label.
     controller : callable, optional
         As in :meth:`rczone.emulators.energyplus.EnergyPlusEmulator.run`.
+    progress : object, optional
+        Told ``progress.advance(days_done, days)`` after each simulated day of the run period.
+    days : int, optional
+        Days of the run period (the total told to ``progress``).
     """
 
-    def __init__(self, api: Any, zones: Sequence[ZoneHvac], actuators: Mapping, controller) -> None:
+    def __init__(
+        self,
+        api: Any,
+        zones: Sequence[ZoneHvac],
+        actuators: Mapping,
+        controller,
+        progress: Any = None,
+        days: int | None = None,
+    ) -> None:
         self.api = api
+        self.progress, self.days, self._days_told = progress, days, 0
         self.zones = tuple(zones)
         self.actuators = dict(actuators)
         self.controller = controller
@@ -139,6 +152,10 @@ class Session:
             self._actuate(state, t, row)
         row.update({f"cmd:{k}": (float("nan") if v is None else v) for k, v in self._set.items()})
         self.rows.append(row)
+        done = int(len(self.rows) * dt // 86400.0)
+        if self.progress is not None and done > self._days_told:
+            self._days_told = done
+            self.progress.advance(done, self.days)
 
     def _actuate(self, state, t: float, row: Mapping[str, float]) -> None:
         ex = self.api.exchange
