@@ -152,3 +152,16 @@ def test_a_redirected_control_test_counts_its_hours_on_stderr(tmp_path, capsys, 
     else:
         assert any(x.endswith("simulated hours (9/9)") for x in lines), lines  # 6 h warm-up + 3 h
     assert not _progress_lines(captured.out) and "comfort" in captured.out.lower()
+
+
+@pytest.mark.slow
+def test_an_emulation_tells_each_simulated_day(tmp_path, capsys, monkeypatch):
+    pytest.importorskip("pyenergyplus")
+    monkeypatch.setenv(INTERVAL_ENV, "0")
+    args = ["emulate", "--building", "office_small", "--start", "03-01", "--days", "2", "--step", "15"]
+    assert main([*args, "-o", str(tmp_path / "run")]) == 0
+    captured = capsys.readouterr()
+    lines = _progress_lines(captured.err)
+    assert any(x.endswith("simulated days (1/2)") for x in lines), lines
+    assert any(x.endswith("simulated days (2/2)") for x in lines), lines
+    assert not _progress_lines(captured.out) and (tmp_path / "run" / "trend.csv").exists()
