@@ -378,6 +378,7 @@ def calibrate(
     uncertainty: bool = True,
     analyses: bool = True,
     data: Dataset | None = None,
+    progress: Any = None,
     **overrides: Any,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` with ``settings`` and check the fitted model open loop.
@@ -408,6 +409,8 @@ def calibrate(
     data : Dataset, optional
         ``dataset(model, frame, settings.constants)`` when the caller has built it already (the
         methods of one zone in a batch share one); default built here.
+    progress : object, optional
+        Told how far the fit is (:func:`rczone.estimation.fit.fit`); None: nothing.
     **overrides
         Fields of :class:`~rczone.estimation.settings.FitSettings` replacing those of ``settings``
         (``method="ls"``, ``free=[...]``, ``n_starts=3``, ...).
@@ -446,6 +449,7 @@ def calibrate(
         uncertainty=uncertainty,
         start=start,
         fixed={k: v for k, v in held.items() if v is not None},
+        progress=progress,
     )
     values = {**res.fixed, **res.estimates}
     theta = {k: v for k, v in values.items() if k in net.parameters and not net.parameters[k].is_tied}

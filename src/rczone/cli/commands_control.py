@@ -8,8 +8,9 @@ from typing import Annotated
 
 import typer
 
-from rczone.cli.common import MODEL_HELP, esc, model, out_console, write_json
+from rczone.cli.common import MODEL_HELP, QuietOption, esc, model, out_console, write_json
 from rczone.cli.main import app
+from rczone.cli.progress import Steps, reporter
 from rczone.errors import ParameterError
 
 
@@ -103,6 +104,7 @@ def control_test(
     report_dir: Annotated[
         Path | None, typer.Option("--report", help="Folder for report.html and figures.")
     ] = None,
+    quiet: QuietOption = False,
 ) -> None:
     """Closed-loop test: comfort (K h), energy (kWh), cost, peak, prediction RMSE, solve time."""
     from rczone.control.closedloop import closed_loop_test
@@ -144,14 +146,25 @@ def control_test(
             raise ParameterError(f"--seeds must be an integer >= 1, got {seeds}")
         test = Scenario(scenario, days=days, price=price, comfort_band=band, forecast=forecast)
         entries = compare_entries(compare, zm, model, disturbance=not no_disturbance)
-        cmp = compare_runs(entries, list(range(seed, seed + seeds)), scenario=test)
+        with reporter(quiet=quiet) as report:
+            runs = Steps(
+                report, len(entries) * seeds, "closed loop: {name} (run {i} of {n}), simulated hours"
+            )
+            cmp = compare_runs(entries, list(range(seed, seed + seeds)), scenario=test, progress=runs)
         out.print(esc(cmp.summary()))
         write_json(json_out, cmp.to_dict())
         return
     plant = VirtualPlant(scenario, days=days, seed=seed, price=price, comfort_band=band, forecast=forecast)
-    res = closed_loop_test(
-        plant, controller, model=zm, disturbance=not no_disturbance, noise_floor=noise_floor
-    )
+    with reporter(quiet=quiet) as report:
+        report(f"closed loop: {controller} on the {scenario} scenario, simulated hours")
+        res = closed_loop_test(
+            plant,
+            controller,
+            model=zm,
+            disturbance=not no_disturbance,
+            noise_floor=noise_floor,
+            progress=report,
+        )
     out.print(esc(res.summary()))
     write_json(json_out, res.to_dict())
     if report_dir:

@@ -7,8 +7,9 @@ from typing import Annotated
 
 import typer
 
-from rczone.cli.common import esc, out_console
+from rczone.cli.common import QuietOption, esc, out_console
 from rczone.cli.main import app
+from rczone.cli.progress import reporter
 
 
 @app.command("emulate")
@@ -38,6 +39,7 @@ def emulate(
     list_: Annotated[
         bool, typer.Option("--list", help="List the buildings, their zones and the weather files.")
     ] = False,
+    quiet: QuietOption = False,
 ) -> None:
     """Run an ASHRAE 90.1-2019 prototype in EnergyPlus (extra rczone[energyplus]) and export its trends."""
     from rczone.errors import ParameterError
@@ -51,7 +53,18 @@ def emulate(
         raise ParameterError("rczone emulate needs --building and -o DIR (or --list)")
     from rczone.emulators.runs import emulate_to_folder
 
-    res = emulate_to_folder(
-        building, weather, out, start=start, days=days, step_minutes=step, seed=seed, test=test, zones=zones
-    )
+    with reporter(quiet=quiet) as report:
+        report(f"EnergyPlus: {building}, {weather}, simulated days")
+        res = emulate_to_folder(
+            building,
+            weather,
+            out,
+            start=start,
+            days=days,
+            step_minutes=step,
+            seed=seed,
+            test=test,
+            zones=zones,
+            progress=report,
+        )
     out_console(None).print(esc(res.summary()))

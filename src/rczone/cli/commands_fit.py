@@ -246,8 +246,19 @@ def _save(zm, path: Path) -> None:
 
 @app.command()
 def predict(
-    model_file: Annotated[str, typer.Argument(help=MODEL_HELP)],
-    data: Annotated[Path, typer.Argument(help="CSV/Parquet file, or a built-in data set name (A, B, C).")],
+    model_file: Annotated[
+        str | None,
+        typer.Argument(
+            metavar="MODEL", help=MODEL_HELP + " Or give it by --model, as other commands, and DATA alone."
+        ),
+    ] = None,
+    data: Annotated[
+        Path | None,
+        typer.Argument(metavar="DATA", help="CSV/Parquet file, or a built-in data set name (A, B, C)."),
+    ] = None,
+    model_opt: Annotated[
+        str | None, typer.Option("--model", help="The model, as other commands take it (then DATA alone).")
+    ] = None,
     column_map: Annotated[
         Path | None, typer.Option("--columns", help="TOML column map for trend logs.")
     ] = None,
@@ -346,6 +357,14 @@ def predict(
     from rczone.errors import ParameterError
     from rczone.validation import integer, steps_ahead
 
+    if model_opt is not None:
+        if data is not None:
+            raise ParameterError(
+                "give the model once: `rczone predict --model MODEL DATA` or `rczone predict MODEL DATA`"
+            )
+        model_file, data = model_opt, None if model_file is None else Path(model_file)
+    if model_file is None or data is None:
+        raise ParameterError("rczone predict needs a model and data: `rczone predict --model MODEL DATA`")
     if steps is not None:
         integer(steps, "--steps", low=1)
     zm = model(model_file)

@@ -27,7 +27,7 @@ from rczone.cli.common import (
     write_json,
 )
 from rczone.cli.main import app
-from rczone.cli.progress import reporter
+from rczone.cli.progress import Steps, reporter
 
 
 def _read(data: Path, column_map: Path | None, zms: list, required: list[str] | None = None) -> object:
@@ -176,13 +176,7 @@ def select(
     )
 
     with reporter(quiet=quiet) as report:
-        fitted = []
-
-        def progress(name: str) -> None:
-            report(f"fitting {name} (ML), candidate {len(fitted) + 1} of {len(zms)}")
-            report.advance(len(fitted), len(zms))
-            fitted.append(name)
-
+        progress = Steps(report, len(zms), "fitting {name} (ML), candidate {i} of {n}")
         sel = select_models(
             zms, frame, settings, rule=criterion, forward=forward, alpha=alpha, progress=progress
         )

@@ -12,12 +12,21 @@ it down as a plain callback: ``report("fitting the second-order model")`` names 
   when the stage is long and says nothing (:class:`LineReporter`);
 * with ``--quiet``, nothing (:class:`QuietReporter`).
 
+The work below the CLI (the global search, the sampler, the closed loop, the demo's study) takes
+the reporter as one keyword, ``progress=None``, and only calls it: ``progress.advance(done, total)``
+after each local search, as the chains' draws come in, per simulated hour; the caller names the
+stage. None (the API's default) tells nothing. :class:`Steps` numbers stages of a known count (the
+candidates of ``select``, the runs of ``control-test --compare``).
+
 No state is global: each reporter holds its own clock, stream and last line, so two commands (or
-two tests) never share one.
+two tests) never share one. The interval of the lines can be set by the environment variable
+:data:`INTERVAL_ENV` (seconds; a test sets it near zero to see lines at once).
 """
 
 from __future__ import annotations
 
+import math
+import os
 import sys
 import threading
 import time
@@ -26,6 +35,18 @@ from typing import IO, Protocol, runtime_checkable
 
 #: Seconds between two lines of a reporter that does not write to a terminal.
 INTERVAL_S = 10.0
+#: Environment variable overriding :data:`INTERVAL_S` (seconds, >= 0; anything else is ignored).
+INTERVAL_ENV = "RCZONE_PROGRESS_INTERVAL"
+
+
+def interval_s() -> float:
+    """Seconds between two progress lines: :data:`INTERVAL_ENV` when it is a number >= 0, else :data:`INTERVAL_S`."""
+    text = os.environ.get(INTERVAL_ENV, "").strip()
+    try:
+        value = float(text)
+    except ValueError:
+        return INTERVAL_S
+    return value if math.isfinite(value) and value >= 0 else INTERVAL_S
 
 
 @runtime_checkable
@@ -77,7 +98,7 @@ class LineReporter:
     stream : file
         Where the lines go (stderr).
     interval : float, optional
-        Least seconds between two lines (default :data:`INTERVAL_S`); a stage that starts is written at once if the last
+        Least seconds between two lines (default :func:`interval_s`); a stage that starts is written at once if the last
         line is that old, a long silent stage gets a heartbeat line from :meth:`tick`.
     clock : callable
         Seconds, monotonic (a fake clock in tests).
@@ -91,7 +112,7 @@ class LineReporter:
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.stream, self.clock = stream, clock
-        self.interval = INTERVAL_S if interval is None else float(interval)
+        self.interval = interval_s() if interval is None else float(interval)
         self.start = self.last = clock()
         self.stage, self.done, self.total = "", 0, None
         self._lock = threading.Lock()
@@ -202,6 +223,37 @@ class TerminalReporter:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+class Steps:
+    """Stages of a known count on a reporter: ``steps(name)`` starts ``template`` for the next one.
+
+    Parameters
+    ----------
+    report : Reporter
+        Where the stages go.
+    total : int
+        How many stages there are.
+    template : str
+        The stage's words, with ``{name}``, ``{i}`` (from 1) and ``{n}``.
+
+    The count of a stage (``advance``) is the work inside it (a fit's local searches), passed on.
+    """
+
+    def __init__(self, report: Reporter, total: int, template: str) -> None:
+        self.report, self.total, self.template, self.started = report, int(total), template, 0
+
+    def __call__(self, name: str) -> None:
+        """The next stage, ``name``."""
+        self.started += 1
+        self.report(self.template.format(name=name, i=self.started, n=self.total))
+
+    def advance(self, done: int, total: int | None = None) -> None:
+        """How far the current stage is."""
+        self.report.advance(done, total)
+
+    def close(self) -> None:
+        """The reporter is the caller's to close."""
 
 
 def reporter(*, quiet: bool = False, stream: IO[str] | None = None, heartbeat: bool = True):

@@ -26,6 +26,7 @@ References
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -112,14 +113,23 @@ class MeasurementLog:
     values: Mapping[str, np.ndarray]
 
 
-def run_loop(plant: Plant, controller: Controller) -> MeasurementLog:
-    """Run ``controller`` on ``plant`` to the plant's end; every measurement, in order."""
+def run_loop(plant: Plant, controller: Controller, progress: Any = None) -> MeasurementLog:
+    """Run ``controller`` on ``plant`` to the plant's end; every measurement, in order.
+
+    ``progress.advance(hours, total_hours)`` is told each simulated hour (None: nothing).
+    """
     y = plant.measure()
     rows = [y]
+    t0, told = float(y["time"]), 0
+    hours = max(math.ceil((plant.end - t0) / 3600.0 - 1e-9), 1)
     while y["time"] < plant.end - 1e-9:
         fc = plant.forecast(controller.horizon, interval=controller.interval)
         y = plant.step(controller.act(y["time"], y, fc))
         rows.append(y)
+        done = int((float(y["time"]) - t0 + 1e-6) // 3600.0)
+        if progress is not None and done > told:
+            told = done
+            progress.advance(min(done, hours), hours)
     frame = pd.DataFrame(rows)
     return MeasurementLog(frame["time"].to_numpy(), {c: frame[c].to_numpy() for c in frame.columns})
 
@@ -132,6 +142,7 @@ def closed_loop_test(
     settings: MPCSettings | None = None,
     disturbance: bool = True,
     noise_floor: float = SENSOR_RESOLUTION_K,
+    progress: Any = None,
 ) -> ClosedLoopResult:
     """Run ``controller`` on ``plant`` to its end, and score it.
 
@@ -149,6 +160,8 @@ def closed_loop_test(
         For a named MPC: its observer estimates an unmeasured heat input (offset-free).
     noise_floor : float
         The prediction score's lowest sensor noise, K (:mod:`rczone.control.prediction`).
+    progress : object, optional
+        Told ``progress.advance(hours, total_hours)`` each simulated hour; None: nothing.
 
     Returns
     -------
@@ -157,7 +170,7 @@ def closed_loop_test(
     name = controller if isinstance(controller, str) else type(controller).__name__
     if isinstance(controller, str):
         controller = make_controller(controller, plant, ControllerOptions(model, settings, disturbance))
-    log = run_loop(plant, controller)
+    log = run_loop(plant, controller, progress)
     zone = plant.zones[0]
     scores = dict(plant.kpis())
     if model is not None:

@@ -173,6 +173,7 @@ def compare(
     *,
     scenario: Scenario | None = None,
     settings: MPCSettings | None = None,
+    progress: Any = None,
 ) -> Comparison:
     """Run every entry on every seed of ``test``, and pair the runs by seed.
 
@@ -184,6 +185,9 @@ def compare(
     scenario : Scenario, optional
     settings : MPCSettings, optional
         For the entries that are MPCs.
+    progress : callable, optional
+        Called with ``"<label>, seed <s>"`` before each run, and told its simulated hours
+        (``progress.advance``, :func:`rczone.control.closedloop.closed_loop_test`); None: nothing.
 
     Returns
     -------
@@ -201,12 +205,15 @@ def compare(
     for seed in seeds:
         runs: list[ClosedLoopResult] = []
         for e in entries:
+            if progress is not None:
+                progress(f"{e.label}, seed {seed}")
             r = closed_loop_test(
                 scenario.plant(seed),
                 e.controller,
                 model=e.model,
                 settings=settings,
                 disturbance=e.disturbance,
+                progress=progress,
             )
             if runs:
                 check_comparable(runs[0], r)

@@ -36,6 +36,7 @@ import tempfile
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
@@ -218,6 +219,7 @@ class EnergyPlusEmulator:
         *,
         report: Sequence[str] = (),
         extra: Mapping[str, tuple[str, str]] | None = None,
+        progress: Any = None,
     ) -> Emulation:
         """Run EnergyPlus once (an emulator object runs once).
 
@@ -236,6 +238,8 @@ class EnergyPlusEmulator:
         extra : mapping of str to (str, str), optional
             More output variables ``(variable, key)`` read each step into the rows by label
             (:class:`~rczone.emulators.session.Session`).
+        progress : object, optional
+            Told ``progress.advance(days_done, days)`` after each simulated day; None: nothing.
 
         Returns
         -------
@@ -258,7 +262,9 @@ class EnergyPlusEmulator:
             self.folder = folder  # while the run lasts: a controller may read eplusout.eio
             (folder / "in.idf").write_text(idf.write_idf(objects), encoding="latin-1")
             api = EnergyPlusAPI()
-            session = Session(api, self.hvac, dict(actuators or {}), controller, extra)
+            session = Session(
+                api, self.hvac, dict(actuators or {}), controller, extra, progress=progress, days=self.days
+            )
             code = session.run(["-d", str(folder), "-w", str(self._epw), str(folder / "in.idf")])
             stopped = isinstance(session.error, Stop)
             if session.error is not None and not stopped:

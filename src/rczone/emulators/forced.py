@@ -28,6 +28,7 @@ References
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -103,7 +104,7 @@ def _zones(em: EnergyPlusEmulator, zones: str | Sequence[str] | None) -> list[st
     return out
 
 
-def forced_run(em: EnergyPlusEmulator, zones: str | Sequence[str] | None) -> Emulation:
+def forced_run(em: EnergyPlusEmulator, zones: str | Sequence[str] | None, progress: Any = None) -> Emulation:
     """Run ``em`` with ``zones`` (default: the first conditioned zone) following the designed set points.
 
     The set points are in the run's frame as ``cmd:<zone> heating`` and ``cmd:<zone> cooling`` (degC).
@@ -130,4 +131,4 @@ def forced_run(em: EnergyPlusEmulator, zones: str | Sequence[str] | None) -> Emu
             out[f"{z} heating"], out[f"{z} cooling"] = schedules[z][k], schedules[z][k] + DEADBAND
         return out
 
-    return em.run(controller, acts)
+    return em.run(controller, acts, progress=progress)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from rczone.emulators.bms import export
 from rczone.emulators.energyplus import Emulation, EnergyPlusEmulator
@@ -66,6 +67,7 @@ def emulate_to_folder(
     seed: int = 0,
     test: str = "normal",
     zones: str | None = None,
+    progress: Any = None,
 ) -> EmulateResult:
     """Run a prototype and write ``trend.csv``, a column map per conditioned zone and ``building.toml``.
 
@@ -82,6 +84,8 @@ def emulate_to_folder(
     test : {"normal", "forced"}
     zones : str, optional
         The zones a forced test drives, comma-separated (default: the first conditioned zone).
+    progress : object, optional
+        Told ``progress.advance(days_done, days)`` after each simulated day; None: nothing.
 
     Returns
     -------
@@ -98,11 +102,11 @@ def emulate_to_folder(
     if test == "forced":
         from rczone.emulators.forced import forced_run
 
-        run = forced_run(em, zones)
+        run = forced_run(em, zones, progress)
     else:
         if zones:
             raise ParameterError("--zones is for --test forced (the zones the test drives)")
-        run = em.run()
+        run = em.run(progress=progress)
     files = export(run, seed=seed, test=test).files
     for name, text in files.items():
         write_text_in(folder, name, text)

@@ -46,6 +46,10 @@ class Session:
     extra : mapping of str to (str, str), optional
         More output variables ``(variable, key)`` to read each step, by row label; one EnergyPlus
         does not have for this building reads zero (e.g. a DX coil's defrost heater).
+    progress : object, optional
+        Told ``progress.advance(days_done, days)`` after each simulated day of the run period.
+    days : int, optional
+        Days of the run period (the total told to ``progress``).
     """
 
     def __init__(
@@ -55,8 +59,11 @@ class Session:
         actuators: Mapping,
         controller,
         extra: Mapping[str, tuple[str, str]] | None = None,
+        progress: Any = None,
+        days: int | None = None,
     ) -> None:
         self.api = api
+        self.progress, self.days, self._days_told = progress, days, 0
         self.zones = tuple(zones)
         self.actuators = dict(actuators)
         self.controller = controller
@@ -158,6 +165,10 @@ class Session:
             self._actuate(state, t, row)
         row.update({f"cmd:{k}": (float("nan") if v is None else v) for k, v in self._set.items()})
         self.rows.append(row)
+        done = int(len(self.rows) * dt // 86400.0)
+        if self.progress is not None and done > self._days_told:
+            self._days_told = done
+            self.progress.advance(done, self.days)
 
     def _actuate(self, state, t: float, row: Mapping[str, float]) -> None:
         ex = self.api.exchange

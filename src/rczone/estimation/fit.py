@@ -111,6 +111,7 @@ def fit(
     uncertainty: bool = True,
     max_evals: int | None = None,
     initial_state: str = "estimate",
+    progress: Any = None,
     **overrides: Any,
 ) -> FitResult:
     """Estimate the ``free`` parameters of ``network`` from ``data``.
@@ -149,6 +150,10 @@ def fit(
         every unmeasured state in an LS fit; ``"steady"`` starts them in equilibrium with the first
         inputs and measurement, which biases the fit when the data do not start at rest. ML and
         MAP fits carry an initial-state uncertainty in the filter either way.
+    progress : object, optional
+        Told how far the work is: ``progress.advance(done, total)`` after each local search of the
+        global search or as the sampler's draws come in (``rczone fit`` hands its progress bar);
+        None (default): nothing is told.
     **overrides
         Fields of :class:`~rczone.estimation.settings.FitSettings` replacing those of ``settings``
         (``method="ls"``, ``n_starts=1``, ``options={"draws": 500}``, ...), as
@@ -205,6 +210,7 @@ def fit(
         settings.n_starts,
         max_evals,
         uncertainty,
+        progress,
     )
     result = meth.run(problem, settings.options, rng)
     if not isinstance(result, FitResult):

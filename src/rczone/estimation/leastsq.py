@@ -152,6 +152,7 @@ def leastsq_search(
     n_starts: int | None = None,
     max_evals: int | None = None,
     scale: float = 0.0,
+    progress=None,
 ) -> tuple[list[StartOutcome], SearchSummary]:
     """Minimize ``J_LS`` from spread starts by Gauss-Newton (see the module notes).
 
@@ -168,6 +169,9 @@ def leastsq_search(
         Evaluation budget per local search.
     scale : float
         The data's squared variation (K^2 s), for :func:`rczone.estimation.search.cost_tolerance`.
+    progress : object, optional
+        Told ``progress.advance(done, most)`` after each search, as by
+        :func:`rczone.estimation.search.global_search`.
 
     Returns
     -------
@@ -196,6 +200,8 @@ def leastsq_search(
             if k == 0 and len(starts) > 1:  # the model's own values may be invalid for these data
                 continue
             raise
+        if progress is not None:
+            progress.advance(k + 1, len(starts))
         if k == 0 and adaptive and outcomes[-1].converged:
             # early agreement, as global_search's gradient search: the second start is the restart near
             # the first optimum a single start would get as its confirmation anyway

@@ -59,11 +59,21 @@ def minimize_fit(problem: FitProblem, objective: Objective, rng: np.random.Gener
     optimizer = problem.optimizer
     if optimizer == "auto" and leastsq.applies(objective):  # Gauss-Newton on the residual Jacobian
         optimizer = leastsq.NAME
-        outcomes, search = leastsq.leastsq_search(objective, rng, problem.n_starts, problem.max_evals, scale)
+        outcomes, search = leastsq.leastsq_search(
+            objective, rng, problem.n_starts, problem.max_evals, scale, progress=problem.progress
+        )
     else:
         optimizer = "lbfgs" if optimizer == "auto" else optimizer  # every Objective has its exact gradient
         outcomes, search = global_search(
-            objective, spec, problem.method, rng, optimizer, problem.n_starts, problem.max_evals, scale=scale
+            objective,
+            spec,
+            problem.method,
+            rng,
+            optimizer,
+            problem.n_starts,
+            problem.max_evals,
+            scale=scale,
+            progress=problem.progress,
         )
     best = winning_end(outcomes, search.optima[0].starts)
     win = outcomes[best]

@@ -150,8 +150,15 @@ def _nutpie() -> Any:
     return nutpie, from_pyfunc
 
 
-def _run_nuts(logp: LogPosterior, starts: np.ndarray, settings: McmcOptions, seed: int) -> _Run:
-    """NUTS (nutpie) from ``starts`` (one row of ``z`` per chain)."""
+def _run_nuts(
+    logp: LogPosterior, starts: np.ndarray, settings: McmcOptions, seed: int, progress: Any = None
+) -> _Run:
+    """NUTS (nutpie) from ``starts`` (one row of ``z`` per chain).
+
+    ``progress.advance(done, total)`` is told the draws of all chains, warm-up included, as they come:
+    nutpie hands each stored draw to the ``expand`` function once, and its own bar (a terminal's
+    indicatif bar, or HTML in a notebook) is off, as it would ignore ``--quiet`` and redirection.
+    """
     nutpie, from_pyfunc = _nutpie()
     d = starts.shape[1]
     names = ["z"]
@@ -160,8 +167,17 @@ def _run_nuts(logp: LogPosterior, starts: np.ndarray, settings: McmcOptions, see
     def make_logp():
         return logp
 
+    total = settings.chains * (settings.draws + settings.tune)
+    drawn = [0]
+
+    def expand(z):
+        drawn[0] += 1
+        if progress is not None and drawn[0] % 10 == 0:
+            progress.advance(drawn[0], total)
+        return {"z": np.asarray(z, dtype=float).copy()}
+
     def make_expand(_seed1, _seed2, _chain):
-        return lambda z: {"z": np.asarray(z, dtype=float).copy()}
+        return expand
 
     def initial_point(s: int) -> np.ndarray:
         # nutpie asks once per chain with a seed of its own; hand the starts out in turn
@@ -237,7 +253,9 @@ class Sampled(NamedTuple):
     mode: StartOutcome
 
 
-def sample(logp: LogPosterior, *, settings: McmcOptions, rng: np.random.Generator) -> Sampled:
+def sample(
+    logp: LogPosterior, *, settings: McmcOptions, rng: np.random.Generator, progress: Any = None
+) -> Sampled:
     """Draw from ``logp``: one L-BFGS search for the mode, then NUTS chains around it.
 
     Parameters
@@ -248,6 +266,8 @@ def sample(logp: LogPosterior, *, settings: McmcOptions, rng: np.random.Generato
         Draws, warm-up and chains.
     rng : numpy.random.Generator
         Draws the starts and the sampler's seed.
+    progress : object, optional
+        Told ``progress.advance(done, total)`` as the chains' draws come in; None: nothing.
 
     Returns
     -------
@@ -260,7 +280,7 @@ def sample(logp: LogPosterior, *, settings: McmcOptions, rng: np.random.Generato
     mode = minimize_from(logp.objective, spec, spec.start, "lbfgs")
     mode_seconds = time.perf_counter() - t0
     starts = over_dispersed_starts(logp, mode.end, settings.chains, rng)
-    run = _run_nuts(logp, starts, settings, int(rng.integers(2**31 - 1)))
+    run = _run_nuts(logp, starts, settings, int(rng.integers(2**31 - 1)), progress)
     theta = logp.to_theta(run.z)
     post = az.convert_to_inference_data(
         {n: theta[..., i] for i, n in enumerate(spec.names)}
@@ -292,7 +312,9 @@ def sample(logp: LogPosterior, *, settings: McmcOptions, rng: np.random.Generato
     return Sampled(posterior, mode)
 
 
-def sample_fit(objective: Objective, *, settings: McmcOptions, rng: np.random.Generator) -> FitResult:
+def sample_fit(
+    objective: Objective, *, settings: McmcOptions, rng: np.random.Generator, progress: Any = None
+) -> FitResult:
     """A :class:`~rczone.estimation.result.FitResult` of posterior means and standard deviations.
 
     Each :class:`~rczone.results.Estimate` holds the posterior mean (``value``) and standard
@@ -309,6 +331,8 @@ def sample_fit(objective: Objective, *, settings: McmcOptions, rng: np.random.Ge
         Draws, warm-up and chains.
     rng : numpy.random.Generator
         Draws the starts and the sampler's seed.
+    progress : object, optional
+        Told how far the chains are (:func:`sample`); None: nothing.
 
     Returns
     -------
@@ -318,7 +342,7 @@ def sample_fit(objective: Objective, *, settings: McmcOptions, rng: np.random.Ge
     from rczone.estimation.minimize import log_likelihood, rmse_of, unit_of
 
     logp = posterior_of(objective)
-    run = sample(logp, settings=settings, rng=rng)
+    run = sample(logp, settings=settings, rng=rng, progress=progress)
     post = run.posterior
     spec, net, data = objective.spec, objective.network, objective.data
     mean, sd = post.mean, post.sd

@@ -502,6 +502,7 @@ def global_search(
     max_evals: int | None = None,
     n_sample: int | None = None,
     scale: float = 0.0,
+    progress=None,
 ) -> tuple[list[StartOutcome], SearchSummary]:
     """Minimize ``cost(eta)`` globally (see the module notes).
 
@@ -526,6 +527,9 @@ def global_search(
     scale : float
         The cost's natural scale (for least squares, the data's variation around their mean), for
         :func:`cost_tolerance`.
+    progress : object, optional
+        Told ``progress.advance(done, most)`` after each local search (``most``: the starts chosen,
+        an upper bound of the adaptive search); None: nothing is told.
 
     Returns
     -------
@@ -588,6 +592,8 @@ def global_search(
             if k == 0 and len(starts) > 1:
                 continue
             raise
+        if progress is not None:
+            progress.advance(k + 1, len(starts))
         if k == 0 and adaptive and optimizer == "lbfgs" and outcomes[-1].converged:
             restart_second(starts, start_costs, spec, outcomes[-1].end, rng)
             restarted = True
@@ -631,6 +637,8 @@ def global_search(
             else:
                 check = minimize_from(cost, spec, best.theta, second, max_evals)
             outcomes.append(check)
+            if progress is not None:
+                progress.advance(len(outcomes), len(outcomes) + 1)
             came_back = abs(check.cost - best.cost) <= tol_of(best.cost)
             if check.cost >= best.cost - tol_of(best.cost) and (check.converged or came_back):
                 converged, confirmed_by = True, second

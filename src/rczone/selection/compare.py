@@ -550,7 +550,9 @@ def select_models(
     alpha : float
         Level of the likelihood-ratio tests.
     progress : callable, optional
-        Called with the name of each model before it is fitted.
+        Called with the name of each model before it is fitted; when it also has
+        ``advance(done, total)`` (:class:`rczone.cli.progress.Reporter`), each fit tells it how far
+        its search is.
     **overrides
         Fields of :class:`~rczone.estimation.settings.FitSettings` replacing those of ``settings``.
 
@@ -606,7 +608,14 @@ def select_models(
         def run(zm: ZoneModel) -> Calibration:
             box = {k: v for k, v in bounds.items() if k in free[name]}
             return calibrate(
-                zm, frame, settings, method="ml", free=free[name], bounds=box, fixed=own[name].fixed or {}
+                zm,
+                frame,
+                settings,
+                method="ml",
+                free=free[name],
+                bounds=box,
+                fixed=own[name].fixed or {},
+                progress=progress if hasattr(progress, "advance") else None,
             )
 
         cal = run(by_name[name])

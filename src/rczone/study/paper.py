@@ -149,6 +149,11 @@ class PaperStudy:
         }
 
 
+def _counter(progress: Callable[[str], None]) -> Any:
+    """``progress`` for a fit's search when it counts steps (``advance``, a CLI progress bar), else None."""
+    return progress if hasattr(progress, "advance") else None
+
+
 def model_order_study(progress: Callable[[str], None]) -> ModelOrderStudy:
     """Section III of the paper on the virtual building: three orders simulated and compared."""
     models = {k: get_model(k) for k in ORDERS}
@@ -254,7 +259,14 @@ def identification_study(
         for meth in METHODS:
             progress(f"attempt {att}: calibrating on {cal_set} by {meth.upper()}")
             cal = calibrate(
-                net, frames[cal_set], method=meth, free=PAPER_FREE[meth], n_starts=3, seed=1, constants=const
+                net,
+                frames[cal_set],
+                method=meth,
+                free=PAPER_FREE[meth],
+                n_starts=3,
+                seed=1,
+                constants=const,
+                progress=_counter(progress),
             )
             entry = {
                 "parameters": {
@@ -311,6 +323,7 @@ def _map_prior_study(
                 seed=1,
                 constants=const,
                 uncertainty=False,
+                progress=_counter(progress),
             )
             fits[s] = {
                 "Rw": cal.result.estimates["Rw"],
@@ -355,6 +368,7 @@ def closed_loop_study(progress: Callable[[str], None]) -> ClosedLoopStudy:
         for meth in ("ls", "ml"):
             fits = {}
             for s, f in frames.items():
+                progress(f"closed-loop study ({case}): {meth.upper()} fit to night {s}")
                 cal = calibrate(
                     net,
                     f,
@@ -364,6 +378,7 @@ def closed_loop_study(progress: Callable[[str], None]) -> ClosedLoopStudy:
                     seed=1,
                     constants=const,
                     uncertainty=False,
+                    progress=_counter(progress),
                 )
                 other = "C" if s == "A" else "A"
                 fits[s] = {

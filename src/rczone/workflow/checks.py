@@ -54,7 +54,8 @@ def fit_and_check(
     others : mapping of name to DataFrame, optional
         Other data to fit and predict in the checks.
     progress : callable
-        Called with a short message before each long step.
+        Called with a short message before each long step; when it also has ``advance(done, total)``
+        (:class:`rczone.cli.progress.Reporter`), the fit tells it how far its search is.
     analyses : bool
         The analyses after the fit that a reader looks at (:func:`rczone.calibration.calibrate`);
         batch calibration, which stores estimates and errors only, skips them.
@@ -79,6 +80,7 @@ def fit_and_check(
         provenance={"data": label, "model": model.label},
         analyses=analyses,
         data=data,
+        progress=progress if hasattr(progress, "advance") else None,  # a bar that counts the searches
     )
     if settings.checks or others:
         cal = check_fit(cal, frame, settings, others=others, progress=progress)
@@ -195,7 +197,9 @@ class PostFitChecks:
         validation = {}
         for name, f in self.others.items():
             progress(f"fitting {name} for comparison")
-            fits[name] = verdict_fit(calibrate(zm, f, settings))
+            fits[name] = verdict_fit(
+                calibrate(zm, f, settings, progress=progress if hasattr(progress, "advance") else None)
+            )
             ol = predict(zm, f, settings.constants or None)
             validation[name] = {"rmse_K": ol.rmse_K, "max_error_K": ol.max_abs_K}
         checks = {

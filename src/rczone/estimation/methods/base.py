@@ -202,6 +202,8 @@ class FitProblem:
         Evaluation budget per local search.
     uncertainty : bool
         Whether to compute standard errors and correlations.
+    progress : object, optional
+        Told how far the search or the sampler is (``progress.advance(done, total)``); None: nothing.
     """
 
     network: RCNetwork
@@ -213,6 +215,7 @@ class FitProblem:
     n_starts: int | None = None
     max_evals: int | None = None
     uncertainty: bool = True
+    progress: Any = None
 
     def objective(self, *, kernel_method: str | None = None, prior_spread: float | None = None,
                   likelihood_weight: float = 1.0) -> Objective:  # fmt: skip

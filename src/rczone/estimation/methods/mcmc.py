@@ -53,7 +53,7 @@ def run(problem: FitProblem, options: McmcOptions, rng: np.random.Generator):
     """Sample the posterior of the ML objective from around one L-BFGS search."""
     from rczone.estimation.sampling import sample_fit
 
-    return sample_fit(problem.objective(), settings=options, rng=rng)
+    return sample_fit(problem.objective(), settings=options, rng=rng, progress=problem.progress)
 
 
 METHOD = Method(
