@@ -27,7 +27,15 @@ cooling load ``m cp (Ti - T_ahu)`` to first order. The QP is solved, the nominal
 re-simulated with the exact model at the new flows, and the QP solved again
 (``linearizations`` passes, default 2; Diehl et al. [2]_ call this a real-time iteration when
 one pass is made per sample). The first nominal is the last plan shifted by one step, and
-OSQP starts from the last primal and dual solution (warm start).
+OSQP starts from the last solution shifted likewise (warm start).
+
+**The QP's form.** By default the states are eliminated (:mod:`rczone.control.qp`, the
+condensed form): the QP has the flows, reheat powers and slacks only, one sparsity pattern at
+every step, so one OSQP problem is set up once and later only updated. For the paper's 13-state
+model this takes OSQP from thousands of iterations to tens or hundreds, and a step (observer,
+two linearizations, two QPs) from about 0.5 s to 0.04 s of CPU (``bench/mpc_step.py``, which
+replays one run through both forms and checks that they act alike). ``formulation="uncondensed"``
+keeps the earlier form (states as variables, the dynamics as equality constraints).
 
 **Why OSQP.** An operator-splitting QP solver (Stellato et al. [1]_): maintained (Oxford and
 Princeton, v1 2024), BSD-licensed, small binary wheels with only numpy and scipy as
@@ -60,6 +68,17 @@ from rczone.control.disturbance import Disturbance
 from rczone.control.energy import FAN_W_PER_KG_S
 from rczone.control.model import ControlModel
 from rczone.control.observer import Estimate, KalmanObserver
+from rczone.control.qp import (
+    OSQP_SETTINGS,
+    Band,
+    CondensedSolver,
+    Coupling,
+    Decision,
+    Prediction,
+    QPMatrices,
+    Weights,
+    condensed_qp,
+)
 from rczone.data.units import to_si
 from rczone.errors import InputShapeError, ParameterError, RczoneError, did_you_mean
 from rczone.models.zone import ZoneModel
@@ -67,6 +86,8 @@ from rczone.network import CP_AIR
 
 #: Joules per kWh.
 J_PER_KWH = 3.6e6
+#: The QP's forms (:class:`MPCSettings`).
+FORMULATIONS = ("condensed", "uncondensed")
 
 
 @dataclass(frozen=True)
@@ -90,6 +111,11 @@ class MPCSettings:
         Cost per (kg/s)^2 of flow change and per kW^2 of reheat change between steps.
     linearizations : int
         Sequential-linearization passes per step.
+    formulation : {"condensed", "uncondensed"}
+        The QP's form: ``condensed`` (default) eliminates the states and keeps one OSQP problem,
+        updated and warm-started from step to step (:mod:`rczone.control.qp`); ``uncondensed``
+        keeps the states as variables and the dynamics as equality constraints, set up afresh
+        for every pass (the form before issue 33, several times slower for a 13-state model).
     """
 
     dt: float = 600.0
@@ -103,8 +129,13 @@ class MPCSettings:
     comfort_weight_quadratic: float = 50.0
     move_weight: float = 1e-2
     linearizations: int = 2
+    formulation: str = "condensed"
 
     def __post_init__(self) -> None:
+        if self.formulation not in FORMULATIONS:
+            raise ParameterError(
+                f"MPC setting formulation must be one of {', '.join(FORMULATIONS)}, got {self.formulation!r}"
+            )
         for k in ("dt", "comfort_weight", "comfort_weight_quadratic", "move_weight"):
             v = getattr(self, k)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0) or (k == "dt" and v <= 0):
@@ -215,20 +246,12 @@ class QPData(NamedTuple):
 
 
 def _shifted(z: np.ndarray, n: int, H: int) -> np.ndarray:
-    """A solution ``[x_1..x_H, m, P, s]`` moved one step on (the last step repeated)."""
+    """A solution ``[x_1..x_H, d_1 (H), ..., s (H)]`` moved one step on (the last step repeated)."""
     x = z[: n * H].reshape(H, n)
-    rest = [z[n * H + i * H : n * H + (i + 1) * H] for i in range(3)]
-    return np.concatenate([np.vstack([x[1:], x[-1:]]).ravel(), *(np.r_[v[1:], v[-1]] for v in rest)])
-
-
-class QPMatrices(NamedTuple):
-    """The sparse QP ``min 1/2 z'Pz + q'z, lower <= Az <= upper`` as OSQP takes it."""
-
-    P: sp.csc_matrix  #: upper triangle of the quadratic term
-    q: np.ndarray  #: linear term
-    A: sp.csc_matrix  #: constraint matrix
-    lower: np.ndarray
-    upper: np.ndarray
+    rest = z[n * H :].reshape(-1, H)
+    return np.concatenate(
+        [np.vstack([x[1:], x[-1:]]).ravel(), np.hstack([rest[:, 1:], rest[:, -1:]]).ravel()]
+    )
 
 
 class _Triplets:
@@ -425,8 +448,7 @@ class MPC:
                 A.rows += 1
                 lo.append(bounds[0])
                 hi.append(bounds[1])
-        lim = self.limits
-        span = np.maximum(lim.ts_max - np.asarray(fc.t_ahu, float)[:H], 0.0) * CP_AIR / 1e3
+        span = self._span(fc, H) / 1e3
         m_lo, m_hi = self.flow_bounds(fc, H)
         for k in range(H):  # input bounds, reheat limit P <= m cp (ts_max - T_ahu), slack >= 0
             r = A.rows
@@ -453,43 +475,65 @@ class MPC:
         qv[ip] -= 2 * s.move_weight * p_prev / 1e3
         return QPMatrices(sp.triu(P, format="csc"), qv, A.matrix(nz), np.array(lo), np.array(hi))
 
+    def _condensed(
+        self, x0, u, fc, q: QPData, bounds: tuple[np.ndarray, np.ndarray], m_prev: float, p_prev: float
+    ) -> QPMatrices:
+        """The same QP as :meth:`_qp` without the states, in z = [m, P (kW), s] (:mod:`rczone.control.qp`)."""
+        s = self.settings
+        H = len(q.qm)
+        c = self.cm.matrices
+        Cy, Dy = c.C[0], c.D[0]
+        span = self._span(fc, H) / 1e3
+        decisions = [
+            Decision(q.G, q.qm, bounds[0], bounds[1], m_prev),
+            Decision(1e3 * q.Ed, 1e3 * q.qp, np.zeros(H), np.full(H, np.inf), p_prev / 1e3),
+        ]
+        dy = u[1 : H + 1] @ Dy
+        low, up = np.asarray(fc.lower, float)[1 : H + 1], np.asarray(fc.upper, float)[1 : H + 1]
+        band = Band(low - dy, up - dy, np.r_[q.qx[1:H], 0.0])
+        weights = Weights(s.comfort_weight, s.comfort_weight_quadratic, s.move_weight)
+        return condensed_qp(Prediction(q.Ad, q.c, x0, Cy), decisions, band, weights, [Coupling(1, 0, span)])
+
+    def _span(self, fc: Forecast, H: int) -> np.ndarray:
+        """The reheat power per unit flow at the discharge limit, ``cp (ts_max - T_ahu)``, W per kg/s, (H,)."""
+        return np.maximum(self.limits.ts_max - np.asarray(fc.t_ahu, float)[:H], 0.0) * CP_AIR
+
+    def _solve(self, qp: QPMatrices, z: np.ndarray | None) -> Any:
+        """OSQP's result: the kept, updated problem (condensed) or a fresh one (uncondensed)."""
+        if self.settings.formulation == "condensed":
+            if self._mem.solver is None:
+                self._mem.solver = CondensedSolver(_osqp())
+            return self._mem.solver.solve(qp, warm=z)
+        solver = _osqp().OSQP()
+        solver.setup(qp.P, qp.q, qp.A, qp.lower, qp.upper, **OSQP_SETTINGS)
+        if z is not None:  # the last step's solution shifted, then the last pass's
+            solver.warm_start(x=z)
+        return solver.solve(raise_error=False)
+
     def plan(
         self, x0: np.ndarray, forecast: Forecast, *, nominal: tuple[np.ndarray, np.ndarray] | None = None
     ) -> Plan:
         """Solve the problem from state ``x0`` (n,) (see the module notes)."""
-        osqp = _osqp()
         H = self._check(forecast)
         u = self._input_matrix(forecast, H)
-        lim = self.limits
         mem = self._mem
-        m_lo, m_hi = self.flow_bounds(forecast, H)
-        m_prev = mem.action.m if mem.action else m_lo[0]
+        bounds = self.flow_bounds(forecast, H)
+        m_prev = mem.action.m if mem.action else bounds[0][0]
         p_prev = mem.action.reheat if mem.action else 0.0
-        m, reheat = nominal if nominal is not None else (m_lo.copy(), np.zeros(H))
-        m = np.clip(m, m_lo, m_hi)
+        m, reheat = nominal if nominal is not None else (bounds[0].copy(), np.zeros(H))
+        m = np.clip(m, *bounds)
         elapsed, status = 0.0, ""
-        z = _shifted(mem.z, len(x0), H) if mem.z is not None and len(mem.z) == (len(x0) + 3) * H else None
         n = len(x0)
+        off = 0 if self.settings.formulation == "condensed" else n * H  # where m starts in z
+        z = _shifted(mem.z, off // H, H) if mem.z is not None and len(mem.z) == off + 3 * H else None
         for _ in range(self.settings.linearizations):
             q = self.linearize(x0, u, forecast, m, reheat)
-            qp = self._qp(x0, u, forecast, q, m_prev, p_prev)
-            solver = osqp.OSQP()
-            solver.setup(
-                qp.P,
-                qp.q,
-                qp.A,
-                qp.lower,
-                qp.upper,
-                verbose=False,
-                eps_abs=1e-5,
-                eps_rel=1e-5,
-                max_iter=20000,
-                polishing=True,
-            )
-            if z is not None:  # the last step's solution shifted, then the last pass's
-                solver.warm_start(x=z)
+            if off:
+                qp = self._qp(x0, u, forecast, q, m_prev, p_prev)
+            else:
+                qp = self._condensed(x0, u, forecast, q, bounds, m_prev, p_prev)
             t0 = _time.perf_counter()
-            res = solver.solve(raise_error=False)
+            res = self._solve(qp, z)
             elapsed += _time.perf_counter() - t0
             status = str(res.info.status)
             if res.x is None or not np.all(np.isfinite(res.x)):
@@ -497,13 +541,12 @@ class MPC:
                     f"the MPC's QP could not be solved ({status}); check the band and the bounds"
                 )
             z = res.x
-            m = np.clip(z[n * H : n * H + H], m_lo, m_hi)
-            span = np.maximum(lim.ts_max - np.asarray(forecast.t_ahu, float)[:H], 0.0) * CP_AIR
-            reheat = np.clip(z[n * H + H : n * H + 2 * H] * 1e3, 0.0, m * span)
+            m = np.clip(z[off : off + H], *bounds)
+            reheat = np.clip(z[off + H : off + 2 * H] * 1e3, 0.0, m * self._span(forecast, H))
         mem.z = z
         x = self.simulate(x0, u, m, reheat)
         c = self.cm.matrices
-        return Plan(m, reheat, x, x @ c.C[0] + u @ c.D[0], z[n * H + 2 * H :], status, elapsed)
+        return Plan(m, reheat, x, x @ c.C[0] + u @ c.D[0], z[off + 2 * H :], status, elapsed)
 
     # ------------------------------------------------------------ the loop
     def set_estimate(self, est: Estimate, time: float) -> None:
