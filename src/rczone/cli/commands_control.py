@@ -69,8 +69,19 @@ def control_test(
         ),
     ] = None,
     seeds: Annotated[
-        int, typer.Option("--seeds", help="With --compare: seeds --seed, --seed + 1, ... (paired runs).")
+        int,
+        typer.Option(
+            "--seeds", help="With --compare or --study: seeds --seed, --seed + 1, ... (paired runs)."
+        ),
     ] = 1,
+    study: Annotated[
+        str | None,
+        typer.Option(
+            "--study",
+            help="paper: the paper's Q1 (13-, 2-, 1-state models) and Q2 (fitted on forced vs closed-loop"
+            " data) under the MPC, with the commissioned thermostat, paired over --seeds in one table.",
+        ),
+    ] = None,
     json_out: Annotated[
         Path | None, typer.Option("--json", help="Write the scores as JSON ('-': stdout).")
     ] = None,
@@ -84,17 +95,28 @@ def control_test(
 
     zm = model(model_spec)
     out = out_console(json_out)
-    if compare is not None:
+    if compare is not None or study is not None:
         from rczone.control.comparison import Scenario, compare_entries
         from rczone.control.comparison import compare as compare_runs
+        from rczone.control.study import study_entries
 
         if seeds < 1:
             raise ParameterError(f"--seeds must be an integer >= 1, got {seeds}")
+        if compare is not None and study is not None:
+            raise ParameterError("give --compare or --study, not both")
         test = Scenario(scenario, days=days, price=price, comfort_band=band, forecast=forecast)
-        entries = compare_entries(compare, zm, model, disturbance=not no_disturbance)
+        if study is not None:
+            entries = study_entries(study)
+        else:
+            entries = compare_entries(compare, zm, model, disturbance=not no_disturbance)
         cmp = compare_runs(entries, list(range(seed, seed + seeds)), scenario=test)
         out.print(esc(cmp.summary()))
         write_json(json_out, cmp.to_dict())
+        if report_dir:
+            from rczone.control.comparison import comparison_report
+
+            path = comparison_report(cmp, report_dir)
+            out.print(f"report written to [bold]{esc(path)}[/]")
         return
     plant = VirtualPlant(scenario, days=days, seed=seed, price=price, comfort_band=band, forecast=forecast)
     res = closed_loop_test(
