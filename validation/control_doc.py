@@ -76,10 +76,10 @@ def baseline_tables(seeds, days: float) -> dict[str, str]:
     return out
 
 
-def paper_tables(seeds, days: float) -> dict[str, str]:
+def paper_tables(seeds, days: float, seasons=("summer", "winter")) -> dict[str, str]:
     entries = paper_entries()
     out = {}
-    for season in ("summer", "winter"):
+    for season in seasons:
         t0 = time.process_time()
         cmp = compare(entries, seeds, scenario=Scenario(season, days=days))
         out[f"paper-{season}"] = cmp.markdown()
@@ -118,7 +118,7 @@ def main(argv: list[str] | None = None) -> int:
         tables.update(baseline_tables(seeds, a.days))
         write_text_atomic(a.out, "\n\n".join(block(k, v) for k, v in tables.items()) + "\n")
     if a.only in (None, "paper"):
-        tables.update(paper_tables(seeds, a.days))
+        tables.update(paper_tables(seeds, a.days, tuple(a.paper_seasons.split(","))))
     write_text_atomic(a.out, "\n\n".join(block(k, v) for k, v in tables.items()) + "\n")
     write_text_atomic(a.page, paste(a.page.read_text(), tables))
     return 0
