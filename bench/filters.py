@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import problems  # noqa: E402
 from rczone.estimation import Dataset, Objective, make_spec  # noqa: E402
-from rczone.kernels.arrays import Discretization, FilterOptions, Observation, Prior, Series  # noqa: E402
+from rczone.kernels.arrays import Discretization, FilterOptions, FilterStart, Observation, Series  # noqa: E402
 from rczone.kernels.discretize import interval_matrices, modal_matrices  # noqa: E402
 from rczone.kernels.kalman import (  # noqa: E402
     kalman_filter,
@@ -80,7 +80,7 @@ def both_filters(prob, theta: np.ndarray):
     obs = Observation(
         mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
     )
-    prior = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
+    prior = FilterStart(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
     series = Series(u, y, which)
 
     def general() -> float:

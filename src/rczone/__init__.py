@@ -53,6 +53,9 @@ _EXPORTS = {
     "FitProblem": "rczone.estimation.methods",
     "register_method": "rczone.estimation.methods",
     "method_names": "rczone.estimation.methods",
+    # plug-ins: controllers and emulators (rczone.controllers, rczone.emulators entry points)
+    "register_controller": "rczone.control.registry",
+    "register_emulator": "rczone.emulators.registry",
     # results
     "Calibration": "rczone.calibration",
     "Prediction": "rczone.calibration",

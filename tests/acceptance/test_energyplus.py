@@ -176,8 +176,11 @@ def test_the_plant_steps_energyplus_and_its_set_points_are_followed():
             plant.step({f"m_{ZONE}": 0.2})
         fc = plant.forecast(7200.0, interval=1800.0)
         assert fc["To"].shape == (5,) and abs(fc["To"][0] - first["To"]) < 1.5
-        ti = [plant.step({f"Tset_{ZONE}": 17.0 if k < 12 else 25.0})[f"Ti_{ZONE}"] for k in range(24)]
-        assert ti[-1] > 23.5 and ti[11] < 19.5 and ti[-1] - ti[11] > 4.0
+        low = {f"heating_{ZONE}": 12.0, f"cooling_{ZONE}": 21.0}  # the lowest the limits allow
+        ti = [plant.step(low if k < 12 else {f"Tset_{ZONE}": 25.0})[f"Ti_{ZONE}"] for k in range(24)]
+        assert ti[-1] > 23.5 and ti[11] < 21.5 and ti[-1] - ti[11] > 2.0
+        asked = plant.series(ZONE)["heating_asked"]
+        assert asked[-1] == 24.0  # Tset 25 asks 24.5 for heating: clipped to the limit
         k = plant.kpis()
         assert k["energy_kWh"] > 0 and k["comfort_Kh"] >= 0 and k["peak_power_kW"] > 0
     finally:

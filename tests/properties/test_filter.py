@@ -26,8 +26,8 @@ from rczone.kernels.arrays import (
     Discretization,
     Dynamics,
     FilterOptions,
+    FilterStart,
     Observation,
-    Prior,
     Series,
     dynamics_model,
 )
@@ -101,7 +101,7 @@ def _compiled_nll(args: tuple, steady_rtol: float) -> float:
         Dynamics(Phi, G0, G1, Qd),
         no_sensitivities(Phi.shape[0], n, p),
         Observation(C, D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))),
-        Prior(x0, P0, np.empty((0, n)), np.empty((0, n, n))),
+        FilterStart(x0, P0, np.empty((0, n)), np.empty((0, n, n))),
         Series(u, y, which.astype(np.int64)),
         FilterOptions(bool(np.any(G1)), False, steady_rtol),
         outputs(y.shape[0], n, ny, 0, False, False),
@@ -178,7 +178,7 @@ def test_modal_coordinates_equal_the_numpy_twin(seed, n_cap, n_massless, n_outpu
     obs = Observation(
         ss.C, ss.D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))
     )
-    prior = Prior(x0, P0, np.empty((0, n)), np.empty((0, n, n)))
+    prior = FilterStart(x0, P0, np.empty((0, n)), np.empty((0, n, n)))
     for steady_rtol in (0.0, 1e-14):
         trace = outputs(t.size, n, ny, 0, True, False)
         nll, n_obs, _, _ = kalman_filter(
@@ -209,7 +209,7 @@ def test_modal_coordinates_compute_values_only():
     obs = Observation(
         ss.C, ss.D, np.diag(R).copy(), np.empty((ny, 0, n)), np.empty((ny, 0, p)), np.empty((ny, 0))
     )
-    prior = Prior(x0, P0, np.empty((0, n)), np.empty((0, n, n)))
+    prior = FilterStart(x0, P0, np.empty((0, n)), np.empty((0, n, n)))
     dyn0 = no_sensitivities(uniq.shape[0], n, p)
     opts = FilterOptions(False, False, 0.0)
     with pytest.raises(ValueError, match="values and innovations only"):

@@ -115,3 +115,26 @@ def test_every_command_line_option_has_an_api_keyword(command):
         if name not in keywords:
             missing.append(param.opts[0])
     assert not missing, f"rczone {command} options without an API keyword: {missing}"
+
+
+#: The readers below the data-source protocol: the command line reaches files only through it.
+READERS = {"rczone.workflow.reader", "rczone.data", "rczone.data.zonedata", "rczone.data.reader"}
+
+
+def readers_imported_by_the_cli(root: Path = SRC) -> dict[str, list[str]]:
+    out = {}
+    for path in sorted((root / "cli").glob("*.py")):
+        names = []
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.module in READERS:
+                names += [
+                    f"{node.module}.{a.name}" for a in node.names if "read" in a.name or "load" in a.name
+                ]
+        if names:
+            out[path.name] = names
+    return out
+
+
+def test_the_command_line_reads_data_through_the_data_source_protocol():
+    """CLI, API and batch read a zone's data the same way (issue 34): rczone.workflow.datasource."""
+    assert readers_imported_by_the_cli() == {}

@@ -57,6 +57,17 @@ from rczone.results import Result
 from rczone.results.accessors import FitAccessors
 from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, dropped_samples, verdict_of
 
+#: What a calibration with pending checks makes on their first read (:attr:`Calibration.pending`).
+_DEFERRED = ("checks", "identifiability", "verdict")
+
+
+def stamped(model: ZoneModel, verdict: Verdict) -> ZoneModel:
+    """``model`` whose provenance records ``verdict`` (trustworthy, and the reasons if not)."""
+    import dataclasses
+
+    provenance = {**model.provenance, "trustworthy": verdict.trustworthy, "flags": list(verdict.reasons)}
+    return dataclasses.replace(model, provenance=provenance)
+
 
 @dataclass(frozen=True, eq=False, repr=False)
 class Calibration(FitAccessors, Result):
@@ -110,7 +121,17 @@ class Calibration(FitAccessors, Result):
         Whether the inputs were excited apart (:mod:`rczone.data.excitation`); collinear inputs
         are named in the verdict's notes.
     verdict : Verdict
-        The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction.
+        The one verdict (:func:`rczone.results.verdict.verdict_of`), computed at construction, or
+        with the checks when they are pending.
+    pending : callable, optional
+        The post-fit checks still to make: called once with the calibration, it returns
+        ``(checks, identifiability)``. Until then ``checks``, ``identifiability`` and ``verdict``
+        are not computed; the first read of any of them (``summary()``, ``to_dict()`` and the
+        report read them) makes all three, as statsmodels computes ``bse`` on first access, and
+        the fitted model's provenance then records the verdict (:func:`rczone.fit`; issue 34).
+    data : Dataset or None
+        The data set the fit was made on (the longest complete stretch of the frame, SI units),
+        which the checks after the fit reuse instead of building it again.
     """
 
     result: FitResult
@@ -128,8 +149,30 @@ class Calibration(FitAccessors, Result):
     evidence: Any = None
     excitation: Any = None
     verdict: Verdict = field(init=False)
+    pending: Any = field(default=None, compare=False)
+    data: Dataset | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
+        if self.pending is None:
+            self._judge()
+
+    def __getattribute__(self, name: str) -> Any:
+        """A deferred attribute (:data:`_DEFERRED`) with the pending checks made first, once."""
+        if name in _DEFERRED and object.__getattribute__(self, "__dict__").get("pending") is not None:
+            object.__getattribute__(self, "_make_pending")()
+        return object.__getattribute__(self, name)
+
+    def _make_pending(self) -> None:
+        """Make the pending checks, the verdict from them, and record it in the model's provenance."""
+        checks, diag = self.pending(self)
+        object.__setattr__(self, "checks", checks)
+        object.__setattr__(self, "identifiability", diag)
+        object.__setattr__(self, "pending", None)
+        self._judge()
+        object.__setattr__(self, "model", stamped(self.model, self.verdict))
+
+    def _judge(self) -> None:
+        """Set :attr:`verdict` from the fit and the checks made."""
         white = self.innovations.white if self.innovations is not None else None
         verdict = verdict_of(
             self.result,
@@ -459,6 +502,7 @@ def calibrate(
         data_warnings=data.warnings,
         robust=robust,
         excitation=excitation,
+        data=data,
     )
 
 

@@ -293,13 +293,10 @@ def with_holdout(cal, scores: HorizonScores):
     """
     import dataclasses
 
+    from rczone.calibration.calibration import stamped
+
     checked = dataclasses.replace(cal, evidence=held_out_evidence(scores, cal.innovations))
-    v = checked.verdict
-    model = dataclasses.replace(
-        checked.model,
-        provenance={**checked.model.provenance, "trustworthy": v.trustworthy, "flags": list(v.reasons)},
-    )
-    return dataclasses.replace(checked, model=model)
+    return dataclasses.replace(checked, model=stamped(checked.model, checked.verdict))
 
 
 def verdict_fit(cal):

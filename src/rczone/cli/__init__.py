@@ -5,11 +5,10 @@ from __future__ import annotations
 import os
 import sys
 
+from rczone.kernels.blas import BLAS_THREADS  # numpy-free: the counts are set before numpy loads
+
 #: Exit code of an interrupted command (Ctrl-C), as a shell reports a SIGINT.
 INTERRUPTED = 130
-
-#: The variables that set the BLAS libraries' thread counts (OpenBLAS, OpenMP, MKL).
-BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 def run() -> int:
@@ -24,7 +23,8 @@ def run() -> int:
     The BLAS libraries run on one thread unless the user set otherwise: rczone's matrices are a
     few states wide, and a multi-threaded BLAS on a busy machine made each of scipy's L-BFGS-B
     steps wait milliseconds for its threads (4 ms instead of 30 us measured on a loaded 2-core
-    machine). Set before numpy is first imported; worker processes inherit it.
+    machine; :mod:`rczone.kernels.blas`). Set before numpy is first imported; worker processes
+    inherit it.
     """
     for var in BLAS_THREADS:
         os.environ.setdefault(var, "1")

@@ -1,4 +1,5 @@
-"""``rczone control-test``: run the virtual building with a controller on its target zone, and score it."""
+"""``rczone control-test``: run a controller on a zone of the virtual building or of an EnergyPlus
+prototype (``--emulator energyplus``), and score it."""
 
 from __future__ import annotations
 
@@ -45,13 +46,38 @@ def control_test(
         ),
     ] = "normal",
     forecast: Annotated[
-        str,
+        str | None,
         typer.Option(
             "--forecast",
-            help="measured: diurnal outdoor curve shifted by the last error; perfect: the run's true"
-            " weather and prices; biased: measured + 2 K.",
+            help="virtual: measured (default; diurnal outdoor curve shifted by the last error), perfect"
+            " (the run's true weather and prices), biased (measured + 2 K); energyplus: BOPTEST's"
+            " forecast uncertainty none (default), low, medium, high.",
         ),
-    ] = "measured",
+    ] = None,
+    emulator: Annotated[
+        str,
+        typer.Option(
+            "--emulator",
+            help="virtual (the built-in building), energyplus, or a registered or plug-in emulator"
+            " (entry-point group rczone.emulators; given --days, --seed and --price).",
+        ),
+    ] = "virtual",
+    building: Annotated[
+        str | None,
+        typer.Option("--building", help="energyplus: a prototype (office_small, office_medium...)."),
+    ] = None,
+    weather: Annotated[
+        str, typer.Option("--weather", help="energyplus: a TMY3 weather file (rczone emulate --list).")
+    ] = "usa_il_chicago",
+    start: Annotated[str, typer.Option("--start", help="energyplus: first day, MM-DD.")] = "01-17",
+    zone: Annotated[
+        str | None, typer.Option("--zone", help="energyplus: the zone the controller runs.")
+    ] = None,
+    step: Annotated[int, typer.Option("--step", help="energyplus: the plant's step, minutes.")] = 15,
+    margin: Annotated[
+        float | None,
+        typer.Option("--margin", help="energyplus mpc: how far inside the comfort band it aims, K (0.1)."),
+    ] = None,
     noise_floor: Annotated[
         float,
         typer.Option(
@@ -89,12 +115,38 @@ def control_test(
         Path | None, typer.Option("--report", help="Folder for report.html and figures.")
     ] = None,
 ) -> None:
-    """Closed-loop test on the virtual building: comfort (K h), energy (kWh), peak flow, prediction RMSE."""
+    """Closed-loop test: comfort (K h), energy (kWh), cost, peak, prediction RMSE, solve time."""
     from rczone.control.closedloop import closed_loop_test
     from rczone.control.virtualplant import VirtualPlant
+    from rczone.emulators.registry import EMULATORS
 
+    EMULATORS.factory(emulator)  # an unknown name (or a plug-in that fails to load) is one line
     zm = model(model_spec)
     out = out_console(json_out)
+    if emulator == "energyplus":
+        from rczone.emulators.control import energyplus_test
+
+        if compare is not None or study is not None or report_dir is not None:
+            raise ParameterError(
+                "--compare, --study and --report are for the virtual building; run each controller alone"
+            )
+        options = dict(weather=weather, start=start, step_minutes=step, seed=seed, price=price)
+        plant = _energyplus_plant(building, zone, days, forecast or "none", options)
+        res = energyplus_test(plant, controller, model=zm, margin_K=margin, noise_floor=noise_floor)
+        out.print(esc(res.summary()))
+        write_json(json_out, res.to_dict())
+        return
+    if emulator != "virtual":  # a registered or plug-in emulator, with the options every plant has
+        from rczone.emulators.registry import make_plant
+
+        plant = make_plant(emulator, days=days, seed=seed, price=price)
+        res = closed_loop_test(
+            plant, controller, model=zm, disturbance=not no_disturbance, noise_floor=noise_floor
+        )
+        out.print(esc(res.summary()))
+        write_json(json_out, res.to_dict())
+        return
+    forecast = forecast or "measured"
     if compare is not None or study is not None:
         from rczone.control.comparison import Scenario, compare_entries
         from rczone.control.comparison import compare as compare_runs
@@ -129,3 +181,14 @@ def control_test(
 
         closed_loop_report(res).write(report_dir)
         out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
+
+
+def _energyplus_plant(building: str | None, zone: str | None, days: float, forecast: str, options: dict):
+    """The EnergyPlus plant of ``--emulator energyplus`` (its own checks say what is wrong)."""
+    from rczone.emulators.plant import EnergyPlusPlant
+
+    if building is None or zone is None:
+        raise ParameterError("--emulator energyplus needs --building and --zone (rczone emulate --list)")
+    if days != int(days):
+        raise ParameterError(f"--days must be whole days on EnergyPlus, got {days:g}")
+    return EnergyPlusPlant(building, zones=[zone], days=int(days), forecast=forecast, **options)

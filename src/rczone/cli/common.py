@@ -121,14 +121,15 @@ def model(spec: str) -> ZoneModel:
 
 
 def read_frame(path: Path, column_map: Path | None = None, zm: ZoneModel | None = None) -> pd.DataFrame:
-    """A zone's data as a frame in rczone's default columns (see :func:`rczone.workflow.reader.read_frame`).
+    """A zone's data as a frame in rczone's default columns, read by its data source as the API reads it.
 
-    With the model ``zm``, a file without a column map is read by the model's signal names.
+    ``path`` names a trend log (with its column map) or a built-in data set
+    (:func:`rczone.workflow.datasource.data_source`); with the model ``zm``, a file without a
+    column map is read by the model's signal names.
     """
-    from rczone.workflow.reader import read_frame as read
-    from rczone.workflow.reader import read_model_frame
+    from rczone.workflow.datasource import data_source
 
-    frame = read(path, column_map) if zm is None else read_model_frame(path, column_map, zm)
+    frame = data_source(path, column_map).frame(zm)
     note_ignored(frame, column_map, f"{zm.label if zm is not None else 'the model'} does not use")
     return frame
 

@@ -39,7 +39,7 @@ from rczone.control.export import NamedArrays, named_arrays, to_control
 from rczone.control.model import ControlModel, DiscreteMatrices, FlowDerivative
 from rczone.control.mpc import MPC, ControlAction, Forecast, MPCSettings, Plan
 from rczone.control.noise import NoiseModel
-from rczone.control.observer import Estimate, KalmanObserver, StateEstimate, estimate_state
+from rczone.control.observer import KalmanObserver, StateEstimate, StateMoments, estimate_state
 from rczone.control.plant import Controller, Plant
 from rczone.control.registry import ControllerOptions, controller_names, make_controller, register_controller
 from rczone.models.zone import FORMAT, DiscreteModel, ZoneModel
@@ -54,7 +54,6 @@ __all__ = [
     "DiscreteMatrices",
     "DiscreteModel",
     "Disturbance",
-    "Estimate",
     "FlowDerivative",
     "Forecast",
     "KalmanObserver",
@@ -64,6 +63,7 @@ __all__ = [
     "Plan",
     "Plant",
     "StateEstimate",
+    "StateMoments",
     "ZoneConstraints",
     "ZoneModel",
     "ZonePower",

@@ -68,7 +68,7 @@ import scipy.sparse as sp
 from rczone.control.disturbance import Disturbance
 from rczone.control.energy import FAN_W_PER_KG_S
 from rczone.control.model import ControlModel
-from rczone.control.observer import Estimate, KalmanObserver
+from rczone.control.observer import KalmanObserver, StateMoments
 from rczone.control.qp import (
     OSQP_SETTINGS,
     Band,
@@ -309,7 +309,7 @@ class _Triplets:
 class _Memory:
     """What the controller keeps between steps (the observer estimate, the last plan and action)."""
 
-    est: Estimate | None = None
+    est: StateMoments | None = None
     time: float | None = None
     u: np.ndarray | None = None
     action: ControlAction | None = None
@@ -686,10 +686,10 @@ class MPC:
         return Plan(m, reheat, x, y, z[off + nd * H :], status, elapsed, planned)
 
     # ------------------------------------------------------------ the loop
-    def set_estimate(self, est: Estimate, time: float) -> None:
+    def set_estimate(self, est: StateMoments, time: float) -> None:
         """Start (or reset) the observer from ``est`` at ``time`` (e.g. from :func:`estimate_state`)."""
         self._mem = _Memory(
-            est=Estimate(np.asarray(est.x, float), np.asarray(est.P, float)), time=float(time)
+            est=StateMoments(np.asarray(est.x, float), np.asarray(est.P, float)), time=float(time)
         )
 
     def step(self, time: float, measurements: Mapping[str, float], forecast: Forecast) -> ControlAction:
@@ -740,7 +740,7 @@ class MPC:
         return action
 
     @property
-    def estimate(self) -> Estimate | None:
+    def estimate(self) -> StateMoments | None:
         """The observer's current (filtered) estimate."""
         return self._mem.est
 

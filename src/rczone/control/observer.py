@@ -30,19 +30,13 @@ from scipy.linalg import solve_discrete_are
 from rczone.control.disturbance import Disturbance
 from rczone.control.model import ControlModel
 from rczone.errors import DataError, InputShapeError
+from rczone.kernels.arrays import StateMoments
 from rczone.models.zone import ZoneModel
 
 #: Prior standard deviation of the disturbance state when the filter starts: W or K.
 DISTURBANCE_PRIOR_SD = {"heat": 200.0, "offset": 1.0}
 #: Prior standard deviation of every node temperature when the filter starts, K.
 NODE_PRIOR_SD = 2.0
-
-
-class Estimate(NamedTuple):
-    """Mean ``x`` (n,) and covariance ``P`` (n, n) of the state."""
-
-    x: np.ndarray
-    P: np.ndarray
 
 
 class SteadyStateGain(NamedTuple):
@@ -75,15 +69,15 @@ class KalmanObserver:
         self.model = model
 
     def predict(
-        self, est: Estimate, u: np.ndarray, m: float | np.ndarray, dt: float, *, heat: float = 0.0
-    ) -> Estimate:
+        self, est: StateMoments, u: np.ndarray, m: float | np.ndarray, dt: float, *, heat: float = 0.0
+    ) -> StateMoments:
         """Time update over ``dt`` s with inputs ``u`` (p,), flow ``m`` and supply-node heat ``heat`` W held."""
         d = self.model.discrete(dt, m)
         x = d.Ad @ est.x + d.Bd @ np.asarray(u, float) + d.Ed[:, 0] * heat
         P = d.Ad @ est.P @ d.Ad.T + d.Qd
-        return Estimate(x, 0.5 * (P + P.T))
+        return StateMoments(x, 0.5 * (P + P.T))
 
-    def update(self, est: Estimate, y: np.ndarray, u: np.ndarray) -> tuple[Estimate, np.ndarray]:
+    def update(self, est: StateMoments, y: np.ndarray, u: np.ndarray) -> tuple[StateMoments, np.ndarray]:
         """Measurement update with outputs ``y`` (ny,; NaN = missing); returns the estimate and the innovation."""
         c = self.model.matrices
         y = np.asarray(y, float)
@@ -96,10 +90,10 @@ class KalmanObserver:
         K = np.linalg.solve(S, C @ est.P).T
         ImKC = np.eye(len(est.x)) - K @ C
         P = ImKC @ est.P @ ImKC.T + K @ R @ K.T
-        return Estimate(est.x + K @ e[obs], 0.5 * (P + P.T)), e
+        return StateMoments(est.x + K @ e[obs], 0.5 * (P + P.T)), e
 
     def filter(
-        self, t: np.ndarray, u: np.ndarray, m: np.ndarray, y: np.ndarray, prior: Estimate
+        self, t: np.ndarray, u: np.ndarray, m: np.ndarray, y: np.ndarray, prior: StateMoments
     ) -> FilterRun:
         """Filter samples ``t`` (N,), inputs ``u`` (N, p), flows ``m`` (N, nf), outputs ``y`` (N, ny).
 
@@ -128,7 +122,7 @@ class KalmanObserver:
         Pf = P - K @ S @ K.T
         return SteadyStateGain(K, 0.5 * (P + P.T), 0.5 * (Pf + Pf.T))
 
-    def prior(self, y0: np.ndarray) -> Estimate:
+    def prior(self, y0: np.ndarray) -> StateMoments:
         """A broad prior: every node at the first measured output, :data:`NODE_PRIOR_SD` K; disturbance 0."""
         finite = np.asarray(y0, float)[np.isfinite(y0)]
         if finite.size == 0:
@@ -140,7 +134,7 @@ class KalmanObserver:
         if dist is not None:
             x[-1] = 0.0
             sd[-1] = DISTURBANCE_PRIOR_SD[dist.kind]
-        return Estimate(x, np.diag(sd**2))
+        return StateMoments(x, np.diag(sd**2))
 
 
 @dataclass(frozen=True, eq=False)
@@ -241,7 +235,7 @@ def estimate_state(
         )
     obs = KalmanObserver(cm)
     run = obs.filter(t, u, m, y, obs.prior(y[np.flatnonzero(np.isfinite(y).any(axis=1))[0]]))
-    est = Estimate(run.x_filt[-1], run.P_filt[-1])
+    est = StateMoments(run.x_filt[-1], run.P_filt[-1])
     if now > t[-1]:
         est = obs.predict(est, u[-1], m[-1], float(now - t[-1]))
     units = tuple("degC" for _ in cm.model.network.state_names)

@@ -23,12 +23,11 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from importlib.metadata import entry_points
-from typing import Any
 
 from rczone.control.mpc import MPCSettings
 from rczone.control.plant import Controller, Plant
-from rczone.errors import ParameterError, did_you_mean
+from rczone.control.plugins import Registry
+from rczone.errors import ParameterError
 from rczone.models.zone import ZoneModel
 
 #: The entry-point group of controller plug-ins.
@@ -55,7 +54,16 @@ class ControllerOptions:
 
 Factory = Callable[[Plant, ControllerOptions], Controller]
 
-_FACTORIES: dict[str, Factory] = {}
+
+def _builtins() -> dict[str, Factory]:
+    """The built-in controllers (imported on the first look-up)."""
+    from rczone.control import builtin
+
+    return builtin.FACTORIES
+
+
+#: The controllers by name (:class:`rczone.control.plugins.Registry`).
+CONTROLLERS = Registry("controller", ENTRY_POINT_GROUP, _builtins)
 
 
 def register_controller(name: str, factory: Factory) -> None:
@@ -67,21 +75,17 @@ def register_controller(name: str, factory: Factory) -> None:
     factory : callable
         ``factory(plant, options) -> Controller``.
     """
-    if not (isinstance(name, str) and name.strip() and name.isprintable()):
-        raise ParameterError(f"a controller name must be a non-empty printable string, got {name!r}")
-    if not callable(factory):
-        raise ParameterError(f"the factory of controller {name!r} must be callable, got {factory!r}")
-    _FACTORIES[name] = factory
+    CONTROLLERS.register(name, factory)
 
 
-def _plugins() -> dict[str, Any]:
-    return {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+def unregister_controller(name: str) -> None:
+    """Remove a controller registered by :func:`register_controller`."""
+    CONTROLLERS.unregister(name)
 
 
 def controller_names() -> tuple[str, ...]:
     """Every controller name known: built in, registered and plug-ins, sorted."""
-    _builtins()
-    return tuple(sorted({*_FACTORIES, *_plugins()}))
+    return CONTROLLERS.names()
 
 
 def make_controller(name: str, plant: Plant, options: ControllerOptions | None = None) -> Controller:
@@ -90,32 +94,13 @@ def make_controller(name: str, plant: Plant, options: ControllerOptions | None =
     Raises
     ------
     ParameterError
-        For an unknown name (with the close ones) or a plug-in that fails to load.
+        For an unknown name (with the close ones), a plug-in that fails to load, or a factory
+        that returns no controller.
     """
-    _builtins()
-    factory = _FACTORIES.get(name)
-    if factory is None:
-        ep = _plugins().get(name)
-        if ep is None:
-            raise ParameterError(
-                f"unknown controller {name!r}; " + did_you_mean(str(name), controller_names())
-            )
-        try:
-            factory = ep.load()
-        except Exception as exc:  # a plug-in's import error is the user's to fix, in one line
-            raise ParameterError(f"controller plug-in {name!r} ({ep.value}) failed to load: {exc}") from exc
-    controller = factory(plant, options or ControllerOptions())
+    controller = CONTROLLERS.factory(name)(plant, options or ControllerOptions())
     if not isinstance(controller, Controller):
         raise ParameterError(
             f"controller {name!r}: its factory returned {type(controller).__name__}, which lacks act(), "
             "horizon or interval (rczone.control.plant.Controller)"
         )
     return controller
-
-
-def _builtins() -> None:
-    """Register the built-in controllers (once; a user's registration of the same name wins)."""
-    from rczone.control import builtin
-
-    for name, factory in builtin.FACTORIES.items():
-        _FACTORIES.setdefault(name, factory)

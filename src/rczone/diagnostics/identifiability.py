@@ -637,6 +637,7 @@ def diagnose(
     operating_point: str = "auto",
     seed: int = 0,
     hold: str | None = None,
+    data: Dataset | None = None,
 ) -> IdentifiabilityReport:
     """Tell whether ``frame`` can identify the ``free`` parameters of ``model``.
 
@@ -677,6 +678,9 @@ def diagnose(
         Inputs between samples, in the sensitivities, the responses and the quick fit (held or
         linear, as in :func:`rczone.simulation.simulate`; on coarse data the choice moves the
         optimum); default the one a fitted model was fitted with (its provenance), else ``"zoh"``.
+    data : Dataset, optional
+        ``frame``'s data set for ``model`` with ``constants`` when the caller has it (a fit's,
+        :attr:`rczone.calibration.Calibration.data`); default built from ``frame``.
 
     Returns
     -------
@@ -704,7 +708,7 @@ def diagnose(
         raise ParameterError(f"model {zm.label!r} has no free parameter to diagnose; name some with free")
     check_free(net, free)
     frame = frame_from(frame)
-    data = dataset(zm, frame, constants)
+    data = dataset(zm, frame, constants) if data is None else data
     if heat_input == "auto":
         offsets = guessed_heat_inputs(net, data)
     else:

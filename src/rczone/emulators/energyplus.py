@@ -195,6 +195,7 @@ class EnergyPlusEmulator:
         self._objects = idf.parse_idf(self._idf_path.read_text(encoding="latin-1"))
         self.hvac = idf.zones(self._objects)
         self._ran = False
+        self.folder: Path | None = None
 
     @property
     def zone_names(self) -> tuple[str, ...]:
@@ -216,6 +217,7 @@ class EnergyPlusEmulator:
         actuators: Mapping[str, Actuator] | None = None,
         *,
         report: Sequence[str] = (),
+        extra: Mapping[str, tuple[str, str]] | None = None,
     ) -> Emulation:
         """Run EnergyPlus once (an emulator object runs once).
 
@@ -231,6 +233,9 @@ class EnergyPlusEmulator:
         report : sequence of str
             EnergyPlus output variables to write into its own time-step report
             (:attr:`Emulation.reported`), for checks.
+        extra : mapping of str to (str, str), optional
+            More output variables ``(variable, key)`` read each step into the rows by label
+            (:class:`~rczone.emulators.session.Session`).
 
         Returns
         -------
@@ -250,9 +255,10 @@ class EnergyPlusEmulator:
         objects = idf.for_run(self._objects, self.start, self.last, int(3600 // self.step_s), report)
         with tempfile.TemporaryDirectory(prefix="rczone-energyplus-") as tmp:
             folder = Path(tmp)
+            self.folder = folder  # while the run lasts: a controller may read eplusout.eio
             (folder / "in.idf").write_text(idf.write_idf(objects), encoding="latin-1")
             api = EnergyPlusAPI()
-            session = Session(api, self.hvac, dict(actuators or {}), controller)
+            session = Session(api, self.hvac, dict(actuators or {}), controller, extra)
             code = session.run(["-d", str(folder), "-w", str(self._epw), str(folder / "in.idf")])
             stopped = isinstance(session.error, Stop)
             if session.error is not None and not stopped:

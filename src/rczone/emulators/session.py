@@ -43,9 +43,19 @@ class Session:
         What the controller may set, by label.
     controller : callable, optional
         As in :meth:`rczone.emulators.energyplus.EnergyPlusEmulator.run`.
+    extra : mapping of str to (str, str), optional
+        More output variables ``(variable, key)`` to read each step, by row label; one EnergyPlus
+        does not have for this building reads zero (e.g. a DX coil's defrost heater).
     """
 
-    def __init__(self, api: Any, zones: Sequence[ZoneHvac], actuators: Mapping, controller) -> None:
+    def __init__(
+        self,
+        api: Any,
+        zones: Sequence[ZoneHvac],
+        actuators: Mapping,
+        controller,
+        extra: Mapping[str, tuple[str, str]] | None = None,
+    ) -> None:
         self.api = api
         self.zones = tuple(zones)
         self.actuators = dict(actuators)
@@ -59,6 +69,8 @@ class Session:
                 for prefix, var in NODE_VARIABLES:
                     self._variables[f"{prefix}:{n}"] = (var, n)
         self._gains = {z.name: [(v, z.name) for v in GAIN_VARIABLES] for z in self.zones}
+        self._extra = dict(extra or {})
+        self._extra_handles: dict[str, int] = {}
         self._handles: dict[str, int] | None = None
         self._gain_handles: dict[str, list[int]] = {}
         self._meters: dict[str, int] = {}
@@ -71,7 +83,8 @@ class Session:
         state = api.state_manager.new_state()
         try:
             api.runtime.set_console_output_status(state, False)
-            for var, key in (*self._variables.values(), *(p for g in self._gains.values() for p in g)):
+            gains = (p for g in self._gains.values() for p in g)
+            for var, key in (*self._variables.values(), *gains, *self._extra.values()):
                 api.exchange.request_variable(state, var, key)
             api.runtime.callback_end_zone_timestep_after_zone_reporting(state, self._callback)
             return api.runtime.run_energyplus(state, args)
@@ -94,6 +107,7 @@ class Session:
             for z, pairs in self._gains.items()
         }
         self._meters = {m: ex.get_meter_handle(state, m) for m in METERS}
+        self._extra_handles = {k: ex.get_variable_handle(state, *vk) for k, vk in self._extra.items()}
         for label, act in self.actuators.items():
             h = ex.get_actuator_handle(state, act.component, act.control, act.key)
             if h < 0:
@@ -125,12 +139,17 @@ class Session:
             self._lookup(state)
         if ex.warmup_flag(state) or ex.kind_of_sim(state) != RUN_PERIOD_WEATHER:
             return
-        t = (ex.day_of_year(state) - 1) * 86400.0 + round(ex.current_time(state) * 3600.0)
+        dt = ex.zone_time_step(state) * 3600.0
+        # the end of this zone time step (current_time is the last HVAC sub-step's when there are several)
+        t = (ex.day_of_year(state) - 1) * 86400.0 + ex.hour(state) * 3600.0
+        t += round(ex.zone_time_step_number(state) * dt)
         row = {"t": t}
         row.update({k: ex.get_variable_value(state, h) for k, h in self._handles.items()})
         for z, hs in self._gain_handles.items():
             row[f"Pel:{z}"] = sum(ex.get_variable_value(state, h) for h in hs)
-        dt = ex.zone_time_step(state) * 3600.0
+        row.update(
+            {k: ex.get_variable_value(state, h) if h >= 0 else 0.0 for k, h in self._extra_handles.items()}
+        )
         for m in METERS:
             row[f"meter:{m}"] = (
                 ex.get_meter_value(state, self._meters[m]) / dt if self._meters[m] >= 0 else 0.0

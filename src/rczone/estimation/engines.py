@@ -52,8 +52,8 @@ from rczone.kernels.arrays import (
     AssembledDerivatives,
     Discretization,
     FilterOptions,
+    FilterStart,
     Observation,
-    Prior,
     Series,
     Start,
     dynamics_derivatives,
@@ -390,7 +390,7 @@ class Assembly(NamedTuple):
     der: AssembledDerivatives
     how: Discretization
     observation: Observation
-    prior: Prior
+    prior: FilterStart
 
 
 def assemble(
@@ -463,5 +463,5 @@ def assemble(
         der,
         how,
         Observation(f(ss.C), f(ss.D), f(r), dC, dD, dr),
-        Prior(x0, np.diag(sx**2), dx0, dP0),
+        FilterStart(x0, np.diag(sx**2), dx0, dP0),
     )

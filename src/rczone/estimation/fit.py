@@ -28,6 +28,7 @@ from rczone.estimation.parameters import make_spec
 from rczone.estimation.resolution import noise_floor
 from rczone.estimation.result import FitResult
 from rczone.estimation.settings import FitSettings
+from rczone.kernels.blas import single_threaded
 from rczone.network import RCNetwork
 from rczone.network.stochastic import (
     KINDS,
@@ -97,6 +98,7 @@ def noise_bounds(network: RCNetwork, data: Dataset, free: Sequence[str]) -> dict
     return out
 
 
+@single_threaded
 def fit(
     network: RCNetwork,
     data: Dataset,

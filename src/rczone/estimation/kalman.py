@@ -40,7 +40,15 @@ from typing import NamedTuple
 import numpy as np
 
 from rczone.errors import InputShapeError
-from rczone.kernels.arrays import Dynamics, FilterOptions, FilterTrace, Observation, Prior, Series, writable
+from rczone.kernels.arrays import (
+    Dynamics,
+    FilterOptions,
+    FilterStart,
+    FilterTrace,
+    Observation,
+    Series,
+    writable,
+)
 from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, no_sensitivities, outputs
 from rczone.kernels.rc2 import nll_rc2
 from rczone.network.statespace import BilinearStateSpace
@@ -189,7 +197,7 @@ def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, Filter
             np.empty((ny, 0, p)),
             np.empty((ny, 0)),
         ),
-        Prior(f(x0), f(P0), np.empty((0, n)), np.empty((0, n, n))),
+        FilterStart(f(x0), f(P0), np.empty((0, n)), np.empty((0, n, n))),
         Series(f(u), f(y), f(which, np.int64)),
         FilterOptions(bool(np.any(Gamma1)), False, STEADY_RTOL),
         outs,

@@ -24,8 +24,8 @@ import pandas as pd
 from rczone.estimation.data import Dataset
 from rczone.estimation.engines import filter_arrays
 from rczone.estimation.kalman import FilterOutput, FilterProblem, kalman_filter_arrays
-from rczone.kernels.arrays import writable
-from rczone.kernels.smoother import Moments, rts_smoother
+from rczone.kernels.arrays import StateMoments, writable
+from rczone.kernels.smoother import rts_smoother
 from rczone.network import RCNetwork
 from rczone.results.protocol import Result, json_number
 
@@ -80,8 +80,8 @@ def rts_smooth(problem: FilterProblem) -> SmootherOutput:
     smoothed = rts_smoother(
         writable(problem.Phi),  # read-only arrays would compile a second specialization
         writable(problem.which, np.int64),
-        Moments(out.x_pred, out.P_pred),
-        Moments(out.x_filt, out.P_filt),
+        StateMoments(out.x_pred, out.P_pred),
+        StateMoments(out.x_filt, out.P_filt),
     )
     return SmootherOutput(smoothed.x, smoothed.P, out)
 

@@ -53,8 +53,8 @@ from rczone.kernels.arrays import (
     AssembledDerivatives,
     Discretization,
     FilterOptions,
+    FilterStart,
     Observation,
-    Prior,
     Series,
 )
 from rczone.kernels.discretize import rc2_interval_derivatives, rc_interval_derivatives
@@ -92,7 +92,7 @@ def nll_rc2_adjoint(
     r : float
         Measurement-noise variance.
     x0, P0 : ndarray, shapes (2,), (2, 2)
-        Prior at the first sample.
+        The state at the first sample (:class:`~rczone.kernels.arrays.FilterStart`).
     u, y : ndarray, shapes (N, p), (N,)
         Inputs; measurements (NaN where missing).
     foh : bool
@@ -302,7 +302,7 @@ def gradient_general(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     obs = Observation(
         mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
     )
-    prior = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
+    prior = FilterStart(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
     series = Series(prob.data.u, prob.data.y, prob.data.which)
     nll, n_obs, _ = nll_reverse(mats, obs, prior, series, FilterOptions(foh, False, steady_rtol), bars)
     return _total(nll, n_obs, theta, prob, bars, dmats, der, grad)

@@ -20,6 +20,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rczone.kernels.cache import tolerate_stale_indexes
+
+# an index written by an older rczone may name a class renamed since: a miss, not an error
+tolerate_stale_indexes()
+
 
 class Dynamics(NamedTuple):
     """Exact discrete matrices of each distinct sampling interval.
@@ -81,7 +86,18 @@ class Observation(NamedTuple):
     dr: np.ndarray  #: (ny, q)
 
 
-class Prior(NamedTuple):
+class StateMoments(NamedTuple):
+    """Mean ``x`` and covariance ``P`` of the state: of one sample, or per sample (time first).
+
+    The observer's estimate (:mod:`rczone.control.observer`) and the smoother's passes
+    (:mod:`rczone.kernels.smoother`) both carry one.
+    """
+
+    x: np.ndarray  #: (n,) or (N, n)
+    P: np.ndarray  #: (n, n) or (N, n, n)
+
+
+class FilterStart(NamedTuple):
     """The state's mean and covariance at the first sample, and their derivatives."""
 
     x0: np.ndarray  #: (n,)

@@ -86,3 +86,34 @@ def use_writable_cache(package: Path | None = None) -> Path | None:
     if config is not None:
         config.CACHE_DIR = str(folder)
     return folder
+
+
+#: What unpickling a cache index written by another version of rczone can raise: a named-array
+#: class renamed or removed since (AttributeError), a module moved (ImportError), a truncated file.
+STALE_INDEX_ERRORS = (AttributeError, ImportError, EOFError, TypeError, ValueError, IndexError)
+
+
+def tolerate_stale_indexes() -> None:
+    """Read a cache index that names a class rczone no longer has as an empty index (a cache miss).
+
+    numba unpickles a kernel's index before it compares the index's source stamp with the source
+    file, so an index written by an older rczone whose signatures name a renamed named-array
+    class (``kernels.arrays.Prior`` became ``FilterStart``) ends the first call of the kernel in
+    an ``AttributeError`` instead of a recompilation. An installed package's folder keeps such
+    files across upgrades (pip removes only the files it installed). Called once by
+    :mod:`rczone.kernels.arrays`, which every kernel with named arrays in its signature imports.
+    """
+    from numba.core import caching
+
+    load = caching.IndexDataCacheFile._load_index
+    if getattr(load, "tolerates_stale", False):
+        return
+
+    def _load_index(self):
+        try:
+            return load(self)
+        except STALE_INDEX_ERRORS:
+            return {}
+
+    _load_index.tolerates_stale = True
+    caching.IndexDataCacheFile._load_index = _load_index

@@ -75,11 +75,11 @@ from rczone.kernels.arrays import (
     Dynamics,
     DynamicsDerivatives,
     FilterOptions,
+    FilterStart,
     FilterTrace,
     FilterValue,
     ModalBasis,
     Observation,
-    Prior,
     Series,
 )
 
@@ -539,7 +539,7 @@ def kalman_filter(
     dyn: Dynamics,
     ddyn: DynamicsDerivatives,
     obs: Observation,
-    prior: Prior,
+    prior: FilterStart,
     series: Series,
     opts: FilterOptions,
     trace: FilterTrace,
@@ -556,7 +556,7 @@ def kalman_filter(
         likelihood only.
     obs : Observation
         Output matrices and measurement variances (``R = diag(r)``), with derivatives.
-    prior : Prior
+    prior : FilterStart
         Mean and covariance at the first sample, with derivatives.
     series : Series
         Inputs, outputs (NaN marks a missing output) and the interval of each step.

@@ -55,8 +55,8 @@ from rczone.kernels.arrays import (
     Discretization,
     ElementValues,
     FilterOptions,
+    FilterStart,
     Observation,
-    Prior,
     Series,
     Slots,
     Start,
@@ -622,7 +622,7 @@ def value_general(theta: np.ndarray, prob) -> float:
     obs = Observation(
         mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
     )
-    prior = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
+    prior = FilterStart(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
     opts = FilterOptions(foh, kind == LS, steady_rtol)
     outs = outputs(N_t, n, ny, 0, kind == LS, False)
     dmats = no_sensitivities(keys.shape[0], n, p)
@@ -671,7 +671,7 @@ def value_and_gradient(theta: np.ndarray, prob) -> tuple[float, np.ndarray, np.n
         mats,
         dmats,
         obs,
-        Prior(mod.x0, mod.P0, der.dx0, der.dP0),
+        FilterStart(mod.x0, mod.P0, der.dx0, der.dP0),
         Series(u, y, which),
         FilterOptions(foh, kind == LS, steady_rtol),
         outs,

@@ -42,8 +42,8 @@ from rczone.kernels.arrays import (
     Dynamics,
     DynamicsDerivatives,
     FilterOptions,
+    FilterStart,
     Observation,
-    Prior,
     Series,
 )
 from rczone.kernels.discretize import interval_derivatives
@@ -188,7 +188,7 @@ def residuals(theta: np.ndarray, prob) -> Residuals:
             dyn,
             ddyn,
             obs,
-            Prior(mod.x0, mod.P0, der.dx0, der.dP0),
+            FilterStart(mod.x0, mod.P0, der.dx0, der.dP0),
             Series(u, y, which),
             FilterOptions(foh, True, 0.0),
             trace,

@@ -59,8 +59,8 @@ from rczone.kernels.arrays import (
     Dynamics,
     DynamicsDerivatives,
     FilterOptions,
+    FilterStart,
     Observation,
-    Prior,
     Series,
 )
 from rczone.kernels.kalman import (
@@ -118,7 +118,7 @@ _FROZE = 4  # ... and the covariance is stationary from there on (k is a stretch
 
 @njit(cache=True, error_model="numpy", fastmath=FAST)
 def nll_reverse(
-    dyn: Dynamics, obs: Observation, prior: Prior, series: Series, opts: FilterOptions, bars: Adjoints
+    dyn: Dynamics, obs: Observation, prior: FilterStart, series: Series, opts: FilterOptions, bars: Adjoints
 ) -> tuple[float, int, int]:
     """``-log L`` (without ``0.5 n log 2 pi``) of the general filter and the adjoints of its inputs.
 
@@ -129,7 +129,7 @@ def nll_reverse(
     obs : Observation
         Output matrices and measurement variances; its derivatives are not used (``C`` and ``D``
         get no adjoints).
-    prior : Prior
+    prior : FilterStart
         Mean and covariance at the first sample; its derivatives are not used.
     series : Series
         Inputs, outputs (NaN where missing) and the interval of each step.

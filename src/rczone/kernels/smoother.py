@@ -25,17 +25,10 @@ References
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numpy as np
 from numba import njit
 
-
-class Moments(NamedTuple):
-    """Means and covariances of the state: per sample (N, n) and (N, n, n), or of one sample."""
-
-    x: np.ndarray  #: (N, n) or (n,)
-    P: np.ndarray  #: (N, n, n) or (n, n)
+from rczone.kernels.arrays import StateMoments
 
 
 @njit(cache=True, error_model="numpy")
@@ -65,8 +58,8 @@ def smoother_gain(Pf: np.ndarray, Phi: np.ndarray, Pp_next: np.ndarray) -> np.nd
 
 @njit(cache=True, error_model="numpy")
 def smooth_step(
-    xf: np.ndarray, Pf: np.ndarray, Phi: np.ndarray, predicted_next: Moments, smoothed_next: Moments
-) -> Moments:
+    xf: np.ndarray, Pf: np.ndarray, Phi: np.ndarray, predicted_next: StateMoments, smoothed_next: StateMoments
+) -> StateMoments:
     """One backward step: the smoothed mean and covariance at ``k`` from those at ``k + 1``.
 
     Parameters
@@ -77,24 +70,26 @@ def smooth_step(
         Filtered covariance at ``k``.
     Phi : ndarray, shape (n, n)
         Transition from ``k`` to ``k + 1``.
-    predicted_next : Moments
+    predicted_next : StateMoments
         The filter's prediction at ``k + 1`` (``x`` of shape (n,), ``P`` of shape (n, n)).
-    smoothed_next : Moments
+    smoothed_next : StateMoments
         The smoothed mean and covariance at ``k + 1``.
 
     Returns
     -------
-    Moments
+    StateMoments
         ``x`` of shape (n,), ``P`` of shape (n, n), exactly symmetric.
     """
     J = smoother_gain(Pf, Phi, predicted_next.P)
     x = xf + J @ (smoothed_next.x - predicted_next.x)
     P = Pf + J @ (smoothed_next.P - predicted_next.P) @ J.T
-    return Moments(x, 0.5 * (P + P.T))
+    return StateMoments(x, 0.5 * (P + P.T))
 
 
 @njit(cache=True, error_model="numpy")
-def rts_smoother(Phi: np.ndarray, which: np.ndarray, predicted: Moments, filtered: Moments) -> Moments:
+def rts_smoother(
+    Phi: np.ndarray, which: np.ndarray, predicted: StateMoments, filtered: StateMoments
+) -> StateMoments:
     """The backward pass over all samples.
 
     Parameters
@@ -103,14 +98,14 @@ def rts_smoother(Phi: np.ndarray, which: np.ndarray, predicted: Moments, filtere
         Transition matrices of the distinct intervals.
     which : ndarray, shape (N - 1,)
         Step ``k`` uses ``Phi[which[k]]``.
-    predicted : Moments
+    predicted : StateMoments
         The filter's predicted means (N, n) and covariances (N, n, n).
-    filtered : Moments
+    filtered : StateMoments
         The filter's filtered means (N, n) and covariances (N, n, n).
 
     Returns
     -------
-    Moments
+    StateMoments
         Means (N, n) and covariances (N, n, n); the last sample's are the filter's.
     """
     N = filtered.x.shape[0]
@@ -123,9 +118,9 @@ def rts_smoother(Phi: np.ndarray, which: np.ndarray, predicted: Moments, filtere
             filtered.x[k],
             filtered.P[k],
             Phi[which[k]],
-            Moments(predicted.x[k + 1], predicted.P[k + 1]),
-            Moments(xs[k + 1], Ps[k + 1]),
+            StateMoments(predicted.x[k + 1], predicted.P[k + 1]),
+            StateMoments(xs[k + 1], Ps[k + 1]),
         )
         xs[k] = step.x
         Ps[k] = step.P
-    return Moments(xs, Ps)
+    return StateMoments(xs, Ps)

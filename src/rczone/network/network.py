@@ -188,7 +188,7 @@ class ConductanceForm:
     output_state: tuple[int, ...]
 
 
-class Assembled(NamedTuple):
+class BilinearMatrices(NamedTuple):
     """What :meth:`RCNetwork._assemble` builds: the bilinear matrices and the per-state constants."""
 
     A: np.ndarray
@@ -672,7 +672,7 @@ class RCNetwork:
             "dist": [[(idx[nd], g) for nd, g in d.gains] for d in self.disturbances],
         }
 
-    def _assemble(self, vals: Mapping[str, float | complex], dtype: type) -> Assembled:
+    def _assemble(self, vals: Mapping[str, float | complex], dtype: type) -> BilinearMatrices:
         """The state space's matrices and per-state constants from resolved parameter values."""
         st = self._structure
 
@@ -718,7 +718,7 @@ class RCNetwork:
         Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
         A, B, M = Axx * inv, Bx[:, :p] * inv, Mf[:, xs] * inv[None]
         if not nl:
-            return Assembled(A, Nx, B, M, C, D, cap, np.zeros(xs.size))
+            return BilinearMatrices(A, Nx, B, M, C, D, cap, np.zeros(xs.size))
         # state (x, s): dx = (A x + Bd s + B u) dt, ds = F s dt + noise; y = C x + Cd s + D u
         nx = xs.size
         A = np.block([[A, Bx[:, p:] * inv], [np.zeros((nl, nx), dtype), F]])
@@ -729,7 +729,7 @@ class RCNetwork:
         C = np.concatenate([C, D[:, p:]], axis=1)
         cap = np.concatenate([cap, np.full(nl, np.nan)])
         diffusion = np.concatenate([np.zeros(nx, dtype), qd])
-        return Assembled(A, Nx, B, M, C, D[:, :p], cap, diffusion)
+        return BilinearMatrices(A, Nx, B, M, C, D[:, :p], cap, diffusion)
 
     def _latent_blocks(
         self, vals: Mapping[str, float | complex], dtype: type, nn: int

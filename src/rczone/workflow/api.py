@@ -7,6 +7,7 @@ command prints (``summary()``) and serializes to what its ``--json`` writes (``t
 
 from __future__ import annotations
 
+import dataclasses
 import datetime
 import os
 from collections.abc import Mapping, Sequence
@@ -22,8 +23,9 @@ from rczone.calibration.dataset import time_index
 from rczone.errors import ParameterError
 from rczone.estimation.methods import DEFAULT_METHOD, MethodOptions
 from rczone.estimation.settings import FitSettings
+from rczone.kernels.blas import single_threaded
 from rczone.models import ZoneModel
-from rczone.workflow.checks import fit_and_check
+from rczone.workflow.checks import defer_checks, fit_and_check
 from rczone.workflow.datasource import DataSource, data_source, frame_and_label
 from rczone.workflow.holdout import before, conformal_settings, score_held_out, split_time
 
@@ -59,6 +61,7 @@ def load_data(
     return data_source(source, columns).frame(zm)
 
 
+@single_threaded
 def fit(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -114,7 +117,9 @@ def fit(
         ``(file, column_map)`` reads the file with its own map (``--check-on FILE:MAP``).
     checks : bool
         Make the checks after the fit (identifiability at the estimates, profiles), as
-        ``rczone fit --json`` does; they enter the one verdict.
+        ``rczone fit --json`` does; they enter the one verdict. They are made when first read
+        (``verdict``, ``checks``, ``identifiability``, ``summary()``, ``to_dict()``), so that a
+        user who wants the estimates pays for the estimates (:attr:`Calibration.pending`).
     profiles : bool
         With ``checks``: profile each R and C over a factor of ten.
     hold : {"zoh", "foh"}
@@ -170,14 +175,18 @@ def fit(
     if holdout is not None:  # a split needs the time axis
         frame = frame_from(frame)
         at = split_time(frame, holdout, model=zm, columns=columns)
-    cal = fit_and_check(zm, frame, settings, label=label or name, others=others, holdout=at)
+    now = dataclasses.replace(settings, checks=False)  # the checks are made when first read
+    cal = fit_and_check(zm, frame, now, label=label or name, holdout=at)
     if floor_area is not None and cal.plausibility is not None:
         from rczone.calibration.reference import with_floor_area
 
         cal = with_floor_area(cal, zm, before(frame, at), floor_area)
+    if checks or others:
+        cal = defer_checks(cal, before(frame, at), settings, others=others)
     return cal
 
 
+@single_threaded
 def predict(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -247,6 +256,7 @@ def predict(
     )
 
 
+@single_threaded
 def score_horizons(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -316,6 +326,7 @@ def score_horizons(
     )
 
 
+@single_threaded
 def simulate(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -399,6 +410,7 @@ def simulate(
     return out
 
 
+@single_threaded
 def diagnose(
     model: ModelLike,
     data: pd.DataFrame | PathLike,
@@ -504,6 +516,7 @@ def read_for_models(
     return read_frame(source, columns, signals, needed if required is None else list(required), outputs)
 
 
+@single_threaded
 def select_models(
     models: Sequence[ModelLike],
     data: pd.DataFrame | PathLike,
@@ -608,6 +621,7 @@ def select_models(
     )
 
 
+@single_threaded
 def design_test(
     model: ModelLike,
     *,

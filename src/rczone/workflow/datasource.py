@@ -216,7 +216,7 @@ def data_source(spec: str | os.PathLike | DataSource, columns: str | os.PathLike
             f"data must be a DataFrame, a file or a built-in data set name, got {type(spec).__name__}"
         )
     path = Path(spec)
-    if path.exists():
+    if os.path.lexists(path):  # a link that loops exists: its reader says what is wrong
         return TrendLog(str(path), str(columns) if columns is not None else None)
     from rczone import datasets
 

@@ -17,12 +17,14 @@ from rczone.calibration import ModelLike, as_model, dataset, noise_values, time_
 from rczone.calibration.prediction import model_hold
 from rczone.errors import DataError
 from rczone.estimation.smoother import SmoothedStates, smooth_states
+from rczone.kernels.blas import single_threaded
 from rczone.network.stochastic import INITIAL_STATE, kind_of
 from rczone.workflow.datasource import DataSource, frame_and_label
 
 PathLike = str | os.PathLike
 
 
+@single_threaded
 def smooth(
     model: ModelLike,
     data: pd.DataFrame | PathLike | DataSource,

@@ -12,7 +12,7 @@ import pytest
 from scipy.linalg import expm
 
 from rczone.control import ControlModel, Disturbance, KalmanObserver, estimate_state
-from rczone.control.observer import Estimate
+from rczone.control.observer import StateMoments
 from rczone.models import load_model
 from rczone.network import CP_AIR
 
@@ -78,7 +78,7 @@ def test_observer_matches_a_textbook_kalman_filter(zm):
     y = 22 + rng.normal(0, 0.5, (40, 1))
     x0, P0 = np.array([22.0, 21.0, 0.0]), np.diag([4.0, 4.0, 200.0**2])
     obs = KalmanObserver(ControlModel(zm, disturbance=Disturbance("heat", sigma=SIG_D)))
-    run = obs.filter(t, u, m, y, Estimate(x0, P0))
+    run = obs.filter(t, u, m, y, StateMoments(x0, P0))
     xs, Ps = textbook_filter(dict(zm.theta), t, u, m, y, x0, P0)
     np.testing.assert_allclose(run.x_filt, xs, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(run.P_filt, Ps, rtol=1e-9, atol=1e-9 * np.abs(Ps).max())

@@ -11,6 +11,7 @@ from rczone.control import ControllerOptions, controller_names, make_controller,
 from rczone.control.closedloop import closed_loop_test
 from rczone.control.virtualplant import VirtualPlant
 from rczone.errors import ParameterError
+from tests.unit.entrypoints import install
 
 
 class HalfwayController:
@@ -37,7 +38,7 @@ def halfway(plant, options):
 def registered():
     register_controller("halfway", halfway)
     yield "halfway"
-    registry._FACTORIES.pop("halfway")  # leave the registry as it was
+    registry.unregister_controller("halfway")  # leave the registry as it was
 
 
 def test_a_registered_controller_runs_through_the_api_held_to_the_zones_limits(registered):
@@ -59,15 +60,8 @@ def test_a_registered_controller_runs_through_control_test(registered, tmp_path,
 
 def test_a_plug_in_is_found_through_its_entry_point(tmp_path, monkeypatch, capsys):
     # an installed distribution declaring rczone.controllers = {"plugged": module:factory}
-    (tmp_path / "my_ctrl.py").write_text(
-        "from tests.unit.control.test_registry import halfway as factory\n", encoding="utf-8"
-    )
-    dist = tmp_path / "my_ctrl-1.0.dist-info"
-    dist.mkdir()
-    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: my-ctrl\nVersion: 1.0\n", encoding="utf-8")
-    (dist / "entry_points.txt").write_text(
-        "[rczone.controllers]\nplugged = my_ctrl:factory\n", encoding="utf-8"
-    )
+    text = "from tests.unit.control.test_registry import halfway as factory\n"
+    install(tmp_path, "my_ctrl", text, "rczone.controllers", "plugged = my_ctrl:factory")
     monkeypatch.syspath_prepend(str(tmp_path))
     assert "plugged" in controller_names()
     plant = VirtualPlant("summer", days=0.05)
@@ -88,4 +82,4 @@ def test_bad_registrations_are_one_line_errors(name, factory, match):
             register_controller(name, factory)
             make_controller(name, VirtualPlant("summer", days=0.01))
     finally:
-        registry._FACTORIES.pop(name, None)
+        registry.unregister_controller(name)

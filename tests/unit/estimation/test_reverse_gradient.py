@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from rczone.estimation import Dataset, Objective, make_spec
-from rczone.kernels.arrays import Discretization, FilterOptions, Observation, Prior, Series
+from rczone.kernels.arrays import Discretization, FilterOptions, FilterStart, Observation, Series
 from rczone.kernels.discretize import rc_interval_derivatives
 from rczone.kernels.problem import assembled, value_and_gradient
 from rczone.kernels.reverse import contract, nll_reverse, zero_adjoints
@@ -136,7 +136,7 @@ def test_reverse_gradient_through_steady_states_that_end_both_ways(hold: str) ->
     obs = Observation(
         mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
     )
-    prior = Prior(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
+    prior = FilterStart(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
     opts = FilterOptions(hold == "foh", False, 1e-14)
     u, y, which = prob.data.u, prob.data.y, prob.data.which
 
