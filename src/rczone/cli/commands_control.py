@@ -96,8 +96,19 @@ def control_test(
         ),
     ] = None,
     seeds: Annotated[
-        int, typer.Option("--seeds", help="With --compare: seeds --seed, --seed + 1, ... (paired runs).")
+        int,
+        typer.Option(
+            "--seeds", help="With --compare or --study: seeds --seed, --seed + 1, ... (paired runs)."
+        ),
     ] = 1,
+    study: Annotated[
+        str | None,
+        typer.Option(
+            "--study",
+            help="paper: the paper's Q1 (13-, 2-, 1-state models) and Q2 (fitted on forced vs closed-loop"
+            " data) under the MPC, with the commissioned thermostat, paired over --seeds in one table.",
+        ),
+    ] = None,
     json_out: Annotated[
         Path | None, typer.Option("--json", help="Write the scores as JSON ('-': stdout).")
     ] = None,
@@ -117,9 +128,9 @@ def control_test(
     if emulator == "energyplus":
         from rczone.emulators.control import energyplus_test
 
-        if compare is not None or report_dir is not None:
+        if compare is not None or study is not None or report_dir is not None:
             raise ParameterError(
-                "--compare and --report are for the virtual building; run each controller alone"
+                "--compare, --study and --report are for the virtual building; run each controller alone"
             )
         options = dict(weather=weather, start=start, step_minutes=step, seed=seed, price=price)
         plant = _energyplus_plant(building, zone, days, forecast or "none", options)
@@ -138,14 +149,20 @@ def control_test(
         write_json(json_out, res.to_dict())
         return
     forecast = forecast or "measured"
-    if compare is not None:
+    if compare is not None or study is not None:
         from rczone.control.comparison import Scenario, compare_entries
         from rczone.control.comparison import compare as compare_runs
+        from rczone.control.study import study_entries
 
         if seeds < 1:
             raise ParameterError(f"--seeds must be an integer >= 1, got {seeds}")
+        if compare is not None and study is not None:
+            raise ParameterError("give --compare or --study, not both")
         test = Scenario(scenario, days=days, price=price, comfort_band=band, forecast=forecast)
-        entries = compare_entries(compare, zm, model, disturbance=not no_disturbance)
+        if study is not None:
+            entries = study_entries(study)
+        else:
+            entries = compare_entries(compare, zm, model, disturbance=not no_disturbance)
         with reporter(quiet=quiet) as report:
             runs = Steps(
                 report, len(entries) * seeds, "closed loop: {name} (run {i} of {n}), simulated hours"
@@ -153,6 +170,11 @@ def control_test(
             cmp = compare_runs(entries, list(range(seed, seed + seeds)), scenario=test, progress=runs)
         out.print(esc(cmp.summary()))
         write_json(json_out, cmp.to_dict())
+        if report_dir:
+            from rczone.control.comparison import comparison_report
+
+            path = comparison_report(cmp, report_dir)
+            out.print(f"report written to [bold]{esc(path)}[/]")
         return
     plant = VirtualPlant(scenario, days=days, seed=seed, price=price, comfort_band=band, forecast=forecast)
     with reporter(quiet=quiet) as report:

@@ -22,9 +22,12 @@ References
 
 from __future__ import annotations
 
+import html
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -54,12 +57,15 @@ class Entry:
     model : ZoneModel, optional
     disturbance : bool
         For an MPC: its observer estimates an unmeasured heat input.
+    reference : str, optional
+        The label of the entry this one is paired against (default the first entry).
     """
 
     label: str
     controller: str
     model: ZoneModel | None = None
     disturbance: bool = True
+    reference: str | None = None
 
 
 @dataclass(frozen=True)
@@ -98,24 +104,32 @@ class Comparison:
     setup : mapping
         The test's settings, and under ``constraints`` the limits of each seed (the schedule is
         seeded; every entry of a seed ran under the same).
+    references : mapping of str to str
+        Entry label -> the label it is paired against (entries not named: the first).
     """
 
     labels: tuple[str, ...]
     seeds: tuple[int, ...]
     scores: Mapping[str, Mapping[str, np.ndarray]]
     setup: Mapping[str, Any]
+    references: Mapping[str, str] = field(default_factory=dict)
+
+    def reference(self, label: str) -> str:
+        """The label ``label`` is paired against."""
+        return self.references.get(label, self.labels[0])
 
     def rows(self) -> list[dict[str, Any]]:
-        """One row per entry and KPI: mean, paired difference to the reference (mean, sd), verdict."""
-        ref = self.labels[0]
+        """One row per entry and KPI: mean, paired difference to its reference (mean, sd), verdict."""
         out = []
         for label in self.labels:
+            ref = self.reference(label)
             for k in KPIS:
                 v = self.scores[label][k]
                 d = v - self.scores[ref][k]
                 out.append(
                     {
                         "entry": label,
+                        "against": None if label == ref else ref,
                         "kpi": k,
                         "mean": float(v.mean()),
                         "diff_mean": float(d.mean()),
@@ -127,6 +141,23 @@ class Comparison:
                 )
         return out
 
+    def markdown(self) -> str:
+        """The table of :meth:`rows` in Markdown, one row per entry, one column per KPI."""
+        head = "| entry | against | " + " | ".join(KPIS) + " |"
+        lines = [head, "|" + " --- |" * (len(KPIS) + 2)]
+        rows = self.rows()
+        for label in self.labels:
+            cells = []
+            for r in (r for r in rows if r["entry"] == label):
+                if r["verdict"] == "reference":
+                    cells.append(f"{r['mean']:.3g}")
+                else:
+                    sd = "" if r["diff_sd"] is None else f" ± {r['diff_sd']:.2g}"
+                    cells.append(f"{r['mean']:.3g} ({r['diff_mean']:+.2g}{sd}, {r['verdict']})")
+            against = self.reference(label) if self.reference(label) != label else ""
+            lines.append(f"| {label} | {against} | " + " | ".join(cells) + " |")
+        return "\n".join(lines)
+
     def to_frame(self) -> pd.DataFrame:
         """:meth:`rows` as a table."""
         return pd.DataFrame(self.rows())
@@ -137,6 +168,7 @@ class Comparison:
             "seeds": list(self.seeds),
             "scores": {lab: {k: v.tolist() for k, v in s.items()} for lab, s in self.scores.items()},
             "rows": self.rows(),
+            "references": {lab: self.reference(lab) for lab in self.labels},
             "setup": dict(self.setup),
         }
 
@@ -146,7 +178,10 @@ class Comparison:
         lines = [
             f"paired comparison on the {st['scenario']} scenario, {st['days']} day(s), seeds "
             f"{', '.join(map(str, self.seeds))}, price {st['price']}, band {st['band']}, "
-            f"{st['forecast']} forecast; reference: {self.labels[0]}",
+            f"{st['forecast']} forecast; reference: {self.labels[0]}"
+            + "".join(
+                f"; {lab} against {ref}" for lab, ref in self.references.items() if ref != self.labels[0]
+            ),
             f"  {'entry':28s} {'KPI':15s} {'mean':>9s} {'diff':>9s} {'sd':>8s}  verdict",
         ]
         for r in self.rows():
@@ -197,6 +232,11 @@ def compare(
     labels = [e.label for e in entries]
     if len(entries) < 2 or len(set(labels)) != len(labels):
         raise ParameterError(f"a comparison needs two or more entries with distinct labels, got {labels}")
+    for e in entries:
+        if e.reference is not None and e.reference not in labels:
+            raise ParameterError(
+                f"entry {e.label!r} is paired against {e.reference!r}, which is not an entry"
+            )
     if not seeds or len(set(seeds)) != len(seeds):
         raise ParameterError(f"a comparison needs distinct seeds, got {list(seeds)}")
     scores: dict[str, dict[str, list[float]]] = {lab: {k: [] for k in KPIS} for lab in labels}
@@ -226,7 +266,8 @@ def compare(
         limits[seed] = runs[0].setup["constraints"]
     setup = {**setup, "disturbance_estimate": None, "constraints": limits}
     arrays = {lab: {k: np.array(v) for k, v in s.items()} for lab, s in scores.items()}
-    return Comparison(tuple(labels), tuple(int(s) for s in seeds), arrays, setup)
+    refs = {e.label: e.reference for e in entries if e.reference is not None}
+    return Comparison(tuple(labels), tuple(int(s) for s in seeds), arrays, setup, refs)
 
 
 def compare_entries(
@@ -243,3 +284,20 @@ def compare_entries(
         name, _, spec = item.partition(":")
         entries.append(Entry(item, name, load(spec) if spec else model, disturbance))
     return entries
+
+
+def comparison_report(cmp: Comparison, folder: str | os.PathLike) -> Path:
+    """Write ``report.html`` into ``folder``: the setup, the paired table and the verdicts (escaped)."""
+    from rczone.files.atomic import ensure_folder, write_text_atomic
+
+    st = cmp.setup
+    title = f"Paired closed-loop comparison: {st['scenario']}, seeds {', '.join(map(str, cmp.seeds))}"
+    table = cmp.to_frame().to_html(index=False, escape=True, float_format=lambda v: f"{v:.4g}", na_rep="")
+    body = (
+        f"<h1>{html.escape(title)}</h1>\n<pre>{html.escape(cmp.summary())}</pre>\n{table}\n"
+        "<p>Each entry's paired difference is to the entry in its <i>against</i> column (seed by seed);"
+        " the verdict needs the mean difference beyond two standard errors and 1 % of the reference."
+        " Every run of a seed was held to the same limits (recorded in the JSON).</p>"
+    )
+    page = f"<!doctype html>\n<html><head><meta charset='utf-8'><title>{html.escape(title)}</title></head>\n<body>{body}</body></html>\n"
+    return write_text_atomic(ensure_folder(folder) / "report.html", page)

@@ -10,7 +10,7 @@
   from the plant's in the model's own input order (:meth:`MPCController.model_forecast`): the
   outdoor and AHU temperatures and the band, price and flow limits from the plant's forecast, the
   neighbours' temperatures held at their last measurement (their mean for ``Tsd``), the rest
-  from the model's defaults (e.g. ``Q``).
+  from the model's defaults (e.g. ``Q``): :func:`rczone.control.inputs.model_inputs`.
 
 **The commissioned thermostat.** Two rules of ordinary commissioning, each against a weakness
 of the schedule's own set points (issue 33):
@@ -44,6 +44,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from rczone.control.inputs import model_inputs
 from rczone.control.mpc import MPC, ControlAction, Forecast
 from rczone.network import CP_AIR
 from rczone.virtual.control import CONTROL_DT, ControllerConfig, VAVController
@@ -177,10 +178,8 @@ class MPCController:
         """The plant's forecast in the model's inputs and conventions (see the module notes)."""
         n = len(forecast["time"])
         held = {c: np.full(n, measurements[f"Ti_{z}"]) for c, z in self.surroundings.items()}
-        if held:
-            held["Tsd"] = np.mean(list(held.values()), axis=0)
-        used = set(self.mpc.cm.input_names)
-        inputs = {k: v for k, v in {"To": forecast["To"], **held}.items() if k in used}
+        series = {"To": forecast["To"], **held}
+        inputs = model_inputs(self.mpc.cm.model, series, n, decided=self.mpc.heaters)
         z = self.zone
         return Forecast(
             inputs,

@@ -50,6 +50,8 @@ from rczone.simulation import SimulationResult, simulate
 from rczone.simulation.discretize import interval_discretization
 
 FORMAT = "rczone-model/1"
+#: What a controller does with an input (:attr:`ModelInputs.roles`).
+INPUT_ROLES = ("actuator", "measured", "unmeasured")
 
 
 @dataclass(frozen=True)
@@ -65,11 +67,17 @@ class ModelInputs:
         e.g. ``{"Tsd": ("Tf", "Tc", "Tn1", "Tn2", "Thw")}``.
     descriptions : mapping of input name to str
         What the input is, used in messages when the data lack it.
+    roles : mapping of input name to str
+        What a controller does with the input (:data:`INPUT_ROLES`): ``actuator`` (it decides
+        it: a heater's power, a supply flow), ``measured`` (a disturbance it measures or is
+        forecast: outdoor temperature, irradiance) or ``unmeasured`` (a disturbance nobody
+        measures: the model's default is used). Inputs not named have no declared role.
     """
 
     defaults: Mapping[str, float] = field(default_factory=dict)
     mean_of: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     descriptions: Mapping[str, str] = field(default_factory=dict)
+    roles: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         d = {}
@@ -87,11 +95,17 @@ class ModelInputs:
         object.__setattr__(self, "defaults", MappingProxyType(d))
         object.__setattr__(self, "mean_of", MappingProxyType(mo))
         object.__setattr__(self, "descriptions", MappingProxyType(dict(self.descriptions)))
+        roles = dict(self.roles) if isinstance(self.roles, Mapping) else None
+        if roles is None or not all(isinstance(r, str) and r in INPUT_ROLES for r in roles.values()):
+            raise ModelFileError(
+                f"input roles must map input names to one of {', '.join(INPUT_ROLES)}, got {self.roles!r}"
+            )
+        object.__setattr__(self, "roles", MappingProxyType({str(k): v for k, v in roles.items()}))
 
     def check_against(self, network: RCNetwork) -> None:
         """Every convention must name an input or flow of ``network``."""
         signals = (*network.input_names, *network.flow_names)
-        for k in (*self.defaults, *self.mean_of):
+        for k in (*self.defaults, *self.mean_of, *self.roles):
             if k not in signals:
                 raise ModelFileError(
                     f"input convention for {k!r}: model {network.name!r} has no such input; "
@@ -103,6 +117,7 @@ class ModelInputs:
             "defaults": dict(self.defaults),
             "mean_of": {k: list(v) for k, v in self.mean_of.items()},
             "descriptions": dict(self.descriptions),
+            "roles": dict(self.roles),
         }
 
 
@@ -583,6 +598,7 @@ class ZoneModel:
                         for k, v in (inp.get("mean_of") or {}).items()
                     },
                     descriptions=dict(inp.get("descriptions") or {}),
+                    roles=dict(inp.get("roles") or {}),
                 )
             else:
                 raise ModelFileError("'inputs' must be an object")

@@ -76,3 +76,31 @@ def test_control_test_compare_writes_the_paired_table(tmp_path, capsys):
         assert main(["control-test", *bad, "--days", "0.02"]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and match in err
+
+
+def test_an_entry_is_paired_against_the_entry_it_names():
+    entries = [
+        Entry("naive", "naive"),
+        Entry("commissioned", "thermostat"),
+        Entry("again", "thermostat", reference="commissioned"),
+    ]
+    cmp = compare(entries, [3, 4], scenario=Scenario("winter", days=0.02))
+    rows = {(r["entry"], r["kpi"]): r for r in cmp.rows()}
+    for k in KPIS:
+        assert rows["again", k]["against"] == "commissioned" and rows["again", k]["diff_mean"] == 0.0
+        d = cmp.scores["commissioned"][k] - cmp.scores["naive"][k]
+        assert rows["commissioned", k]["diff_mean"] == pytest.approx(d.mean())
+    table = cmp.markdown().splitlines()
+    assert len(table) == 2 + 3 and table[-1].startswith("| again | commissioned |")
+    with pytest.raises(ParameterError, match="not an entry"):
+        compare([Entry("a", "naive"), Entry("b", "naive", reference="c")], [1])
+
+
+def test_control_test_study_refuses_unknown_studies_in_one_line(capsys):
+    for bad, match in (
+        (["--study", "papr"], "paper"),
+        (["--study", "paper", "--compare", "naive,thermostat"], "not both"),
+    ):
+        assert main(["control-test", *bad, "--days", "0.02"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and match in err

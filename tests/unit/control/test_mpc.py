@@ -1,5 +1,7 @@
 """The reference MPC: its QP against a brute-force solution, its energy linearization, its bounds."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.optimize import minimize
@@ -200,3 +202,47 @@ def test_bounds_are_given_in_the_users_units(zm):
 def test_bad_settings_and_forecasts_raise_one_line_errors(zm, make, error, match):
     with pytest.raises(error, match=match):
         make(zm)
+
+
+def _replay(model, formulation, fcs, temps):
+    mpc = MPC(model, MPCSettings(horizon=12, formulation=formulation), disturbance=Disturbance("heat"))
+    return np.array(
+        [
+            [(a := mpc.step(600.0 * k, {"Ti": ti}, fc)).m, a.reheat]
+            for k, (fc, ti) in enumerate(zip(fcs, temps))
+        ]
+    )
+
+
+@pytest.mark.parametrize("name", ["second-order", pytest.param("full-scale", marks=pytest.mark.slow)])
+def test_the_condensed_qp_takes_the_actions_of_the_uncondensed_one(name):
+    # the same measurements and forecasts through both forms: the same QPs, so the same actions to
+    # the solver's tolerance (the band moves up and the weather cools: flow and reheat both move)
+    model = load_model(name)
+    fcs = [
+        forecast(12, low=21.0 if k < 5 else 22.5, up=23.0 if k < 5 else 24.0, to=26.0 - k) for k in range(10)
+    ]
+    neighbours = [n for n in model.state_space().input_names if n.startswith(("Tn", "Tc", "Tf", "Thw"))]
+    fcs = (
+        [
+            replace(fc, inputs={"To": fc.inputs["To"], **{n: np.full(13, 23.0) for n in neighbours}})
+            for fc in fcs
+        ]
+        if neighbours
+        else fcs
+    )
+    temps = 22.4 - 0.15 * np.arange(10)
+    dense = _replay(model, "uncondensed", fcs, temps)
+    cond = _replay(model, "condensed", fcs, temps)
+    assert dense[:, 1].max() > 100.0 and np.ptp(dense[:, 0]) > 0.01  # reheat and flow both used
+    np.testing.assert_allclose(cond[:, 0], dense[:, 0], atol=5e-4)
+    np.testing.assert_allclose(cond[:, 1], dense[:, 1], atol=2.0)
+
+
+def test_the_condensed_solver_is_set_up_once(zm):
+    mpc = MPC(zm, MPCSettings(horizon=6), disturbance=None)
+    for k in range(3):
+        mpc.step(600.0 * k, {"Ti": 22.0}, forecast(6, to=20.0 + k))
+    first = mpc._mem.solver._solver
+    mpc.step(1800.0, {"Ti": 21.0}, forecast(6, to=15.0))
+    assert mpc._mem.solver._solver is first
