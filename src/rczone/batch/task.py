@@ -65,6 +65,22 @@ def run_unit(zones: list[list[Task]], run_zone: Callable[[list[Task]], list[dict
     return [row for tasks in zones for row in run_zone(tasks)]
 
 
+def _drift_columns(model: ZoneModel, frame, constants) -> dict:
+    """``drift`` (None: not tested), when it started and the tests that say so (:func:`~rczone.calibration.drift.record_drift`)."""
+    from rczone.calibration.drift import record_drift
+
+    check = record_drift(model, frame, constants or None)
+    tested = check is not None and bool(check.traces)
+    return {
+        "drift": check.drifted if tested else None,
+        "drift_since_s": check.since_s if tested else None,
+        "drift_detected_s": check.detected_s if tested else None,
+        "drift_tests": "; ".join(sorted({f"{s.test} of {s.output}" for s in check.signals}))
+        if tested
+        else None,
+    }
+
+
 def run_task(task: Task, cache: dict | None = None) -> dict:
     """Calibrate ``task`` and return its result row (never raises for a zone's own problems).
 
@@ -114,6 +130,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
             p = r.posterior
             row.update(draws=p.n_draws, tune=p.tune, chains=p.n_chains, divergences=p.divergences)
             row.update(max_rhat=float(p.rhat.max()), min_ess_bulk=float(p.ess_bulk.min()))
+        row.update(_drift_columns(cal.model, frame, settings.constants))
         for n, e in r.parameters.items():
             row[n] = e.value
             row[f"{n}_se"] = e.std_error
