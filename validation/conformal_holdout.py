@@ -176,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     for name, zm, frame, split in () if args.table_only else cases(args.shared, args.selected, args.only):
         t0 = time.process_time()
-        results[name] = {"model": zm.label, **scores(zm, frame, split)}
+        results[name] = {"model": zm.network.name, **scores(zm, frame, split)}
         results[name]["scoring_cpu_s"] = time.process_time() - t0
         write_json_atomic(saved, results)
         print(markdown({name: results[name]}), flush=True)
