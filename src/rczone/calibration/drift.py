@@ -363,7 +363,7 @@ def check_drift(
     return DriftCheck(tuple(sorted(signals, key=lambda s: s.detected_s)), traces, tuple(notes))
 
 
-def record_drift(model, frame, constants=None) -> DriftCheck | None:
+def record_drift(model, data) -> DriftCheck | None:
     """The CUSUM tests of a zone's own record: its second half against its first (``fit-many``).
 
     The fitted model's Kalman filter runs over the whole record; its standardized one-step
@@ -377,35 +377,29 @@ def record_drift(model, frame, constants=None) -> DriftCheck | None:
     ----------
     model : ZoneModel
         The fitted model, with its noise levels.
-    frame : DataFrame
-        The zone's data (those of the fit).
-    constants : mapping, optional
-        Inputs held constant (SI units).
+    data : Dataset
+        The zone's data (those of the fit; :func:`rczone.calibration.dataset.dataset`).
 
     Returns
     -------
     DriftCheck or None
         None when the model has no noise levels (a least-squares fit has no innovations to test).
     """
-    from rczone.calibration.prediction import prediction_setup
+    from rczone.calibration.prediction import model_hold, noise_values
     from rczone.estimation.engines import run_filter
     from rczone.network.stochastic import is_noise_name
 
     if not any(is_noise_name(k) for k in model.noise):
         return None
-    setup = prediction_setup(model, frame, constants)
-    data, net = setup.data, model.network
     t = data.t
     first = int(np.searchsorted(t, t[0] + RECORD_REFERENCE * (t[-1] - t[0])))
     reference = first - first // 4
     if first < 2 or t[first - 1] - t[first - reference] < MIN_BLOCKS * BLOCK_S:
-        hours = (t[-1] - t[0]) / 3600
-        note = (
-            f"a record of {hours:.3g} h is too short to test for drift (at least"
-            f" {MIN_BLOCKS / (RECORD_REFERENCE * 0.75):.3g} h)"
-        )
+        need = MIN_BLOCKS * BLOCK_S / (RECORD_REFERENCE * 0.75) / 3600
+        note = f"a record of {(t[-1] - t[0]) / 3600:.3g} h is too short to test for drift (about {need:.3g} h needed)"
         return DriftCheck((), {}, (note,))
-    out = run_filter(net, setup.values, data, setup.hold)
+    net = model.network
+    out = run_filter(net, {**model.theta, **noise_values(model)}, data, model_hold(model))
     with np.errstate(invalid="ignore"):
         z = out.innovations / np.sqrt(np.einsum("kii->ki", out.S))
     check = check_drift(z, t, first, reference, net.outputs)

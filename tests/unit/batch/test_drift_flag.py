@@ -15,6 +15,7 @@ import pytest
 from rczone.batch import read_manifest, run_batch
 from rczone.batch.store import valid_row
 from rczone.batch.summary import summarize
+from rczone.calibration.dataset import dataset
 from rczone.calibration.drift import record_drift
 from tests.unit.calibration.test_drift import DAY, model, virtual_zone  # noqa: F401  (fixture)
 from tests.unit.estimation.test_initial_state import MODEL
@@ -24,7 +25,7 @@ CHANGES = {"changed": {"rea_factor": 0.5}, "bias": {"bias_K": 1.0}, "steady": {}
 
 @pytest.mark.parametrize("zone", ["changed", "bias"])
 def test_a_record_whose_zone_changes_on_day_4_is_flagged_within_a_day(model, zone):  # noqa: F811
-    check = record_drift(model, virtual_zone(11, days=7.0, **CHANGES[zone]))
+    check = record_drift(model, dataset(model, virtual_zone(11, days=7.0, **CHANGES[zone])))
     assert check.drifted, zone
     assert 4 * DAY <= check.detected_s <= 5 * DAY, check.detected_s / DAY
     assert check.since_s <= check.detected_s and "DRIFTED" in check.describe()
@@ -32,16 +33,16 @@ def test_a_record_whose_zone_changes_on_day_4_is_flagged_within_a_day(model, zon
 
 @pytest.mark.parametrize("seed", [1, 2])
 def test_an_unchanged_record_is_not_flagged(model, seed):  # noqa: F811
-    check = record_drift(model, virtual_zone(seed, days=7.0))
+    check = record_drift(model, dataset(model, virtual_zone(seed, days=7.0)))
     assert not check.drifted and "Ti" in check.traces, check.describe()
     assert "only the CUSUM" in check.notes[-1]
 
 
 def test_a_short_record_or_a_model_without_noise_is_not_tested(model):  # noqa: F811
-    short = record_drift(model, virtual_zone(1, days=0.5))
+    short = record_drift(model, dataset(model, virtual_zone(1, days=0.5)))
     assert not short.drifted and not short.traces and "too short" in short.notes[0]
     noiseless = model.with_values(model.theta, {})
-    assert record_drift(noiseless, virtual_zone(1, days=2.0)) is None
+    assert record_drift(noiseless, dataset(noiseless, virtual_zone(1, days=2.0))) is None
 
 
 def test_the_drift_columns_are_stored_and_the_summary_lists_the_drifted_zones():
@@ -79,3 +80,17 @@ def test_fit_many_flags_the_zones_that_changed_and_not_the_one_that_did_not(tmp_
     assert {d["zone"] for d in run.totals["drifted"]} == {"changed", "bias"}
     assert any("show drift" in line for line in run.summary_lines())
     assert "Drift" in (tmp_path / "out" / "report.html").read_text()
+
+
+def test_a_drift_test_that_cannot_run_leaves_the_fit_standing(monkeypatch, model):  # noqa: F811
+    from rczone.batch import task
+    from rczone.calibration import drift
+    from rczone.errors import DataError
+
+    def broken(*_args):
+        raise DataError("the filter diverged")
+
+    monkeypatch.setattr(drift, "record_drift", broken)
+    cols = task._drift_columns(model, None)
+    assert cols == {"drift": None, "drift_tests": "not tested: DataError: the filter diverged"}
+    assert valid_row({"key": "a", "zone": "a", "method": "ml", "status": "ok", "fingerprint": "f", **cols})
