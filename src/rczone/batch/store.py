@@ -86,8 +86,11 @@ if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_close_lock_fds_in_child)
 
 #: Columns of a row and the JSON types they hold (others hold numbers or null).
-TEXT = ("key", "zone", "method", "model", "source", "status", "error", "fingerprint", "flags", "engine")
-FLAGS = ("converged", "trustworthy")
+TEXT = (
+    *("key", "zone", "method", "model", "source", "status", "error", "fingerprint", "flags", "engine"),
+    "drift_tests",
+)
+FLAGS = ("converged", "trustworthy", "drift")
 COUNTS = ("n_evals",)
 STATUSES = ("ok", "failed")
 

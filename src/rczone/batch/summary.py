@@ -47,6 +47,7 @@ def summarize(df: pd.DataFrame) -> dict:
         else [],
         "estimates": {},
         "verdicts": {},
+        "drifted": _drifted(ok),
     }
     for method, g in ok.groupby("method") if len(ok) else []:
         est = {}
@@ -69,6 +70,17 @@ def summarize(df: pd.DataFrame) -> dict:
         counts = ok.drop_duplicates("zone")[c].value_counts()
         out["verdicts"][c.removesuffix("_verdict")] = {v: int(counts.get(v, 0)) for v in VERDICTS}
     return out
+
+
+def _drifted(ok: pd.DataFrame) -> list[dict]:
+    """The calibrations whose own record shows drift (:func:`rczone.calibration.drift.record_drift`)."""
+    if "drift" not in ok or not len(ok):
+        return []
+    hit = ok[ok["drift"].fillna(False).astype(bool)]
+    return [
+        {"zone": r.zone, "method": r.method, "since_s": json_number(r.drift_since_s), "tests": r.drift_tests}
+        for r in hit.itertuples()
+    ]
 
 
 def _histograms(df: pd.DataFrame, params: list[str]) -> Figure:
@@ -132,6 +144,16 @@ def write_summary(df: pd.DataFrame, folder: str | Path, title: str = "rczone bat
         rep.table(
             [{"parameter": p, **c} for p, c in s["verdicts"].items()],
             "Identifiability verdicts across zones (rczone diagnose, before fitting)",
+        )
+    if s["drifted"]:
+        rep.heading("Drift")
+        rep.table(
+            [
+                {**d, "since (h)": d["since_s"] / 3600 if d["since_s"] is not None else None}
+                for d in s["drifted"]
+            ],
+            "Zones whose errors left the range of their record's first half (CUSUM on the innovations)",
+            digits=3,
         )
     if s["failures"]:
         rep.heading("Failures")
@@ -248,6 +270,13 @@ class BatchRun(Result):
                 f"[yellow]{s['flagged']} calibration(s) finished but are flagged untrustworthy[/]"
                 " (column 'flags' of the results: an estimate at a bound, no standard error, or starts that"
                 " disagree)"
+            )
+        if s.get("drifted"):
+            zones = ", ".join(escape(d["zone"]) for d in s["drifted"][:SHOWN_FAILURES])
+            more = len(s["drifted"]) - SHOWN_FAILURES
+            lines.append(
+                f"[yellow]{len(s['drifted'])} calibration(s) show drift[/] ({zones}{f' and {more} more' if more > 0 else ''}):"
+                " the errors of the record's second half left the range of its first (columns 'drift', 'drift_since_s')"
             )
         return lines + (self.lost_lines() if lost else [])
 

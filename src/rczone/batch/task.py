@@ -17,6 +17,8 @@ from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
 
+import numpy as np
+
 from rczone.batch.manifest import Task, file_digest
 from rczone.errors import RczoneError
 from rczone.models import ZoneModel
@@ -63,6 +65,25 @@ def run_unit(zones: list[list[Task]], run_zone: Callable[[list[Task]], list[dict
         The rows of every zone, in order.
     """
     return [row for tasks in zones for row in run_zone(tasks)]
+
+
+def _drift_columns(model: ZoneModel, data) -> dict:
+    """``drift`` (None: not tested), when it started and the tests that say so (:func:`~rczone.calibration.drift.record_drift`)."""
+    from rczone.calibration.drift import record_drift
+
+    try:
+        check = record_drift(model, data)
+    except (RczoneError, np.linalg.LinAlgError) as exc:  # the fit stands; only the test could not run
+        return {"drift": None, "drift_tests": f"not tested: {type(exc).__name__}: {exc}"}
+    tested = check is not None and bool(check.traces)
+    return {
+        "drift": check.drifted if tested else None,
+        "drift_since_s": check.since_s if tested else None,
+        "drift_detected_s": check.detected_s if tested else None,
+        "drift_tests": "; ".join(sorted({f"{s.test} of {s.output}" for s in check.signals}))
+        if tested
+        else None,
+    }
 
 
 def run_task(task: Task, cache: dict | None = None) -> dict:
@@ -114,6 +135,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
             p = r.posterior
             row.update(draws=p.n_draws, tune=p.tune, chains=p.n_chains, divergences=p.divergences)
             row.update(max_rhat=float(p.rhat.max()), min_ess_bulk=float(p.ess_bulk.min()))
+        row.update(_drift_columns(cal.model, cache[key]))
         for n, e in r.parameters.items():
             row[n] = e.value
             row[f"{n}_se"] = e.std_error

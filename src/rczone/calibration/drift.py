@@ -25,6 +25,11 @@ The CUSUM's reference values come from the warm-up after its first quarter (the 
 at least the conformal window: a day of hourly blocks estimates their spread only to about 15 %,
 which a decision interval tuned for known values does not forgive.
 
+``fit-many`` tests each zone's own record the same way (:func:`record_drift`): the fitted model's
+innovations over the second half of the record against the first half's (after its first
+quarter), so that nights whose errors leave the range of the earlier ones are flagged as drift,
+with the time it started, instead of only being averaged into the stored error.
+
 References
 ----------
 .. [1] E. S. Page, "Continuous inspection schemes", Biometrika 41 (1954) 100-115.
@@ -53,6 +58,8 @@ MIN_BLOCKS = 8
 WIDEN_FACTOR = 2.0
 #: ...for this long (the median over the window), s.
 WIDEN_WINDOW_S = 6 * 3600.0
+#: Share of a zone's record that :func:`record_drift` calibrates the CUSUM on (the rest is tested).
+RECORD_REFERENCE = 0.5
 
 
 @dataclass(frozen=True)
@@ -354,3 +361,48 @@ def check_drift(
     else:
         notes.append("no online update (--online): the band's widening is not watched")
     return DriftCheck(tuple(sorted(signals, key=lambda s: s.detected_s)), traces, tuple(notes))
+
+
+def record_drift(model, data) -> DriftCheck | None:
+    """The CUSUM tests of a zone's own record: its second half against its first (``fit-many``).
+
+    The fitted model's Kalman filter runs over the whole record; its standardized one-step
+    innovations after :data:`RECORD_REFERENCE` of the record are tested against those before it
+    (after the filter's first quarter), as :func:`check_drift` does for ``predict``. A model fitted
+    to a record whose building changed part-way is a compromise of before and after, so its
+    errors shift at the change and the shift is dated. A record too short for
+    :data:`MIN_BLOCKS` reference blocks is not filtered (a note says so).
+
+    Parameters
+    ----------
+    model : ZoneModel
+        The fitted model, with its noise levels.
+    data : Dataset
+        The zone's data (those of the fit; :func:`rczone.calibration.dataset.dataset`).
+
+    Returns
+    -------
+    DriftCheck or None
+        None when the model has no noise levels (a least-squares fit has no innovations to test).
+    """
+    from rczone.calibration.prediction import model_hold, noise_values
+    from rczone.estimation.engines import run_filter
+    from rczone.network.stochastic import is_noise_name
+
+    if not any(is_noise_name(k) for k in model.noise):
+        return None
+    t = data.t
+    first = int(np.searchsorted(t, t[0] + RECORD_REFERENCE * (t[-1] - t[0])))
+    reference = first - first // 4
+    if first < 2 or t[first - 1] - t[first - reference] < MIN_BLOCKS * BLOCK_S:
+        need = MIN_BLOCKS * BLOCK_S / (RECORD_REFERENCE * 0.75) / 3600
+        note = f"a record of {(t[-1] - t[0]) / 3600:.3g} h is too short to test for drift (about {need:.3g} h needed)"
+        return DriftCheck((), {}, (note,))
+    net = model.network
+    out = run_filter(net, {**model.theta, **noise_values(model)}, data, model_hold(model))
+    with np.errstate(invalid="ignore"):
+        z = out.innovations / np.sqrt(np.einsum("kii->ki", out.S))
+    check = check_drift(z, t, first, reference, net.outputs)
+    notes = [n for n in check.notes if "online" not in n]
+    notes.append("a fit has no online band: only the CUSUM on the innovations is tested")
+    return DriftCheck(check.signals, check.traces, tuple(notes))
