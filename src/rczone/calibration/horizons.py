@@ -407,6 +407,8 @@ def horizon_scores(
         y_hat = predictor(setup.values)
         for h, steps in zip(y_hat, horizons):
             what = "the open-loop prediction" if steps is None else f"the {steps}-step prediction"
+            if not np.isfinite(h[max(first, steps or 0) :]).all():
+                raise DataError(f"{what} is not finite; the model's values are not usable on these data")
             validation.scored_samples(data.y[first:], h[first:], zm.network.outputs, what)
         sd, sources = setup.noise_sd(horizons)
     cov = saved_covariance(zm) if parameters else None

@@ -486,6 +486,7 @@ def prediction_setup(
         raise DataError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
     if initial_state not in INITIAL_STATES:
         raise DataError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
+    validation.measured_outputs(frame, zm.network.outputs)  # a measurement of 1e308 degC starts nothing
     data = dataset(zm, frame, constants)
     first = 0 if start is None else int(np.searchsorted(data.t, start))
     if first >= data.n_samples:

@@ -579,3 +579,15 @@ def test_a_manifest_is_validated_whole_through_the_api(tmp_path):
     )
     with pytest.raises(RczoneError, match=r"zone 2 \(b\): unknown free parameter 'Rxx'"):
         read_manifest(tmp_path / "m.toml")
+
+
+def test_scores_per_horizon_check_the_measurements_as_predict_does(tmp_path, capsys):
+    """Found by the long fuzz round: a measured 1e308 degC started an open loop whose scores were inf."""
+    frame = zone_frame()
+    frame.loc[0, "Ti"] = 1e308
+    with pytest.raises(RczoneError, match=r"column 'Ti' \(temperature\) is 1e\+308 at sample 1"):
+        rczone.score_horizons("TiTe", frame, horizons="open", baselines=True)
+    frame.to_csv(tmp_path / "hot.csv", index=False)
+    one_line_exit_2(
+        ["predict", "TiTe", str(tmp_path / "hot.csv"), "--horizons", "open"], capsys, r"'Ti'.*1e\+308"
+    )
