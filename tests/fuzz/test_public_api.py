@@ -420,6 +420,21 @@ def test_multizone_refuses_hostile_rooms(rooms):
     result_or_one_line(lambda: multizone(rooms))
 
 
+@FAST
+@given(st.sampled_from(["FitSettings", "TrendLog", "BuiltinNight", "model_to_toml"]), st.data())
+def test_settings_sources_and_model_files_refuse_hostile_values(what, data):
+    value = data.draw(anything)
+    make = {
+        "FitSettings": lambda: rczone.FitSettings(
+            **{data.draw(st.sampled_from(["method", "seed", "n_starts", "noise", "hold", "free"])): value}
+        ),
+        "TrendLog": lambda: rczone.TrendLog(value),
+        "BuiltinNight": lambda: rczone.BuiltinNight(value),
+        "model_to_toml": lambda: rczone.model_to_toml(value),
+    }[what]
+    result_or_one_line(make)
+
+
 @pytest.mark.slow
 @LONG
 @given(hostile_frames())

@@ -180,7 +180,7 @@ class ZoneModel:
             n: p.value for n, p in self.network.parameters.items() if not p.is_tied and p.value is not None
         }
         given = validation.mapping(self.theta, "theta")
-        theta.update({str(k): validation.finite(v, f"parameter {k}") for k, v in given.items()})
+        theta.update({str(k): validation.number(v, f"parameter {k}") for k, v in given.items()})
         vals = self.network.values(theta)  # validates names, ranges and ties now
         self.inputs.check_against(self.network)
         for k, v in dict(self.noise).items():

@@ -129,6 +129,24 @@ def steps_ahead(steps: object, n_samples: int, name: str = "steps") -> int:
     return k
 
 
+def number(value: object, name: str) -> float:
+    """``value`` as a float (NaN and infinities pass, for the caller's own check); bools and text are refused.
+
+    Parameters
+    ----------
+    value : object
+        What the user gave.
+    name : str
+        The argument's name, for the message.
+    """
+    try:
+        if isinstance(value, (bool, np.bool_, str, bytes)):
+            raise TypeError
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"{name} must be a number, got {printable(repr(value))[:60]}") from None
+
+
 def finite(value: object, name: str, *, low: float = -math.inf, high: float = math.inf) -> float:
     """``value`` as a finite float within ``[low, high]`` (a number, not a bool or text).
 
@@ -141,12 +159,7 @@ def finite(value: object, name: str, *, low: float = -math.inf, high: float = ma
     low, high : float
         Inclusive limits.
     """
-    try:
-        if isinstance(value, (bool, np.bool_, str, bytes)):
-            raise TypeError
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"{name} must be a number, got {printable(repr(value))[:60]}") from None
+    x = number(value, name)
     if not math.isfinite(x) or not low <= x <= high:
         span = f" from {low:g} to {high:g}" if math.isfinite(low) or math.isfinite(high) else ""
         raise ParameterError(f"{name} must be a finite number{span}, got {x:g}")

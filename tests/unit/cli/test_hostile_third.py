@@ -591,3 +591,13 @@ def test_scores_per_horizon_check_the_measurements_as_predict_does(tmp_path, cap
     one_line_exit_2(
         ["predict", "TiTe", str(tmp_path / "hot.csv"), "--horizons", "open"], capsys, r"'Ti'.*1e\+308"
     )
+
+
+def test_a_huge_noise_level_in_a_saved_model_through_the_command_line(tmp_path, data, capsys):
+    path = saved(tmp_path, sigma_v=0.1)
+    doc = json.loads(path.read_text())
+    doc["noise"]["sigma_v"] = 1e300  # edited by hand: a model file is untrusted
+    path.write_text(json.dumps(doc))
+    one_line_exit_2(
+        ["predict", str(path), str(data), "--steps", "1"], capsys, r"noise level 'sigma_v' = 1e\+300"
+    )
