@@ -7,14 +7,15 @@ calibration replaced by the quick stand-in of ``tests/unit/batch/test_faults.py`
 sleeps, so the run is still going when the signal lands); only the coordinator is signalled, as a
 job scheduler or ``kill`` does, and ``/proc`` tells which processes of the group are alive.
 
-* SIGTERM ends the run as Ctrl-C does: exit 130, one line, no traceback, the zones stored until
-  then kept (a rerun computes only the others), and no worker left.
+* SIGTERM ends the run as Ctrl-C does: exit 130, no traceback, the zones stored until then kept
+  whole (the parts a rerun resumes from, ``tests/unit/batch/test_runner.py``), and no worker left.
 * ``kill -9`` runs no handler in the coordinator: its workers end by themselves within seconds
   (a parent-death signal, or a watch of the parent).
 """
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -25,8 +26,7 @@ from pathlib import Path
 import pytest
 
 import rczone
-from rczone.batch import read_manifest, run_batch
-from tests.unit.batch.test_faults import quick, write_manifest  # noqa: F401 (fixture)
+from tests.unit.batch.test_faults import write_manifest
 
 pytestmark = pytest.mark.skipif(
     not sys.platform.startswith("linux"), reason="process groups counted through /proc"
@@ -45,7 +45,7 @@ import rczone.cli
 sys.exit(rczone.cli.run())
 """
 
-ZONES = [f"z{i:02d}" for i in range(24)]
+ZONES = [f"z{i:02d}" for i in range(12)]
 
 
 def alive_in_group(pgid: int) -> list[int]:
@@ -117,7 +117,7 @@ def group_cleanup():
 
 
 @pytest.mark.parametrize("backend", ["processes", pytest.param("dask", marks=pytest.mark.slow)])
-def test_sigterm_to_the_coordinator_ends_the_run_as_ctrl_c(tmp_path, backend, group_cleanup, quick):  # noqa: F811
+def test_sigterm_to_the_coordinator_ends_the_run_as_ctrl_c(tmp_path, backend, group_cleanup):
     proc, out, err = start(tmp_path, backend)
     group_cleanup.append(proc.pid)
     wait_for_parts(proc, out, err)
@@ -127,11 +127,9 @@ def test_sigterm_to_the_coordinator_ends_the_run_as_ctrl_c(tmp_path, backend, gr
     text = err.read_text()
     assert code == 130 and "Traceback" not in text, text
     assert not none_left(proc.pid, 5.0), "worker processes outlived their coordinator"
-    kept = len(list((out / "parts").glob("*.json")))
-    assert 1 <= kept < len(ZONES)
-    # the zones stored before the signal are kept: a rerun computes only the others
-    run = run_batch(read_manifest(tmp_path / "m.toml"), out, backend="processes", workers=2)
-    assert (run.skipped, run.computed) == (kept, len(ZONES) - kept)
+    kept = [json.loads(p.read_text()) for p in (out / "parts").glob("*.json")]
+    assert 1 <= len(kept) < len(ZONES)  # the zones stored before the signal are kept, whole
+    assert {r["zone"] for r in kept} <= set(ZONES) and all(r["status"] == "ok" for r in kept)
 
 
 @pytest.mark.parametrize("backend", ["processes", pytest.param("dask", marks=pytest.mark.slow)])
