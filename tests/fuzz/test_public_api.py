@@ -17,6 +17,7 @@ dozen examples per function keep ``make test`` quick; the ``slow`` round runs mo
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pandas as pd
@@ -27,8 +28,12 @@ from hypothesis import strategies as st
 import rczone
 from rczone.errors import RczoneError
 
-FAST = settings(max_examples=15, deadline=None, suppress_health_check=list(HealthCheck), database=None)
-LONG = settings(max_examples=400, deadline=None, suppress_health_check=list(HealthCheck), database=None)
+#: Examples per function: a few dozen keep ``make test`` quick; ``RCZONE_FUZZ_EXAMPLES=500`` runs a long round.
+EXAMPLES = int(os.environ.get("RCZONE_FUZZ_EXAMPLES", "15"))
+FAST = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck), database=None)
+LONG = settings(
+    max_examples=max(400, EXAMPLES), deadline=None, suppress_health_check=list(HealthCheck), database=None
+)
 
 MODEL = "TiTe"
 
@@ -151,8 +156,14 @@ def _numbers(obj: object, skip: tuple[str, ...] = ()):
         yield float(obj)
 
 
-def result_or_one_line(call, *, nan_ok: tuple[str, ...] = ()):
-    """Call; a result must hold no NaN in its frame, an error must be rczone's and one line."""
+def _no_nan_in_table(frame: pd.DataFrame) -> None:
+    """A table of scores: a score that does not exist is missing (``pd.NA``), never a float NaN."""
+    floats = [c for c in frame.columns if frame[c].dtype == float]
+    assert np.isfinite(frame[floats].to_numpy(float)).all(), f"NaN or inf in a table of results:\n{frame}"
+
+
+def result_or_one_line(call):
+    """Call; a result must hold no NaN where it reports a number, an error must be rczone's and one line."""
     try:
         out = call()
     except RczoneError as exc:
@@ -165,8 +176,13 @@ def result_or_one_line(call, *, nan_ok: tuple[str, ...] = ()):
     if isinstance(out, pd.DataFrame):  # a simulation: every node at every sample
         assert np.isfinite(out.to_numpy(float)).all(), f"non-finite values in the result:\n{out}"
     elif hasattr(out, "to_dict"):  # its scores (a series may leave samples it does not predict empty)
-        bad = [v for v in _numbers(out.to_dict(), nan_ok) if not math.isfinite(v)]
+        bad = [v for v in _numbers(out.to_dict()) if not math.isfinite(v)]
         assert not bad, f"non-finite scores in {type(out).__name__}: {out.to_dict()}"
+    if isinstance(out, rczone.Prediction):  # no band: no coverage (None), never NaN
+        assert out.coverage is None or np.isfinite(out.coverage).all(), out.coverage
+        assert np.isfinite(out.rmse_K).all() and np.isfinite(out.max_abs_K).all()
+    if type(out).__name__ == "HorizonScores":
+        _no_nan_in_table(out.to_frame())
     return out
 
 
@@ -214,7 +230,7 @@ def test_fit_refuses_hostile_data_or_flags_it(frame):
 @given(hostile_frames())
 def test_simulate_and_predict_on_hostile_data(frame):
     result_or_one_line(lambda: rczone.simulate(MODEL, frame))
-    result_or_one_line(lambda: rczone.predict(FITTED, frame, steps=1), nan_ok=("coverage_2sigma",))
+    result_or_one_line(lambda: rczone.predict(FITTED, frame, steps=1))
 
 
 @FAST
@@ -236,7 +252,7 @@ def test_predict_hostile_steps(steps):
 @FAST
 @given(st.sampled_from(["initial_state", "hold"]), hostile_texts)
 def test_predict_hostile_options(name, value):
-    result_or_one_line(lambda: rczone.predict(FITTED, DATA, **{name: value}), nan_ok=("coverage_2sigma",))
+    result_or_one_line(lambda: rczone.predict(FITTED, DATA, **{name: value}))
 
 
 @FAST
@@ -327,9 +343,101 @@ def test_load_model_and_load_data_refuse_hostile_names(text):
     result_or_one_line(lambda: rczone.load_data(text))
 
 
+@FAST
+@given(hostile_frames(), st.sampled_from([None, 1, 3]))
+def test_predict_open_loop_and_smooth_on_hostile_data(frame, steps):
+    """A model without noise levels too: no band, so no coverage (None), never NaN."""
+    result_or_one_line(lambda: rczone.predict(MODEL, frame))
+    result_or_one_line(lambda: rczone.predict(FITTED, frame, steps=steps))
+    result_or_one_line(lambda: rczone.smooth(FITTED, frame))
+
+
+@FAST
+@given(
+    st.one_of(
+        hostile_sequences, hostile_texts, st.lists(st.one_of(st.integers(), st.just("open")), max_size=3)
+    ),
+    st.one_of(st.none(), hostile_texts, st.sampled_from(["1h", "3h", "4h", "1d", "0s", "-1h"])),
+    st.booleans(),
+)
+def test_score_horizons_refuses_hostile_values(horizons, warmup, baselines):
+    result_or_one_line(
+        lambda: rczone.score_horizons(FITTED, DATA, horizons=horizons, warmup=warmup, baselines=baselines)
+    )
+
+
+@FAST
+@given(hostile_frames(), st.sampled_from(["open", "1,open", "3"]))
+def test_score_horizons_on_hostile_data(frame, horizons):
+    result_or_one_line(
+        lambda: rczone.score_horizons(MODEL if horizons == "open" else FITTED, frame, horizons=horizons)
+    )
+
+
+@FAST
+@given(
+    st.one_of(
+        st.dictionaries(
+            st.sampled_from(["Ci", "Ce", "Rie", "Rea", "x"]), st.one_of(any_floats, names), max_size=3
+        ),
+        hostile_mappings,
+    ),
+    st.one_of(
+        st.none(),
+        st.dictionaries(st.sampled_from(["sigma_v", "sigma_w_Ti", "x0_Te"]), any_floats),
+        hostile_mappings,
+    ),
+)
+def test_model_values_refuse_hostile_values(theta, noise):
+    from rczone.models import load_model
+
+    result_or_one_line(lambda: load_model(MODEL).with_values(theta, noise))
+
+
+anything = st.one_of(any_floats, names, bad_integers, st.none(), hostile_mappings, hostile_sequences)
+
+
+@FAST
+@given(st.sampled_from(["Node", "Resistor", "HeatInput", "SupplyAir", "Parameter", "RCNetwork"]), st.data())
+def test_network_constructors_refuse_hostile_values(cls, data):
+    value = data.draw(anything)
+    make = {
+        "Node": lambda: rczone.Node("T", value),
+        "Resistor": lambda: rczone.Resistor("T", "To", value),
+        "HeatInput": lambda: rczone.HeatInput("Q", value),
+        "SupplyAir": lambda: rczone.SupplyAir("T", cp=value),
+        "Parameter": lambda: rczone.Parameter("C", "capacitance", value),
+        "RCNetwork": lambda: rczone.RCNetwork("n", value, ["To"], [rczone.Resistor("T", "To", "R")]),
+    }[cls]
+    result_or_one_line(make)
+
+
+@FAST
+@given(st.one_of(bad_integers, st.integers(51, 10**9), hostile_texts, st.lists(hostile_texts, max_size=3)))
+def test_multizone_refuses_hostile_rooms(rooms):
+    from rczone.models.multizone import multizone
+
+    result_or_one_line(lambda: multizone(rooms))
+
+
+@FAST
+@given(st.sampled_from(["FitSettings", "TrendLog", "BuiltinNight", "model_to_toml"]), st.data())
+def test_settings_sources_and_model_files_refuse_hostile_values(what, data):
+    value = data.draw(anything)
+    make = {
+        "FitSettings": lambda: rczone.FitSettings(
+            **{data.draw(st.sampled_from(["method", "seed", "n_starts", "noise", "hold", "free"])): value}
+        ),
+        "TrendLog": lambda: rczone.TrendLog(value),
+        "BuiltinNight": lambda: rczone.BuiltinNight(value),
+        "model_to_toml": lambda: rczone.model_to_toml(value),
+    }[what]
+    result_or_one_line(make)
+
+
 @pytest.mark.slow
 @LONG
 @given(hostile_frames())
 def test_simulate_and_predict_on_hostile_data_long(frame):
     result_or_one_line(lambda: rczone.simulate(MODEL, frame))
-    result_or_one_line(lambda: rczone.predict(FITTED, frame, steps=1), nan_ok=("coverage_2sigma",))
+    result_or_one_line(lambda: rczone.predict(FITTED, frame, steps=1))

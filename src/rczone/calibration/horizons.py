@@ -163,8 +163,19 @@ class HorizonScores(Result):
         )
 
     def to_frame(self) -> pd.DataFrame:
-        """The scores table (a copy)."""
-        return self.table.copy()
+        """The scores table (a copy); a score that does not exist is missing (``pd.NA``), never NaN.
+
+        A baseline has no band, a model without noise levels none either (:attr:`band_source`
+        says so): their ``coverage_2sigma`` and ``interval_score_K`` are missing, as are the
+        scores of a row with no scored sample (``n`` 0) and of an unstable baseline.
+        """
+        table = self.table.copy()
+        unstable = ~table["stable"].astype(bool)
+        table.loc[unstable, ["rmse_K", "mae_K", "bias_K"]] = np.nan
+        for col in table.columns:
+            if table[col].dtype.kind == "f" and table[col].isna().any():
+                table[col] = table[col].astype("Float64")
+        return table
 
     def summary_lines(self) -> list:
         """What ``rczone predict --horizons`` prints: the table, then where the start, band and ARX come from."""
@@ -181,7 +192,13 @@ class HorizonScores(Result):
             table.add_column(col)
         table.add_column("inside ±2σ")
         for _, r in self.table.iterrows():
-            cov = "" if not math.isfinite(r.coverage_2sigma) else f"{r.coverage_2sigma:.0%}"
+            cov = (
+                f"{r.coverage_2sigma:.0%}"
+                if math.isfinite(r.coverage_2sigma)
+                else "no band"
+                if r.predictor == MODEL
+                else ""
+            )
             if not math.isnan(r.interval_score_K):
                 cov += f" (score {r.interval_score_K:.3f})"
             scores = (
@@ -388,6 +405,11 @@ def horizon_scores(
                 validation.steps_ahead(h, len(data.t) - first, "horizon")
         predictor = setup.predictor(horizons)
         y_hat = predictor(setup.values)
+        for h, steps in zip(y_hat, horizons):
+            what = "the open-loop prediction" if steps is None else f"the {steps}-step prediction"
+            if not np.isfinite(h[max(first, steps or 0) :]).all():
+                raise DataError(f"{what} is not finite; the model's values are not usable on these data")
+            validation.scored_samples(data.y[first:], h[first:], zm.network.outputs, what)
         sd, sources = setup.noise_sd(horizons)
     cov = saved_covariance(zm) if parameters else None
     if cov is not None:

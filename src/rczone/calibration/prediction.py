@@ -49,7 +49,6 @@ from rczone.network.stochastic import (
 )
 from rczone.results import Result
 from rczone.results.accessors import PredictionFrames
-from rczone.results.protocol import json_number
 from rczone.simulation.simulate import HOLDS
 
 
@@ -169,25 +168,53 @@ class Prediction(PredictionFrames, Result):
         return per_output_errors(self.error)[1]
 
     @property
-    def coverage(self) -> np.ndarray:
-        """Fraction of measured samples inside the band, per output (NaN without a band)."""
+    def has_band(self) -> bool:
+        """Whether the prediction has a 2-sigma band at a measured sample of every output.
+
+        A model without noise levels, an LS fit's RMSE or saved standard errors has none
+        (:attr:`band_source` says so); its :attr:`coverage` is then None, never NaN.
+        """
+        lo, hi = self.band
+        ok = np.isfinite(self.measured) & np.isfinite(lo) & np.isfinite(hi)
+        return bool(ok.any(axis=0).all())
+
+    @property
+    def coverage(self) -> np.ndarray | None:
+        """Fraction of measured samples inside the band, per output; None without a band (:attr:`has_band`)."""
+        if not self.has_band:
+            return None
         lo, hi = self.band
         ok = np.isfinite(self.measured) & np.isfinite(lo) & np.isfinite(hi)
         inside = (self.measured >= lo) & (self.measured <= hi) & ok
-        return np.where(ok.sum(axis=0) > 0, inside.sum(axis=0) / np.maximum(ok.sum(axis=0), 1), np.nan)
+        return inside.sum(axis=0) / ok.sum(axis=0)
+
+    @property
+    def no_band_note(self) -> str:
+        """Why the prediction has no band, in words (empty when it has one)."""
+        if self.has_band:
+            return ""
+        return (
+            "no 2-sigma band: the model has no noise levels or standard errors (a model fitted with rczone fit"
+            " --save-model has them)"
+        )
 
     def _columns(self) -> dict[str, np.ndarray]:
         cols: dict[str, np.ndarray] = {}
         lo, hi = self.band
+        band = self.has_band  # without one, no column of NaN bounds: the note says why
+        parts = {
+            part: a
+            for part, a in (("sd_noise", self.sd_noise), ("sd_parameters", self.sd_parameters))
+            if a is not None and np.isfinite(a).any()
+        }
         for j, o in enumerate(self.outputs):
             cols[f"{o}_measured"] = self.measured[:, j]
             cols[f"{o}_predicted"] = self.predicted[:, j]
-            cols[f"{o}_lower"] = lo[:, j]
-            cols[f"{o}_upper"] = hi[:, j]
-            if self.sd_noise is not None:
-                cols[f"{o}_sd_noise"] = self.sd_noise[:, j]
-            if self.sd_parameters is not None:
-                cols[f"{o}_sd_parameters"] = self.sd_parameters[:, j]
+            if band:
+                cols[f"{o}_lower"] = lo[:, j]
+                cols[f"{o}_upper"] = hi[:, j]
+            for part, a in parts.items():
+                cols[f"{o}_{part}"] = a[:, j]
         st = self.states
         if st is not None:
             for i, name in enumerate(st.names):
@@ -199,6 +226,7 @@ class Prediction(PredictionFrames, Result):
     def to_frame(self) -> pd.DataFrame:
         """Per output measured, predicted, lower and upper (2 sigma), then every node's estimate.
 
+        Without a band (:attr:`has_band`) there are no ``lower`` and ``upper`` columns.
         Indexed by the data's time stamps.
         Without clock time (seconds from the start), a ``time`` column in seconds instead.
         """
@@ -234,13 +262,12 @@ class Prediction(PredictionFrames, Result):
                     for k, sd in start.sd.items()
                 )
             )
+        cover = self.coverage
         for j, o in enumerate(self.outputs):
-            cover = self.coverage[j]
             band = (
-                f"{cover:.0%} of the measurements inside the 2-sigma band ({esc(self.band_source)})"
-                if np.isfinite(cover)
-                else "no 2-sigma band: the model has no noise levels or standard errors (a model fitted"
-                " with rczone fit --save-model has them)"
+                f"{cover[j]:.0%} of the measurements inside the 2-sigma band ({esc(self.band_source)})"
+                if cover is not None
+                else self.no_band_note
             )
             lines.append(
                 f"{esc(self.data_label)}: {esc(o)} {self.horizon} RMSE {self.rmse_K[j]:.3f} K, max error"
@@ -276,7 +303,10 @@ class Prediction(PredictionFrames, Result):
             }
             if start is not None
             else None,
-            "coverage_2sigma": {o: json_number(float(c)) for o, c in zip(self.outputs, self.coverage)},
+            "coverage_2sigma": None
+            if (cover := self.coverage) is None
+            else {o: float(c) for o, c in zip(self.outputs, cover)},
+            "coverage_note": self.no_band_note or None,
             "mean_sd_K": {
                 part: {o: float(np.nanmean(a[:, j])) for j, o in enumerate(self.outputs)}
                 for part, a in (("noise", self.sd_noise), ("estimates", self.sd_parameters))
@@ -456,6 +486,7 @@ def prediction_setup(
         raise DataError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
     if initial_state not in INITIAL_STATES:
         raise DataError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
+    validation.measured_outputs(frame, zm.network.outputs)  # a measurement of 1e308 degC starts nothing
     data = dataset(zm, frame, constants)
     first = 0 if start is None else int(np.searchsorted(data.t, start))
     if first >= data.n_samples:
@@ -628,6 +659,8 @@ def setup_prediction(
     sd = sd[0]
     if not np.all(np.isfinite(y_hat[max(first, steps or 0) :])):
         raise DataError("the model's prediction is not finite; its values are not usable on these data")
+    what = "the open-loop prediction" if steps is None else f"the {steps}-step prediction"
+    validation.scored_samples(data.y[first:], y_hat[first:], zm.network.outputs, what)
     sd_par = lower = upper = None
     kept = saved_draws(zm) if parameters else None
     cov = saved_covariance(zm) if parameters and kept is None else None

@@ -163,6 +163,7 @@ def fit(
     innovations far from white) - every output is still written; 2: a mistake in the input.
     """
 
+    from rczone.files.atomic import refuse_link_in
     from rczone.workflow import FitSettings, fit_and_check
     from rczone.workflow.holdout import before, split_time
 
@@ -175,6 +176,8 @@ def fit(
     n_starts = _starts(starts)
     full = read_frame(data, column_map, zm)
     at = split_time(full, holdout, model=zm, columns=column_map)
+    if report_dir and at is not None:
+        refuse_link_in(report_dir, HELD_OUT)  # before the fit, not after it
     frame = before(full, at)
     settings = FitSettings(
         method=method,
@@ -218,12 +221,16 @@ def fit(
         raise typer.Exit(cal.exit_code)
 
 
+#: The subfolder of ``--report DIR`` that ``--holdout`` writes its report into.
+HELD_OUT = "holdout"
+
+
 def held_out_report(held, report_dir: Path, out) -> None:
     """``--holdout --report DIR``: the held-out scores' report in ``DIR/holdout``."""
     from rczone.report.predict import horizons_report
 
-    horizons_report(held).write(report_dir, under="holdout")
-    out.print(f"held-out report written to [bold]{esc(report_dir / 'holdout' / 'report.html')}[/]")
+    horizons_report(held).write(report_dir, under=HELD_OUT)
+    out.print(f"held-out report written to [bold]{esc(report_dir / HELD_OUT / 'report.html')}[/]")
 
 
 def _save(zm, path: Path) -> None:

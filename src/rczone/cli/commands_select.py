@@ -160,6 +160,11 @@ def select(
 
     full = frame
     at = split_time(frame, holdout, model=zms[0], columns=column_map)
+    if report_dir and at is not None:
+        from rczone.cli.commands_fit import HELD_OUT
+        from rczone.files.atomic import refuse_link_in
+
+        refuse_link_in(report_dir, HELD_OUT)  # before the fits, not after them
     frame = before(full, at)
     box = bounds(bound, parameter_kinds(*zms))
     held = fixed(fix, parameter_kinds(*zms))

@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from rczone import validation
 from rczone.control.constraints import ZoneConstraints
 from rczone.control.energy import zone_power
 from rczone.control.plant import forecast_steps
@@ -91,8 +92,7 @@ def check_run(season: str, days: float, seed: int, price: str, comfort_band: str
             f"days must be in (0, {MAX_DAYS}] and leave at least one scored minute "
             f"({CONTROL_DT / DAY:.6g} days), got {days!r}"
         )
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ParameterError(f"seed must be an integer >= 0, got {seed!r}")
+    validation.seed(seed)
 
 
 class VirtualPlant:

@@ -287,6 +287,17 @@ def ensure_folder_in(folder: str | os.PathLike, name: str) -> Path:
     return folder.joinpath(*parts)
 
 
+def refuse_link_in(folder: str | os.PathLike, name: str) -> None:
+    """Refuse now a symbolic link at ``folder/name``, a subfolder a command writes into when it ends.
+
+    The writing refuses it too (:func:`write_bytes_in`); this says so before the work, not after.
+    """
+    folder = Path(folder)
+    here = folder.joinpath(*_split(name))
+    if _is_link(here):
+        raise _link_error(folder, here)
+
+
 def open_in(folder: str | os.PathLike, name: str, flags: int = os.O_RDWR | os.O_CREAT) -> int:
     """Open the regular file ``folder/name`` (a lock file) without following a symbolic link.
 

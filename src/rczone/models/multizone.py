@@ -35,9 +35,13 @@ References
 
 from __future__ import annotations
 
+import numbers
 import re
 from collections.abc import Mapping, Sequence
 
+import numpy as np
+
+from rczone import validation
 from rczone.errors import ParameterError, did_you_mean
 from rczone.models.library import _VALUES
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor
@@ -118,11 +122,10 @@ def multizone(
         For an unknown or repeated room, a wall of a room with itself or listed twice, a circuit
         without rooms, or a room heated by two circuits... (one line each, with a hint).
     """
-    if isinstance(rooms, int) and not isinstance(rooms, bool):
-        if not 1 <= rooms <= 50:
-            raise ParameterError(f"number of rooms must be 1 to 50, got {rooms}")
-        rooms = [str(i) for i in range(1, rooms + 1)]
-    rooms = _check_rooms(rooms)
+    if isinstance(rooms, (numbers.Number, np.bool_)):  # a count: 1 to 50, not a bool or 2.5
+        n = validation.integer(rooms, "rooms", low=1, high=50, besides="room names or ")
+        rooms = [str(i) for i in range(1, n + 1)]
+    rooms = _check_rooms(validation.name_list(rooms, "rooms"))
     nodes: list[Node] = []
     resistors: list[Resistor] = []
     params: list[Parameter] = []

@@ -194,7 +194,8 @@ class ZoneModel:
         theta = {
             n: p.value for n, p in self.network.parameters.items() if not p.is_tied and p.value is not None
         }
-        theta.update({str(k): v for k, v in dict(self.theta).items()})
+        given = validation.mapping(self.theta, "theta")
+        theta.update({str(k): validation.number(v, f"parameter {k}") for k, v in given.items()})
         vals = self.network.values(theta)  # validates names, ranges and ties now
         self.inputs.check_against(self.network)
         for k, v in dict(self.noise).items():
@@ -229,6 +230,8 @@ class ZoneModel:
         self, theta: Mapping[str, float], noise: Mapping[str, float] | None = None, **provenance: Any
     ) -> ZoneModel:
         """A copy with other parameter values (a fit's), same structure and conventions."""
+        theta = validation.mapping(theta, "theta")
+        noise = None if noise is None else validation.mapping(noise, "noise")
         return ZoneModel(
             self.network,
             {**self.theta, **theta},

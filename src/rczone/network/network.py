@@ -161,8 +161,24 @@ class SupplyAir:
     cp: Value = CP_AIR
 
 
+def _elements(items: object, kind: type | tuple[type, ...], what: str) -> tuple:
+    """``items`` as a tuple of ``kind`` objects, or one line naming the argument (not a TypeError)."""
+    if isinstance(items, (str, bytes, Mapping)) or not isinstance(items, Iterable):
+        raise NetworkError(f"{what} must be a sequence, got {type(items).__name__}")
+    out = tuple(items)
+    wrong = next((x for x in out if not isinstance(x, kind)), None)
+    if wrong is not None:
+        expected = kind.__name__ if isinstance(kind, type) else kind[0].__name__
+        raise NetworkError(f"{what} must hold {expected} objects, got {type(wrong).__name__}")
+    return out
+
+
 def _as_params(parameters: Iterable[Parameter] | Mapping[str, Parameter]) -> dict[str, Parameter]:
-    items = parameters.values() if isinstance(parameters, Mapping) else parameters
+    items = (
+        parameters.values()
+        if isinstance(parameters, Mapping)
+        else _elements(parameters, Parameter, "parameters")
+    )
     out: dict[str, Parameter] = {}
     for p in items:
         if not isinstance(p, Parameter):
@@ -284,18 +300,19 @@ class RCNetwork:
         *,
         disturbances: Iterable[LatentForce] = (),
     ) -> None:
-        nodes = tuple(nodes)
+        nodes = _elements(nodes, Node, "nodes")
         set_ = object.__setattr__
         set_(self, "name", name)
         set_(self, "nodes", nodes)
-        set_(self, "boundaries", tuple(boundaries))
-        set_(self, "resistors", tuple(resistors))
+        set_(self, "boundaries", _elements(boundaries, str, "boundaries"))
+        set_(self, "resistors", _elements(resistors, Resistor, "resistors"))
         set_(self, "parameters", _as_params(parameters))
-        set_(self, "heat_inputs", tuple(heat_inputs))
-        set_(self, "supply_air", tuple(supply_air))
-        set_(self, "outputs", tuple(outputs) if outputs is not None else (nodes[0].name,) if nodes else ())
+        set_(self, "heat_inputs", _elements(heat_inputs, HeatInput, "heat_inputs"))
+        set_(self, "supply_air", _elements(supply_air, SupplyAir, "supply_air"))
+        outputs = _elements(outputs, str, "outputs") if outputs is not None else None
+        set_(self, "outputs", outputs if outputs is not None else (nodes[0].name,) if nodes else ())
         set_(self, "description", description)
-        set_(self, "disturbances", tuple(disturbances))
+        set_(self, "disturbances", _elements(disturbances, LatentForce, "disturbances"))
         self._validate()
 
     def __hash__(self) -> int:  # parameters is a dict; identity hash suffices for caching

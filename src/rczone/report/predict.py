@@ -88,12 +88,13 @@ def prediction_report(pred: Prediction, data_name: str, model_name: str) -> Repo
             digits=3,
         )
     rows = []
+    cover = pred.coverage
     for j, o in enumerate(pred.outputs):
         row = {
             "output": o,
             "RMSE (K)": float(pred.rmse_K[j]),
             "max error (K)": float(pred.max_abs_K[j]),
-            "inside ±2σ": f"{pred.coverage[j]:.0%}" if np.isfinite(pred.coverage[j]) else "no band",
+            "inside ±2σ": f"{cover[j]:.0%}" if cover is not None else "no band",
         }
         for key, part in (
             ("mean σ, noise (K)", pred.sd_noise),

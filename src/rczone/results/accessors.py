@@ -180,10 +180,19 @@ class PredictionFrames:
         -------
         DataFrame
             Indexed by the data's time stamps (or by the time in seconds without clock time).
+
+        Raises
+        ------
+        DataError
+            The prediction has no band (a model without noise levels or standard errors).
         """
         import pandas as pd
 
+        from rczone.errors import DataError
+
         z = normal_quantile(alpha)
+        if not getattr(self, "has_band", True):  # no standard deviation: a band of NaN is no band
+            raise DataError(f"the prediction has {getattr(self, 'no_band_note', 'no band')}")
         name = self.outputs[0] if output is None else output
         if name not in self.outputs:
             raise ParameterError(f"output must be one of {', '.join(self.outputs)}, got {output!r}")

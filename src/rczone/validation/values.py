@@ -129,6 +129,24 @@ def steps_ahead(steps: object, n_samples: int, name: str = "steps") -> int:
     return k
 
 
+def number(value: object, name: str) -> float:
+    """``value`` as a float (NaN and infinities pass, for the caller's own check); bools and text are refused.
+
+    Parameters
+    ----------
+    value : object
+        What the user gave.
+    name : str
+        The argument's name, for the message.
+    """
+    try:
+        if isinstance(value, (bool, np.bool_, str, bytes)):
+            raise TypeError
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError):
+        raise ParameterError(f"{name} must be a number, got {printable(repr(value))[:60]}") from None
+
+
 def finite(value: object, name: str, *, low: float = -math.inf, high: float = math.inf) -> float:
     """``value`` as a finite float within ``[low, high]`` (a number, not a bool or text).
 
@@ -141,14 +159,10 @@ def finite(value: object, name: str, *, low: float = -math.inf, high: float = ma
     low, high : float
         Inclusive limits.
     """
-    try:
-        if isinstance(value, (bool, np.bool_, str, bytes)):
-            raise TypeError
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError, OverflowError):
-        raise ParameterError(f"{name} must be a number, got {printable(repr(value))[:60]}") from None
+    x = number(value, name)
     if not math.isfinite(x) or not low <= x <= high:
-        raise ParameterError(f"{name} must be a finite number from {low:g} to {high:g}, got {x:g}")
+        span = f" from {low:g} to {high:g}" if math.isfinite(low) or math.isfinite(high) else ""
+        raise ParameterError(f"{name} must be a finite number{span}, got {x:g}")
     return x
 
 
@@ -347,6 +361,31 @@ def measured_outputs(frame: Any, outputs: Sequence[str], *, label: str = "data",
                 f"{label}: the measured {name} is {np.nanmin(values):g} at every sample: a constant carries"
                 " nothing to fit (a column map that maps it to a value, or a stuck sensor); map the"
                 " measured column"
+            )
+
+
+def scored_samples(measured: np.ndarray, predicted: np.ndarray, outputs: Sequence[str], what: str) -> None:
+    """Refuse a score of nothing: every output needs a sample both measured and predicted.
+
+    A prediction whose warm-up, horizon or gaps leave an output no such sample would report its
+    RMSE, maximum error and coverage as NaN; it is one line instead.
+
+    Parameters
+    ----------
+    measured, predicted : ndarray, shape (N, ny)
+        The scored samples (NaN: not measured, not predicted).
+    outputs : sequence of str
+        The outputs' names.
+    what : str
+        What is scored, for the message (``"the 12-step prediction"``).
+    """
+    counts = (np.isfinite(measured) & np.isfinite(predicted)).sum(axis=0)
+    for j, name in enumerate(outputs):
+        if counts[j] == 0:
+            raise DataError(
+                f"{what} scores no sample of {printable(str(name))!r}: none of the {len(measured)} scored"
+                " samples is both measured and predicted; give data that measure it after the warm-up and"
+                " horizon"
             )
 
 

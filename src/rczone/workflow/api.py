@@ -312,6 +312,10 @@ def score_horizons(
     frame = frame_from(frame)
     start = split_time(frame, warmup, model=zm, columns=columns, warmup=True)
     settings = conformal_settings(conformal, online, start)
+    if not isinstance(horizons, (str, list, tuple)):  # an int or a set: one line, not a TypeError
+        raise ParameterError(
+            f"horizons must be a list such as [1, 12, 'open'] or text such as '1,12,open', got {horizons!r}"
+        )
     text = horizons if isinstance(horizons, str) else ",".join(str(h) for h in horizons)
     return horizon_scores(
         zm,

@@ -6,6 +6,7 @@ The API's side of the hostile values is fuzzed in ``tests/fuzz/test_public_api.p
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import re
@@ -19,6 +20,7 @@ import pandas as pd
 import pytest
 
 import rczone
+from rczone.cli.compile_notice import NOTICE
 from rczone.cli.main import main
 from rczone.errors import RczoneError
 
@@ -53,7 +55,7 @@ def data(tmp_path: Path) -> Path:
 def one_line_exit_2(args: list[str], capsys, pattern: str) -> str:
     assert main(args) == 2
     err = capsys.readouterr().err
-    lines = [ln for ln in err.splitlines() if not ln.startswith("warning: ")]
+    lines = [ln for ln in err.splitlines() if not ln.startswith("warning: ") and ln != NOTICE]
     assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in err, err
     assert re.search(pattern, err), err
     return err
@@ -183,6 +185,58 @@ def test_predict_horizons_longer_than_the_data(tmp_path, data, capsys, horizons)
     )
 
 
+NAN_WORD = re.compile(r"\bnan\b", re.IGNORECASE)
+
+
+def test_a_prediction_without_a_band_carries_no_nan_through_the_api():
+    """A model without noise levels or standard errors has no band: its coverage is None, with a note."""
+    pred = rczone.predict("TiTe", zone_frame())
+    assert not pred.has_band and pred.coverage is None
+    text = pred.summary()
+    assert "no 2-sigma band" in text and not NAN_WORD.search(text), text
+    d = pred.to_dict()
+    assert d["coverage_2sigma"] is None and d["coverage_note"].startswith("no 2-sigma band")
+    assert all(math.isfinite(v) for v in (d["rmse_K"], d["max_error_K"]))
+    frame = pred.to_frame()
+    assert not [c for c in frame.columns if c.endswith(("_lower", "_upper", "_sd_noise"))]
+    assert np.isfinite(frame[["Ti_measured", "Ti_predicted"]].to_numpy(float)).all()
+    with pytest.raises(RczoneError, match="no 2-sigma band"):
+        pred.summary_frame()
+    scores = rczone.score_horizons("TiTe", zone_frame(), horizons="open", baselines=True)
+    table = scores.to_frame()
+    assert table.coverage_2sigma.isna().all()  # missing (pd.NA), not a number
+    assert not [c for c in table.columns if table[c].dtype == float and table[c].isna().any()]
+    assert "no band" in scores.summary() and not NAN_WORD.search(scores.summary())
+    assert all(r["coverage_2sigma"] is None for r in scores.to_dict()["scores"])
+
+
+def test_a_prediction_without_a_band_prints_no_nan_on_the_command_line(tmp_path, data, capsys):
+    out = tmp_path / "p.json"
+    assert main(["predict", "TiTe", str(data), "--json", str(out), "-o", str(tmp_path / "s.csv")]) == 0
+    printed = capsys.readouterr().out
+    assert "no 2-sigma band" in printed and not NAN_WORD.search(printed), printed
+    d = json.loads(out.read_text())
+    assert d["coverage_2sigma"] is None and "no noise levels" in d["coverage_note"]
+    series = pd.read_csv(tmp_path / "s.csv")
+    assert "Ti_lower" not in series and series["Ti_predicted"].notna().all()
+    assert main(["predict", "TiTe", str(data), "--horizons", "open", "--baselines"]) == 0
+    printed = capsys.readouterr().out
+    assert "no band" in printed and not NAN_WORD.search(printed), printed
+
+
+def test_a_prediction_that_scores_no_sample_is_one_line(tmp_path, data, capsys):
+    frame = zone_frame()
+    frame.loc[60:, "Ti"] = np.nan  # measured only in the warm-up
+    with pytest.raises(rczone.DataError, match=r"scores no sample of 'Ti'"):
+        rczone.predict("TiTe", frame, warmup="5h")
+    frame.to_csv(tmp_path / "gappy.csv", index=False)
+    one_line_exit_2(
+        ["predict", "TiTe", str(tmp_path / "gappy.csv"), "--warmup", "5h"],
+        capsys,
+        r"scores no sample of 'Ti'",
+    )
+
+
 def test_a_gap_of_1e15_s_in_time_is_refused():
     frame = zone_frame()
     frame.loc[60:, "time"] += 1e15
@@ -216,6 +270,41 @@ def test_a_link_planted_at_a_report_subfolder_is_refused(tmp_path):
     report.figures["horizons"] = b"png"
     with pytest.raises(OutputError, match="symbolic link"):
         report.write(tmp_path / "rep", under="holdout")
+    assert list((tmp_path / "outer").iterdir()) == []
+
+
+@POSIX
+@pytest.mark.parametrize("command", ["fit", "select"])
+def test_holdout_report_does_not_follow_a_link_planted_at_its_subfolder(tmp_path, data, capsys, command):
+    (tmp_path / "outer").mkdir()
+    rep = tmp_path / "rep"
+    rep.mkdir()
+    (rep / "holdout").symlink_to("../outer")
+    models = (
+        ["--model", "TiTe", "--method", "ls"] if command == "fit" else ["--model", "Ti", "--model", "TiTe"]
+    )
+    args = [command, str(data), *models, "--starts", "1", "--holdout", "0.25"]
+    one_line_exit_2([*args, "--report", str(rep)], capsys, r"holdout'? is a symbolic link")
+    assert list((tmp_path / "outer").iterdir()) == []
+    assert (rep / "holdout").is_symlink() and not (rep / "report.html").exists()  # all or nothing
+
+
+@POSIX
+@pytest.mark.parametrize("sub", ["parts", "stream"])
+def test_fit_many_does_not_follow_a_link_planted_at_its_subfolders(tmp_path, capsys, sub):
+    """The other subfolders rczone names itself in an output folder: fit-many's ``parts`` and ``stream``."""
+    frame = zone_frame()
+    frame.to_csv(tmp_path / "a.csv", index=False)
+    (tmp_path / "m.toml").write_text(
+        'methods = ["ls"]\nn_starts = 1\ndiagnose = false\nmodel = "TiTe"\n'
+        '[[zone]]\nid = "a"\ndata = "a.csv"\n'
+    )
+    (tmp_path / "outer").mkdir()
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / sub).symlink_to("../outer")
+    args = ["fit-many", str(tmp_path / "m.toml"), "--out", str(out), "--backend", "processes"]
+    one_line_exit_2([*args, "--workers", "1"], capsys, rf"{sub}'? is a symbolic link")
     assert list((tmp_path / "outer").iterdir()) == []
 
 
@@ -369,3 +458,146 @@ sys.exit(0)
 def test_sigterm_ends_a_command_as_ctrl_c_does():
     done = subprocess.run([sys.executable, "-c", TERMINATED], env=_env(), timeout=120, capture_output=True)
     assert done.returncode == 130, done.stderr
+
+
+# ---- each class through the side the tests above do not take (issue 39: "through the CLI and the API")
+
+
+def test_control_test_values_through_the_api():
+    from rczone.control.virtualplant import VirtualPlant
+
+    for days in (1e-9, 0.0001, math.nan, True):
+        with pytest.raises(RczoneError, match="days must be"):
+            VirtualPlant("summer", days=days)
+    with pytest.raises(RczoneError, match=r"seed must be an integer from 0"):
+        VirtualPlant("summer", days=0.1, seed=-1)
+
+
+def test_mcmc_without_warm_up_through_the_api():
+    with pytest.raises(RczoneError, match=r"tune must be an integer from 10"):
+        rczone.fit("TiTe", zone_frame(), method="mcmc", options={"draws": 10, "tune": 0, "chains": 1})
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["fit", "{data}", "--model", "TiTe", "--seed", "-1"],
+        ["diagnose", "{data}", "--model", "TiTe", "--seed", "-5"],
+        ["select", "{data}", "--model", "Ti", "--model", "TiTe", "--seed", "-1"],
+    ],
+)
+def test_negative_seeds_through_the_command_line(data, capsys, args):
+    one_line_exit_2([a.format(data=data) for a in args], capsys, r"seed must be an integer")
+
+
+@pytest.mark.parametrize("rooms", [True, 2.5, math.nan, "²", ["²"], ["1", 2]])
+def test_multizone_room_counts_through_the_api(rooms):
+    from rczone.models.multizone import multizone
+
+    with pytest.raises(RczoneError, match=r"room"):
+        multizone(rooms)
+
+
+def test_a_column_of_text_through_the_command_line(tmp_path, capsys):
+    frame = zone_frame()
+    frame["To"] = "x"
+    frame.to_csv(tmp_path / "text.csv", index=False)
+    one_line_exit_2(["fit", str(tmp_path / "text.csv"), "--model", "TiTe"], capsys, r"'To'")
+
+
+def test_predict_steps_past_the_data_through_the_command_line(tmp_path, data, capsys):
+    model = saved(tmp_path, sigma_v=0.1)
+    one_line_exit_2(
+        ["predict", str(model), str(data), "--steps", str(10**12)], capsys, r"steps .* not less than the"
+    )
+
+
+@pytest.mark.parametrize("horizons", [[5000], [10**8], [1, 120, "open"]])
+def test_predict_horizons_longer_than_the_data_through_the_api(tmp_path, horizons):
+    with pytest.raises(RczoneError, match=r"horizon \d+ is not less than the"):
+        rczone.score_horizons(saved(tmp_path, sigma_v=0.1), zone_frame(), horizons=horizons)
+
+
+def test_a_fit_that_holds_every_r_and_c_through_the_command_line(data, capsys):
+    fix = ["--fix", "Ci", "--fix", "Ce", "--fix", "Rie", "--fix", "Rea"]
+    assert main(["fit", str(data), "--model", "TiTe", "--starts", "1", *fix]) in (0, 3)
+    assert "evaluation of the model at its values" in capsys.readouterr().out
+
+
+def test_a_gap_of_1e15_s_through_the_command_line(tmp_path, capsys):
+    frame = zone_frame()
+    frame.loc[60:, "time"] += 1e15
+    frame.to_csv(tmp_path / "gap.csv", index=False)
+    one_line_exit_2(
+        ["fit", str(tmp_path / "gap.csv"), "--model", "TiTe"],
+        capsys,
+        r"more than a century|outside the years",
+    )
+
+
+def test_a_latent_force_of_zero_length_scale_in_a_model_file(tmp_path, data, capsys):
+    force = (
+        '\n[[disturbance]]\nname = "d"\nkind = "matern32"\nto = "Ti"\nmagnitude = 1.0\nlength_scale = 0.0\n'
+    )
+    (tmp_path / "m.toml").write_text(TITE + force)
+    one_line_exit_2(["fit", str(data), "--model", str(tmp_path / "m.toml")], capsys, r"length_scale")
+
+
+def test_predict_with_zero_noise_through_the_api(tmp_path):
+    for steps in (None, 1):
+        with pytest.raises(RczoneError, match=r"cannot use the noise levels of model 'm\.json'"):
+            rczone.predict(saved(tmp_path, sigma_v=0.0), zone_frame(), steps=steps)
+
+
+def test_inputs_missing_at_the_head_through_the_command_line(tmp_path, capsys):
+    frame = zone_frame(200)
+    frame.loc[:59, "To"] = np.nan
+    frame.to_csv(tmp_path / "gappy.csv", index=False)
+    args = ["fit", str(tmp_path / "gappy.csv"), "--model", "TiTe", "--method", "ls", "--starts", "1"]
+    assert main(args) == 3
+    assert "fitted on 140 of 200" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("extra", "pattern"),
+    [
+        ('[columns]\nTi = { value = 21 }\nTo = "To"\n', r"the measured Ti is 21 at every sample"),
+        ('[time]\nend = "today"\n[columns]\nTi = "Ti"\nTo = "To"\n', r"end = 'today' changes with the day"),
+    ],
+)
+def test_column_maps_that_fit_nothing_or_change_with_the_day_through_the_api(tmp_path, data, extra, pattern):
+    (tmp_path / "map.toml").write_text(extra)
+    with pytest.raises(RczoneError, match=pattern):
+        rczone.fit("TiTe", data, columns=tmp_path / "map.toml", checks=False)
+
+
+def test_a_manifest_is_validated_whole_through_the_api(tmp_path):
+    from rczone.batch import read_manifest
+
+    (tmp_path / "m.toml").write_text(
+        'methods = ["ls"]\n[[zone]]\nid = "a"\ndata = "C"\n[[zone]]\nid = "b"\ndata = "C"\nfree = ["Cw", "Rxx"]\n'
+    )
+    with pytest.raises(RczoneError, match=r"zone 2 \(b\): unknown free parameter 'Rxx'"):
+        read_manifest(tmp_path / "m.toml")
+
+
+def test_scores_per_horizon_check_the_measurements_as_predict_does(tmp_path, capsys):
+    """Found by the long fuzz round: a measured 1e308 degC started an open loop whose scores were inf."""
+    frame = zone_frame()
+    frame.loc[0, "Ti"] = 1e308
+    with pytest.raises(RczoneError, match=r"column 'Ti' \(temperature\) is 1e\+308 at sample 1"):
+        rczone.score_horizons("TiTe", frame, horizons="open", baselines=True)
+    frame.to_csv(tmp_path / "hot.csv", index=False)
+    one_line_exit_2(
+        ["predict", "TiTe", str(tmp_path / "hot.csv"), "--horizons", "open"], capsys, r"'Ti'.*1e\+308"
+    )
+
+
+def test_a_huge_noise_level_in_a_saved_model_through_the_command_line(tmp_path, data, capsys):
+    path = saved(tmp_path, sigma_v=0.1)
+    doc = json.loads(path.read_text())
+    doc["noise"]["sigma_v"] = 1e300  # edited by hand: a model file is untrusted
+    path.write_text(json.dumps(doc))
+    one_line_exit_2(
+        ["predict", str(path), str(data), "--steps", "1"], capsys, r"noise level 'sigma_v' = 1e\+300"
+    )
