@@ -79,6 +79,7 @@ API = {
 RENAMED = {
     "model_name": "model",
     "model_file": "model",
+    "model_opt": "model",  # predict --model MODEL DATA, the positional MODEL's other spelling
     "column_map": "columns",
     "const": "constants",
     "fix": "fixed",
