@@ -435,6 +435,42 @@ def test_settings_sources_and_model_files_refuse_hostile_values(what, data):
     result_or_one_line(make)
 
 
+#: A valid method record's fields (the built-in ML's), one of which the fuzz test makes hostile.
+METHOD_FIELDS = {
+    "name": "fuzzed",
+    "title": "a fuzzed method",
+    "kernel": "ml",
+    "stochastic": True,
+    "objective": "negative log-likelihood",
+    "rmse_kind": "one-step",
+    "run": lambda problem, options, rng: None,
+}
+
+
+@FAST
+@given(st.sampled_from(["register_method", "register_controller", "register_emulator", "Method"]), st.data())
+def test_plug_in_registrations_refuse_hostile_values(what, data):
+    """A registry takes what it can run later, or refuses in one line; nothing is left registered."""
+    from rczone.control.registry import unregister_controller
+    from rczone.emulators.registry import unregister_emulator
+
+    name, value = data.draw(st.one_of(names, anything)), data.draw(anything)
+    make = {
+        "register_method": lambda: rczone.register_method(value),
+        "register_controller": lambda: rczone.register_controller(name, value),
+        "register_emulator": lambda: rczone.register_emulator(name, value),
+        "Method": lambda: rczone.Method(
+            **{**METHOD_FIELDS, data.draw(st.sampled_from(sorted(METHOD_FIELDS))): value}
+        ),
+    }[what]
+    try:
+        result_or_one_line(make)
+    finally:
+        if isinstance(name, str):
+            unregister_controller(name)
+            unregister_emulator(name)
+
+
 @pytest.mark.slow
 @LONG
 @given(hostile_frames())
