@@ -55,6 +55,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import itertools
+import json
 import sys
 import tempfile
 import time
@@ -78,7 +79,9 @@ from rczone.workflow.reader import read_model_frame
 HERE = Path(__file__).resolve().parent
 DEFAULT_SHARED = HERE.parent.parent / "shared"
 sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE))
 from tests.unit.selection.synthetic import TRUE_MODEL, TRUE_VALUES, inputs, simulate_sde  # noqa: E402
+from verdicts import verdict_cell  # noqa: E402
 
 #: Horizons scored, s (one step where the samples are coarser), then open loop.
 HORIZONS_S = (300.0, 900.0, 3600.0, 3 * 3600.0, 6 * 3600.0)
@@ -136,14 +139,19 @@ def select_on_calibration(shared: Path) -> ZoneModel:
     with tempfile.TemporaryDirectory() as tmp:
         saved = Path(tmp) / "selected.json"
         cmd = ["select", str(shared / BM_DATA), "--columns", str(BM_MAP), "--forward", "--holdout", BM_SPLIT]
-        code = rczone([*cmd, "--save-model", str(saved), "--json", str(Path(tmp) / "select.json")])
+        report = Path(tmp) / "select.json"
+        code = rczone([*cmd, "--save-model", str(saved), "--json", str(report)])
         if code not in (0, 3):
             raise RuntimeError(f"rczone select failed (exit code {code})")
+        chosen = json.loads(report.read_text())
+        # the verdict select gives the selected fit, its held-out checks included
+        SELECTED["verdict"] = chosen["models"][chosen["selected"]]["verdict"]
         return load_model(saved)
 
 
-#: The selected model, once chosen (or read from ``--selected``): the selection runs once per run.
-SELECTED: dict[str, ZoneModel] = {}
+#: The selected model, once chosen (or read from ``--selected``), and the verdict select gave its fit:
+#: the selection runs once per run.
+SELECTED: dict[str, object] = {}
 
 
 def selected_model(shared: Path) -> ZoneModel:
@@ -321,14 +329,19 @@ def _steps_key(value) -> str:
     return "open" if value is None or value != value else str(int(value))
 
 
-def member_row(zm: ZoneModel, frame: pd.DataFrame, split: float) -> dict:
+def member_row(zm: ZoneModel, frame: pd.DataFrame, split: float, verdict: dict | None = None) -> dict:
     """Held-out RMSE per horizon of a model fitted on the calibration part and of the baselines, its coverage, its flags.
 
     The scores and band of ``rczone predict --horizons ... --baselines`` with the calibration part
-    as warm-up (:func:`rczone.calibration.horizons.horizon_scores`).
+    as warm-up (:func:`rczone.calibration.horizons.horizon_scores`); ``verdict`` is the one rczone
+    gives the fit with this held-out part (``fit --holdout``, ``select --holdout``), as JSON.
     """
     table = horizon_scores(zm, frame, horizons=MEMBER_HORIZONS, start=split).table
-    out: dict = {"at_bound": bound_flags(zm), "flags": [str(f) for f in zm.provenance.get("flags", [])]}
+    out: dict = {
+        "at_bound": bound_flags(zm),
+        "flags": [str(f) for f in zm.provenance.get("flags", [])],
+        "verdict": verdict,
+    }
     for name, part in table.groupby("predictor", sort=False):
         out[name] = {"rmse_K": {_steps_key(r.steps): float(r.rmse_K) for r in part.itertuples()}}
     rows = table[table["predictor"] == "model"].itertuples()
@@ -338,13 +351,19 @@ def member_row(zm: ZoneModel, frame: pd.DataFrame, split: float) -> dict:
 
 def members(shared: Path, selected: ZoneModel) -> dict:
     """:func:`member_row` of the selected model and of every :data:`MEMBERS` fit on the calibration part."""
+    from rczone.calibration.evidence import with_holdout
+    from rczone.calibration.horizons import holdout_scores
+
     frame, split = bm_frame(shared, selected)
-    out = {f"{selected.network.name} (selected, noise all)": member_row(selected, frame, split)}
+    verdict = SELECTED.get("verdict")
+    out = {f"{selected.network.name} (selected, noise all)": member_row(selected, frame, split, verdict)}
     for name, noise in MEMBERS:
         zm = load_model(name)
         frame, split = bm_frame(shared, zm)
-        fitted = calibrate(zm, frame[frame["time"].to_numpy(float) < split], noise=noise).model
-        out[f"{name} (noise {noise})"] = member_row(fitted, frame, split)
+        cal = calibrate(zm, frame[frame["time"].to_numpy(float) < split], noise=noise)
+        # the verdict of `rczone fit --holdout` on this split: the fit's flags and the held-out checks
+        held = with_holdout(cal, holdout_scores(cal.model, frame, split, None, label="Bacher-Madsen"))
+        out[f"{name} (noise {noise})"] = member_row(cal.model, frame, split, held.verdict.to_dict())
         print(f"{name} (noise {noise}): done", flush=True)
     return out
 
@@ -359,11 +378,12 @@ def members_markdown(rows: dict) -> str:
     """The model comparison as Markdown: 2-sigma coverage with the parameters at a bound, then RMSE with the baselines."""
     keys = [_steps_key(k) for k in MEMBER_HORIZONS]
     titles = " | ".join(label(None if k == "open" else int(k), 300.0) for k in keys)
-    lines = [f"| 2σ coverage | {titles} | at a bound |", "|---" * (len(keys) + 2) + "|"]
+    lines = [f"| 2σ coverage | {titles} | at a bound | verdict |", "|---" * (len(keys) + 3) + "|"]
     for name, r in rows.items():
         cells = " | ".join(f"{r['model']['coverage'][k]:.0%}" for k in keys)
         bound = ", ".join(f.partition(" ")[0] for f in r["at_bound"]) or "none"
-        lines.append(f"| {_short(name)} | {cells} | {bound} |")
+        verdict = verdict_cell(r["verdict"]) if r.get("verdict") else "not recorded"
+        lines.append(f"| {_short(name)} | {cells} | {bound} | {verdict} |")
     lines += ["", f"| RMSE (K) | {titles} |", "|---" * (len(keys) + 1) + "|"]
     for name, r in rows.items():
         lines.append(

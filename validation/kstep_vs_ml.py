@@ -26,6 +26,7 @@ import numpy as np
 from rczone.calibration.conformal import ALPHA, interval_score
 from rczone.estimation import Dataset, fit
 from rczone.estimation.forecast import k_step_bands
+from rczone.estimation.innovations import innovation_analysis
 from rczone.estimation.kstep_fit import fit_kstep
 from rczone.files.atomic import write_json_atomic
 from rczone.models import load_model
@@ -35,6 +36,7 @@ DEFAULT_SHARED = HERE.parent.parent / "shared"
 sys.path.insert(0, str(HERE))
 from latent_force import DATASETS  # noqa: E402
 from real_data import bacher_madsen_frame  # noqa: E402
+from verdicts import fit_verdict, verdict_cell  # noqa: E402
 
 #: Horizons the k-step fit sums, s (besides one step).
 FIT_HORIZONS_S = (3600.0, 21600.0)
@@ -82,13 +84,15 @@ def one(name: str, network, frame) -> dict:
     ks = fit_kstep(network, cal, horizons=fit_steps, ml=ml)
     t_ks = time.process_time() - t0 - t_ml
     ml_values = {**ml.fixed, **{n: e.value for n, e in ml.parameters.items()}}
+    white = innovation_analysis(network, ml_values, cal).white
+    verdict = fit_verdict(network, ml, cal, white).to_dict()
     return {
         "model": network.name,
         "dt_s": dt,
         "calibration_samples": first,
         "held_out_samples": data.n_samples - first,
         "fit_horizons": fit_steps,
-        "ml": {"values": ml_values, "flags": list(ml.flags), "cpu_s": t_ml, "scores": scores(network, ml_values, data, first, score_steps)},
+        "ml": {"values": ml_values, "flags": list(ml.flags), "verdict": verdict, "cpu_s": t_ml, "scores": scores(network, ml_values, data, first, score_steps)},
         "kstep": {
             "values": ks.values,
             "notes": list(ks.notes),
@@ -104,17 +108,18 @@ def one(name: str, network, frame) -> dict:
 def markdown(results: dict) -> str:
     """The table of docs/validation.md."""
     lines = [
-        "| data set | model | horizon | RMSE ML (K) | RMSE k-step (K) | interval score ML (K) | interval score k-step (K) | coverage ML | coverage k-step |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| data set | model | horizon | RMSE ML (K) | RMSE k-step (K) | interval score ML (K) | interval score k-step (K) | coverage ML | coverage k-step | verdict of the ML fit |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, r in results.items():
-        for k, a in r["ml"]["scores"].items():
+        verdict = verdict_cell(r["ml"]["verdict"]) if r["ml"].get("verdict") else "not recorded"
+        for row, (k, a) in enumerate(r["ml"]["scores"].items()):
             b = r["kstep"]["scores"][k]
             h = int(k) * r["dt_s"] / 3600
             lines.append(
                 f"| {name} | {r['model']} | {k} ({h:g} h) | {a['rmse_K']:.3f} | {b['rmse_K']:.3f} |"
                 f" {a['interval_score_K']:.3f} | {b['interval_score_K']:.3f} | {a['coverage_2sigma']:.0%} |"
-                f" {b['coverage_2sigma']:.0%} |"
+                f" {b['coverage_2sigma']:.0%} | {verdict if row == 0 else ''} |"
             )
     return "\n".join(lines)
 

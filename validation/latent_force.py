@@ -61,6 +61,7 @@ HERE = Path(__file__).resolve().parent
 DEFAULT_SHARED = HERE.parent.parent / "shared"
 sys.path.insert(0, str(HERE))
 from real_data import bacher_madsen_frame, leec_frame, leec_network  # noqa: E402
+from verdicts import fit_verdict, verdict_cell  # noqa: E402
 
 #: Prediction horizon of the held-out check, s.
 HORIZON_S = 6 * 3600.0
@@ -150,6 +151,7 @@ def _one(
         "converged": res.converged,
         "flags": list(res.flags),
         "at_bound": [e.name for e in res.parameters.values() if e.at_bound],
+        "verdict": fit_verdict(net, res, cal, white.white).to_dict(),
         "ljung_box_p": white.ljung_box_p,
         "rmse_6h_K": float(np.sqrt(np.nanmean(err**2))),
         "estimates": {k: float(v) for k, v in res.estimates.items()},
@@ -279,8 +281,8 @@ def markdown(results: dict) -> str:
     """One row per data set and model."""
     lines = [
         "| data set | model | process noise | log L | k | LR (df) | p (chi2) | Ljung-Box p | 6-h RMSE held out (K) |"
-        " at a bound |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        " at a bound | verdict |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, r in results.items():
         t = r["test"]
@@ -290,7 +292,7 @@ def markdown(results: dict) -> str:
             test = f"{t['statistic']:.1f} ({t['df']}) | {t['p_value']:.2g}" if which == "with" else "| "
             lines.append(
                 f"| {name} | {label} | {r['noise']} | {m['loglik']:.1f} | {m['n_params']} | {test} | {m['ljung_box_p']:.2g} |"
-                f" {m['rmse_6h_K']:.3f} | {', '.join(m['at_bound']) or '-'} |"
+                f" {m['rmse_6h_K']:.3f} | {', '.join(m['at_bound']) or '-'} | {verdict_cell(m['verdict'])} |"
             )
     return "\n".join(lines)
 

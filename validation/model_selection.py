@@ -14,7 +14,7 @@ on it: the whole Bacher & Madsen family (``Tm``, ``Te``, ``Th``, the sensor node
 solar splits ``Ae`` and ``As``, ``Ria``) with a heater and solar gains, grown from ``Ti`` one part
 at a time by likelihood-ratio tests, and prints its path beside the one the paper reports. Prints 'skipped: data not found' and exits 0 when the data are absent.
 Writes ``<out>/model_selection.json``, ``<out>/model_selection/report.html`` and prints the tables
-as Markdown (the form in docs/validation.md).
+as Markdown (the form in docs/validation.md), each candidate with the verdict rczone gives its fit.
 """
 
 from __future__ import annotations
@@ -27,6 +27,9 @@ from pathlib import Path
 from rczone.cli.main import main as rczone
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from verdicts import verdict_cell  # noqa: E402
+
 DEFAULT_SHARED = HERE.parent.parent / "shared"
 DATA = Path("data") / "bacher_madsen_prbs" / "inputPRBS1.csv"
 COLUMN_MAP = HERE / "maps" / "bacher_madsen.toml"
@@ -59,15 +62,15 @@ def comparison(res: dict) -> str:
 def markdown(res: dict) -> str:
     """The candidates, the forward steps and the comparison with the paper as Markdown tables."""
     lines = [
-        "| model | log L | k | AIC | BIC | Ljung-Box p (innovations) | white |",
-        "|---|---|---|---|---|---|---|",
+        "| model | log L | k | AIC | BIC | Ljung-Box p (innovations) | white | verdict |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for name, m in res["models"].items():
         p = m["innovations"]["ljung_box_p"]
         mark = " **(selected)**" if name == res["selected"] else ""
         lines.append(
             f"| {name}{mark} | {m['loglik']:.1f} | {m['n_params']} | {m['aic']:.1f} | {m['bic']:.1f} |"
-            f" {p:.2g} | {'yes' if m['innovations']['white'] else 'no'} |"
+            f" {p:.2g} | {'yes' if m['innovations']['white'] else 'no'} | {verdict_cell(m['verdict'])} |"
         )
     lines += [
         "",

@@ -8,8 +8,10 @@ Reads the data sets from the shared folder (default: ``shared`` next to the repo
 licences do not allow shipping them (see each PROVENANCE.md), so nothing is copied. Prints
 'skipped: data not found' and exits 0 when they are absent. For each data set: the data are
 cleaned by a stated rule, split into a calibration part and the held-out last part, the
-identifiability verdicts are computed, the model is fitted by LS and ML, and the fitted model
-is simulated open loop on the held-out part. Results go to ``<out>/real_data.json``.
+identifiability verdicts are computed, the model is fitted by LS and ML (``rczone.fit`` with
+``holdout=0.25``, so each fit carries the verdict ``rczone fit --holdout 0.25`` gives), and the
+fitted model is simulated open loop on the held-out part. Results go to ``<out>/real_data.json``;
+the tables of docs/validation.md are printed as Markdown.
 """
 
 from __future__ import annotations
@@ -25,12 +27,15 @@ import pandas as pd
 from rczone.data import load_zone_data
 from rczone.data.quality import RczoneWarning
 from rczone.diagnostics import diagnose
-from rczone.estimation import Dataset, fit
+from rczone.estimation import Dataset
 from rczone.estimation.openloop import open_loop_error
 from rczone.files.atomic import write_json_atomic
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from verdicts import verdict_cell  # noqa: E402
+
 DEFAULT_SHARED = HERE.parent.parent / "shared"
 
 
@@ -96,9 +101,30 @@ def longest_clean_run(mask: np.ndarray) -> slice:
     return slice(*best)
 
 
-def fit_and_validate(
-    net: RCNetwork, cal: pd.DataFrame, val: pd.DataFrame, free: list[str], name: str
-) -> dict:
+#: The held-out part: the last quarter of the samples (``rczone fit --holdout 0.25``).
+HOLDOUT = 0.25
+#: Columns of the tables: per data set, the parameters shown (in the JSON's order).
+SHOWN = {
+    "leec_classroom_vav": ("Ci", "Cm", "Rea", "Rim"),
+    "bacher_madsen_prbs": ("Ci", "Ce", "Rie", "Rea", "Aw"),
+}
+#: Units of the parameters in the tables' headers.
+UNITS = {"C": "J/K", "R": "K/W", "A": "m2"}
+
+
+def fit_and_validate(net: RCNetwork, frame: pd.DataFrame, free: list[str], name: str) -> dict:
+    """Diagnose, fit by LS and ML with the last :data:`HOLDOUT` held out, and score open loop.
+
+    Each fit is ``rczone.fit(..., holdout=HOLDOUT)`` (``rczone fit --holdout 0.25``), so its verdict
+    is the one rczone gives: the fit's own flags and the held-out checks
+    (:mod:`rczone.calibration.evidence`).
+    """
+    import rczone
+    from rczone.models import load_model
+    from rczone.workflow.holdout import before, split_time
+
+    at = split_time(frame, HOLDOUT, model=load_model(net))
+    cal, val = before(frame, at), frame[frame["time"] >= at]
     data_cal = Dataset.from_frame(cal, net, time="time")
     data_val = Dataset.from_frame(val, net, time="time")
     out: dict = {"samples_calibration": len(cal), "samples_validation": len(val), "methods": {}}
@@ -107,7 +133,10 @@ def fit_and_validate(
     out["diagnose"] = {k: {"verdict": v.verdict, "reason": v.reason} for k, v in d.parameters.items()}
     for method in ("ls", "ml"):
         extra = ["sigma_v", "sigma_w_Ti"] if method == "ml" else []
-        res = fit(net, data_cal, free + extra, method=method)
+        fitted = rczone.fit(
+            net, frame, method=method, free=free + extra, checks=False, holdout=HOLDOUT, label=name
+        )
+        res = fitted.result
         theta = {
             k: v
             for k, v in {**res.fixed, **res.estimates}.items()
@@ -116,9 +145,17 @@ def fit_and_validate(
         ol_cal = open_loop_error(net, theta, data_cal)
         ol_val = open_loop_error(net, theta, data_val)
         out["methods"][method] = {
-            "parameters": {n: {"estimate": res.estimates[n], "std_error": res.std_errors[n]} for n in free},
+            "parameters": {
+                n: {
+                    "estimate": res.estimates[n],
+                    "std_error": res.std_errors[n],
+                    "at_bound": bool(res.parameters[n].at_bound),
+                }
+                for n in free
+            },
             "converged": res.converged,
             "flags": list(res.flags),
+            "verdict": fitted.verdict.to_dict(),
             "calibration_rmse_K": ol_cal.rmse_K,
             "validation_rmse_K": ol_val.rmse_K,
             "validation_max_error_K": ol_val.max_abs_K,
@@ -127,10 +164,43 @@ def fit_and_validate(
             f"{name} {method.upper()}: "
             + ", ".join(f"{n} = {res.estimates[n]:.3g}" for n in free)
             + f"; open-loop RMSE {ol_cal.rmse_K:.2f} K (calibration), {ol_val.rmse_K:.2f} K"
-            f" (held out, max {ol_val.max_abs_K:.2f} K)"
+            f" (held out, max {ol_val.max_abs_K:.2f} K); {verdict_cell(fitted.verdict)}"
         )
     print(f"{name} diagnose: " + ", ".join(f"{k} {v['verdict']}" for k, v in out["diagnose"].items()))
     return out
+
+
+def estimate_cell(p: dict) -> str:
+    """An estimate and its standard error on one power of ten (``4.84e6 ± 0.09e6``), or ``(at bound)``."""
+    v, se = p["estimate"], p["std_error"]
+    e = int(np.floor(np.log10(abs(v)))) if v else 0
+    scaled = abs(e) >= 3
+    text = (lambda x: f"{x / 10**e:.2f}e{e}") if scaled else (lambda x: f"{x:.3g}")
+    if p.get("at_bound"):
+        return f"{v:.2g} (at bound)"
+    if not np.isfinite(se):
+        return text(v)
+    return f"{text(v)} ± {text(se)}" if scaled else f"{v:.3g} ± {se:.2g}"
+
+
+def markdown(results: dict) -> str:
+    """The tables of docs/validation.md: per data set, each method's estimates, errors and verdict."""
+    blocks = []
+    for name, res in results.items():
+        shown = SHOWN[name]
+        head = " | ".join(f"{n} ({UNITS[n[0]]})" for n in shown)
+        lines = [
+            f"| method | {head} | RMSE calib. (K) | RMSE held out (K) | max held out (K) | verdict |",
+            "|" + "---|" * (len(shown) + 5),
+        ]
+        for method, m in res["methods"].items():
+            cells = " | ".join(estimate_cell(m["parameters"][n]) for n in shown)
+            lines.append(
+                f"| {method.upper()} | {cells} | {m['calibration_rmse_K']:.2f} | {m['validation_rmse_K']:.2f} |"
+                f" {m['validation_max_error_K']:.2f} | {verdict_cell(m['verdict'])} |"
+            )
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)
 
 
 def leec_frame(shared: Path) -> tuple[pd.DataFrame, np.ndarray]:
@@ -150,10 +220,7 @@ def leec_frame(shared: Path) -> tuple[pd.DataFrame, np.ndarray]:
 def leec(shared: Path) -> dict:
     """LEEC classroom: the longest stretch without frozen sensors, last 25 % held out."""
     clean, bad = leec_frame(shared)
-    split = int(0.75 * len(clean))
-    res = fit_and_validate(
-        leec_network(), clean.iloc[:split], clean.iloc[split:], ["Ci", "Cm", "Rea", "Rim"], "LEEC"
-    )
+    res = fit_and_validate(leec_network(), clean, ["Ci", "Cm", "Rea", "Rim"], "LEEC")
     res["cleaning"] = (
         f"frozen logger: samples where Ti, Ts and the wall-mass temperature have not changed for 6 h are"
         f" excluded ({int(bad.sum())} of {bad.size}); the longest clean stretch ({len(clean)} hours) is used"
@@ -177,13 +244,10 @@ def bacher_madsen_frame(shared: Path, outdoor: str = "Ta") -> pd.DataFrame:
 
 def bacher_madsen(shared: Path) -> dict:
     """Bacher-Madsen PRBS experiment: TiTe, last 25 % held out."""
-    frame = bacher_madsen_frame(shared)
-    split = int(0.75 * len(frame))
     return fit_and_validate(
         bacher_madsen_network(),
-        frame.iloc[:split],
-        frame.iloc[split:],
-        ["Ci", "Ce", "Rie", "Rea", "Aw"],
+        bacher_madsen_frame(shared),
+        list(SHOWN["bacher_madsen_prbs"]),
         "Bacher-Madsen",
     )
 
@@ -204,6 +268,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"skipped {name}: {exc}")
     write_json_atomic(args.out / "real_data.json", results)
     print(f"results written to {args.out / 'real_data.json'}")
+    print(markdown(results))
     return 0
 
 

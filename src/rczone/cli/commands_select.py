@@ -117,7 +117,9 @@ def select(
     outputs (two coupled rooms fitted jointly, and one room with the neighbour's measured
     temperature as a boundary) are compared on the likelihood of their common outputs
     conditional on the others' measurements, with Vuong's test between non-nested pairs. Exit code 0; 3 when the selected
-    model's fit is flagged; 2 for a mistake in the input.
+    model's fit is flagged (with --holdout also when it fails a held-out check, as rczone fit
+    --holdout: a 2-sigma band covering less than 80 % at a horizon, a stable baseline beating it by
+    more than 10 %, or innovations far from white); 2 for a mistake in the input.
     """
     import dataclasses
 
@@ -126,7 +128,7 @@ def select(
     from rczone.errors import ParameterError
 
     check_seed(seed)
-    from rczone.selection.compare import family_candidates, select_models
+    from rczone.selection.compare import family_candidates, select_models, with_held_out
     from rczone.selection.text import fit_arguments
 
     n_starts = _starts(starts)
@@ -186,9 +188,8 @@ def select(
             zms, frame, settings, rule=criterion, forward=forward, alpha=alpha, progress=progress
         )
         if at is not None:
-            sel = dataclasses.replace(
-                sel, holdout=score_held_out(sel.best.calibration.model, full, at, settings.constants, label)
-            )
+            held = score_held_out(sel.best.calibration.model, full, at, settings.constants, label)
+            sel = with_held_out(sel, held)  # its checks enter the selected fit's verdict and exit code
     sel = dataclasses.replace(
         sel,
         data_label=label,

@@ -156,8 +156,11 @@ class Candidate:
             "parameters": {n: r.estimates[n] for n in r.names},
             "std_errors": {n: r.std_errors[n] for n in r.names},
             "units": {n: e.unit for n, e in r.parameters.items()},
-            "trustworthy": r.trustworthy,
-            "flags": list(r.flags),
+            # the fit's verdict (its flags, data, robust errors and, for the selected model with
+            # held-out data, the held-out checks), as passed_over and exit_code read it
+            "trustworthy": self.trustworthy,
+            "flags": list(self.calibration.verdict.reasons),
+            "verdict": self.calibration.verdict.to_dict(),
             "retried_from_simpler": self.retried,
         }
 
@@ -283,6 +286,8 @@ class Selection(Result):
         Channels the data's column map mapped that no candidate uses.
     holdout : HorizonScores or None
         The selected model's scores on data held out of the selection (``--holdout``); None without.
+        Set by :func:`with_held_out`, which also puts their checks into the selected model's
+        verdict (and so into :attr:`exit_code`), as ``rczone fit --holdout`` does.
     """
 
     candidates: Mapping[str, Candidate]
@@ -312,7 +317,7 @@ class Selection(Result):
 
     @property
     def exit_code(self) -> int:
-        """0, or 3 when the selected model's fit is flagged (its verdict)."""
+        """0, or 3 when the selected model's fit is flagged (its verdict, held-out checks included)."""
         return 0 if self.best.calibration.verdict.trustworthy else EXIT_UNTRUSTED
 
     def _repr_line(self) -> str:
@@ -322,18 +327,19 @@ class Selection(Result):
         """What ``rczone select`` prints after fitting the candidates."""
         from rich.markup import escape
 
-        from rczone.selection.text import selection_lines
+        from rczone.selection.text import selection_lines, verdict_lines
 
         held = []
-        if self.holdout is not None:  # the selected model's held-out scores and checks, said
-            evidence = self.held_out_evidence()
-            held = [*self.holdout.summary_lines(), *(escape(x) for x in (*evidence.reasons, *evidence.notes))]
-        return [*selection_lines(self), *held]
+        if self.holdout is not None:  # the selected model's held-out scores and the checks it passed
+            held = [*self.holdout.summary_lines(), *(escape(x) for x in self.held_out_evidence().notes)]
+        return [*selection_lines(self), *held, *verdict_lines(self)]
 
     def held_out_evidence(self):
         """The held-out checks of the selected model (:func:`rczone.calibration.evidence.held_out_evidence`); None without."""
         if self.holdout is None:
             return None
+        if self.best.calibration.evidence is not None:
+            return self.best.calibration.evidence
         from rczone.calibration.evidence import held_out_evidence
 
         return held_out_evidence(self.holdout, self.best.calibration.innovations)
@@ -395,6 +401,33 @@ class Selection(Result):
                 else {}
             ),
         }
+
+
+def with_held_out(sel: Selection, scores) -> Selection:
+    """``sel`` with the selected model's held-out scores, and their checks in its verdict.
+
+    The held-out checks (:mod:`rczone.calibration.evidence`: band coverage per horizon, the
+    baselines, the innovations) enter the selected fit's verdict as they enter ``rczone fit
+    --holdout``'s, so a selection whose model fails them is flagged (:attr:`Selection.exit_code`
+    3) and says which check failed.
+
+    Parameters
+    ----------
+    sel : Selection
+    scores : HorizonScores
+        The selected model's scores on the held-out part
+        (:func:`rczone.workflow.holdout.score_held_out`).
+
+    Returns
+    -------
+    Selection
+        A new selection; the other candidates are unchanged (only the selected one is scored).
+    """
+    from rczone.calibration.evidence import with_holdout
+
+    best = dataclasses.replace(sel.best, calibration=with_holdout(sel.best.calibration, scores))
+    candidates = {n: best if n == sel.selected else c for n, c in sel.candidates.items()}
+    return dataclasses.replace(sel, candidates=candidates, holdout=scores)
 
 
 def common_stretch(models: Sequence[ZoneModel], frame: pd.DataFrame, constants) -> pd.DataFrame:

@@ -139,8 +139,18 @@ def selection_lines(sel) -> list:
             f"[yellow]warning:[/] the innovations of {esc(sel.selected)} are not white (Ljung-Box p ="
             f" {inn.ljung_box_p:.2g}): every candidate misses some dynamics or input"
         )
-    lines += [f"[yellow]warning:[/] {esc(sel.selected)}: {esc(f)}" for f in best.verdict.reasons]
-    if not best.verdict.trustworthy:
+    return lines
+
+
+def verdict_lines(sel) -> list[str]:
+    """The selected fit's verdict, last: its flags, and with held-out data the verdict line ``fit`` prints."""
+    best = sel.best.calibration
+    lines = [f"[yellow]warning:[/] {esc(sel.selected)}: {esc(f)}" for f in best.verdict.reasons]
+    if best.evidence is not None:
+        from rczone.calibration.evidence import verdict_line
+
+        lines.append(verdict_line(best))
+    elif not best.verdict.trustworthy:
         lines.append(f"[red]the selected model's fit is flagged[/] (exit code {EXIT_UNTRUSTED})")
     return lines
 

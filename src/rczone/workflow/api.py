@@ -576,7 +576,8 @@ def select_models(
         The data's name in titles and the JSON.
     holdout : str or float, optional
         Select on the data before this time or all but this last fraction, then score the selected
-        model on the rest (``--holdout``; :attr:`Selection.holdout`).
+        model on the rest (``--holdout``; :attr:`Selection.holdout`); the held-out checks enter the
+        selected fit's verdict and :attr:`Selection.exit_code`, as in :func:`fit`.
 
     Returns
     -------
@@ -617,12 +618,13 @@ def select_models(
         frame = before(full, at)
     sel = run(zms, frame, settings, rule=criterion.strip().lower(), forward=forward, alpha=alpha)
     args = fit_arguments(sel, settings, columns=columns)
-    held = None
-    if at is not None:
-        held = score_held_out(sel.best.calibration.model, full, at, settings.constants, label or name)
-    return dataclasses.replace(
-        sel, data_label=label or name, source=source, noise=noise, fit_args=args, holdout=held
-    )
+    if at is not None:  # the held-out checks enter the selected fit's verdict, as in fit
+        from rczone.selection.compare import with_held_out
+
+        sel = with_held_out(
+            sel, score_held_out(sel.best.calibration.model, full, at, settings.constants, label or name)
+        )
+    return dataclasses.replace(sel, data_label=label or name, source=source, noise=noise, fit_args=args)
 
 
 @single_threaded

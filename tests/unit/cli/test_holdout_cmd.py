@@ -39,9 +39,11 @@ def test_fit_holdout_fits_the_first_part_and_scores_the_rest(files, capsys):
 def test_select_holdout_scores_the_selected_model(files, capsys):
     out = files / "sel.json"
     args = ["select", str(files / "zone.csv"), "--model", "Ti+heater", "--model", "TiTe+heater"]
-    assert main([*args, "--starts", "1", "--holdout", "0.25", "--json", str(out)]) == 0
+    rc = main([*args, "--starts", "1", "--holdout", "0.25", "--json", str(out)])
     res = json.loads(out.read_text())
     assert res["selected"] == "TiTe+heater" and res["holdout"]["model"] == "TiTe+heater"
+    # the held-out checks are in the selected fit's verdict and exit code, as fit's (0 or 3 there too)
+    assert rc == res["exit_code"] in (0, 3) and (rc == 3 or not res["holdout"]["evidence"]["failed"])
     assert "(held out)" in capsys.readouterr().out
 
 
@@ -60,3 +62,24 @@ def test_bad_holdout_values_are_one_line_errors(files, capsys, command, value, m
     assert main([*args, "--holdout", value]) == 2
     err = capsys.readouterr().err
     assert message in err and "Traceback" not in err and err.count("\n") == 1
+
+
+@pytest.mark.slow
+def test_select_holdout_of_a_wrong_model_exits_3_like_fit_and_names_the_failed_checks(files, capsys):
+    """The selected model fails the held-out checks: select's verdict and exit code say so, as fit's do."""
+    out = files / "wrong.json"
+    args = ["select", str(files / "zone.csv"), "--model", "Ti", "--model", "Ti+heater", "--starts", "1"]
+    assert main(args) == 0  # on all the data, nothing flags the selected fit itself
+    capsys.readouterr()
+    assert main([*args, "--holdout", "0.3", "--json", str(out)]) == 3
+    text = capsys.readouterr().out
+    res = json.loads(out.read_text())
+    failed = res["holdout"]["evidence"]["failed"]
+    best = res["models"][res["selected"]]
+    assert res["selected"] == "Ti+heater" and failed and res["exit_code"] == 3 and not best["trustworthy"]
+    assert all(any(f.startswith(f"held out, {name} failed") for f in best["flags"]) for name in failed)
+    assert "verdict: flagged" in text and all(f"held out, {name} failed" in text for name in failed)
+    # fit of the same model with the same split reaches the same verdict
+    fit = ["fit", str(files / "zone.csv"), "--model", "Ti+heater", "--starts", "1", "--holdout", "0.3"]
+    assert main([*fit, "--noise", "all", "--no-profiles", "--json", str(files / "fit.json")]) == 3
+    assert json.loads((files / "fit.json").read_text())["verdict"]["held_out"]["failed"] == failed
