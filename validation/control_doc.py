@@ -2,7 +2,7 @@
 
 Usage::
 
-    python validation/control_doc.py [--seeds 31,32] [--oracle] [--paper-seasons summer,winter] [--days 1] [--out validation/control_doc.md]
+    python validation/control_doc.py [--seeds 31,32,33,34] [--oracle] [--paper-seasons summer,winter] [--days 1] [--out validation/control_doc.md]
                                      [--page docs/control.md] [--only baselines|paper|paste]
 
 Every table is one :func:`rczone.control.comparison.compare`: every entry on the same seeds (seeds
@@ -21,7 +21,7 @@ The tables are written to ``--out`` (one block per table between ``<!-- table:NA
 ``<!-- /table:NAME -->``) and pasted into the same markers of ``--page``;
 ``tests/validation/test_control_doc.py`` checks that the page carries the output file's tables
 and that no test names these seeds. The prose around them is not touched: read it again after a
-change of the numbers. The defaults make 48 one-day runs and two fits: some 10 minutes of CPU.
+change of the numbers. The defaults make 96 one-day runs and two fits: some 20 minutes of CPU.
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ HERE = Path(__file__).resolve().parent
 OUT = HERE / "control_doc.md"
 PAGE = HERE.parent / "docs" / "control.md"
 #: Seeds no test names (``tests/validation/test_control_doc.py`` checks).
-SEEDS = (31, 32)
+SEEDS = (31, 32, 33, 34)
 #: name -> (season, price)
 BASELINES = {
     "summer": ("summer", "flat"),
