@@ -13,8 +13,9 @@ paired difference to the entry it answers against:
   paired against the former.
 
 The commissioned thermostat runs beside them as the baseline, paired against the 13-state MPC.
-Every MPC estimates an unmeasured heat input (the disturbance state), as in the independent
-review of issue 33, where without it every model failed alike.
+Every MPC estimates an unmeasured heat input (the disturbance state) but one: the 2-state MPC
+without it, paired against the same model with it, the independent review of issue 33's third
+finding (without it every model failed alike).
 """
 
 from __future__ import annotations
@@ -30,6 +31,8 @@ from rczone.models.zone import ZoneModel
 STUDIES = ("paper",)
 #: The reference entry of the paper study.
 REFERENCE = "Q1 13-state"
+#: The entry without the disturbance state.
+NO_DISTURBANCE = "2-state, no disturbance estimate"
 
 
 def fitted(name: str, night: str) -> ZoneModel:
@@ -49,6 +52,9 @@ def paper_entries(fit: Callable[[str, str], ZoneModel] = fitted) -> list[Entry]:
         Entry("Q1 1-state", "mpc", load_model("first-order")),
         Entry(forced, "mpc", fit("second-order-paper", "C")),
         Entry("Q2 2-state, ML on A (closed loop)", "mpc", fit("second-order-paper", "A"), reference=forced),
+        Entry(
+            NO_DISTURBANCE, "mpc", load_model("second-order-paper"), disturbance=False, reference="Q1 2-state"
+        ),
         Entry("baseline: thermostat", "thermostat"),
     ]
 

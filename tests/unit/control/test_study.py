@@ -3,7 +3,7 @@
 import pytest
 
 from rczone.control.comparison import Scenario, compare
-from rczone.control.study import REFERENCE, paper_entries, study_entries
+from rczone.control.study import NO_DISTURBANCE, REFERENCE, paper_entries, study_entries
 from rczone.errors import ParameterError
 from rczone.models import load_model
 
@@ -18,6 +18,9 @@ def test_the_paper_study_pairs_q1_with_the_full_model_and_q2_closed_loop_with_fo
     assert [e.model.state_space().n_states for e in entries[1:3]] == [2, 1]
     q2 = [e for e in entries if e.label.startswith("Q2")]
     assert q2[1].reference == q2[0].label and entries[-1].controller == "thermostat"
+    blind = next(e for e in entries if e.label == NO_DISTURBANCE)
+    assert not blind.disturbance and blind.reference == "Q1 2-state"
+    assert all(e.disturbance for e in entries if e is not blind)
     with pytest.raises(ParameterError, match="paper"):
         study_entries("papers")
 
