@@ -12,6 +12,7 @@ EnergyPlus, :class:`rczone.emulators.plant.EnergyPlusPlant`: ``building``, ``wea
 
 from __future__ import annotations
 
+import importlib
 import inspect
 from collections.abc import Callable
 from typing import Any
@@ -24,31 +25,29 @@ from rczone.errors import ParameterError
 ENTRY_POINT_GROUP = "rczone.emulators"
 
 
-def _virtual(**options: Any) -> Plant:
-    from rczone.control.virtualplant import VirtualPlant
+def _lazy(target: str) -> Callable[..., Plant]:
+    """A built-in emulator's factory: the class ``"module:Class"``, imported on the first run."""
 
-    return VirtualPlant(**options)
+    def factory(**options: Any) -> Plant:
+        return _load(target)(**options)
 
-
-def _energyplus(**options: Any) -> Plant:
-    from rczone.emulators.plant import EnergyPlusPlant
-
-    return EnergyPlusPlant(**options)
+    factory.target = target  # type: ignore[attr-defined]  (whose constructor takes the options)
+    return factory
 
 
-def _signature_of(name: str) -> Callable[..., Any]:
-    """The class whose constructor takes a built-in emulator's options (for the message of a bad one)."""
-    if name == "virtual":
-        from rczone.control.virtualplant import VirtualPlant
+def _load(target: str) -> Callable[..., Plant]:
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
 
-        return VirtualPlant
-    from rczone.emulators.plant import EnergyPlusPlant
 
-    return EnergyPlusPlant
+_BUILTINS = {
+    "virtual": _lazy("rczone.control.virtualplant:VirtualPlant"),
+    "energyplus": _lazy("rczone.emulators.plant:EnergyPlusPlant"),
+}
 
 
 def _builtins() -> dict[str, Callable[..., Plant]]:
-    return {"virtual": _virtual, "energyplus": _energyplus}
+    return _BUILTINS
 
 
 #: The emulators by name (:class:`rczone.control.plugins.Registry`).
@@ -87,7 +86,7 @@ def make_plant(name: str, **options: Any) -> Plant:
         factory that returns no plant.
     """
     factory = EMULATORS.factory(name)
-    target = _signature_of(name) if factory in _builtins().values() else factory
+    target = _load(factory.target) if hasattr(factory, "target") else factory
     try:
         params = inspect.signature(target).parameters
     except (TypeError, ValueError):  # a builtin or C callable: let the call decide
