@@ -139,3 +139,29 @@ def readers_imported_by_the_cli(root: Path = SRC) -> dict[str, list[str]]:
 def test_the_command_line_reads_data_through_the_data_source_protocol():
     """CLI, API and batch read a zone's data the same way (issue 34): rczone.workflow.datasource."""
     assert readers_imported_by_the_cli() == {}
+
+
+def dataset_builders(root: Path = SRC) -> list[tuple[str, str]]:
+    """(module, function) of every call of ``dataset(model, frame, ...)`` in the package.
+
+    ``emulators/catalog.dataset()`` (pyenergyplus' file catalogue, no argument) is not a data set.
+    """
+    out = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root).as_posix()
+        for fn in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                for node in ast.walk(fn):
+                    if (
+                        isinstance(node, ast.Call)
+                        and getattr(node.func, "id", getattr(node.func, "attr", None)) == "dataset"
+                        and (node.args or node.keywords)
+                    ):
+                        out.append((rel, fn.name))
+    return out
+
+
+def test_a_frame_becomes_a_data_set_in_one_place():
+    """Entry points prepare the data once (calibration.dataset.prepare); below, it is handed on."""
+    builders = dataset_builders()
+    assert builders == [("calibration/dataset.py", "prepare")], builders

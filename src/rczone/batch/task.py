@@ -103,7 +103,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
         "error": "",
     }
     try:
-        from rczone.calibration.dataset import dataset
+        from rczone.calibration.dataset import prepare
         from rczone.workflow.checks import fit_and_check
 
         zm = task_model(task)
@@ -116,8 +116,8 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
         settings = replace(task.settings, checks=False)
         key = ("data", tuple(sorted((settings.constants or {}).items())))
         if key not in cache:  # the zone's methods fit the same data set
-            cache[key] = dataset(zm, frame, settings.constants or None)
-        cal = fit_and_check(zm, frame, settings, label=task.source.label, analyses=False, data=cache[key])
+            cache[key] = prepare(zm, frame, settings.constants or None)
+        cal = fit_and_check(zm, cache[key], settings, label=task.source.label, analyses=False)
         r = cal.result
         row.update(
             open_loop_rmse_K=cal.open_loop.rmse_K,
@@ -135,7 +135,7 @@ def run_task(task: Task, cache: dict | None = None) -> dict:
             p = r.posterior
             row.update(draws=p.n_draws, tune=p.tune, chains=p.n_chains, divergences=p.divergences)
             row.update(max_rhat=float(p.rhat.max()), min_ess_bulk=float(p.ess_bulk.min()))
-        row.update(_drift_columns(cal.model, cache[key]))
+        row.update(_drift_columns(cal.model, cache[key].dataset))
         for n, e in r.parameters.items():
             row[n] = e.value
             row[f"{n}_se"] = e.std_error

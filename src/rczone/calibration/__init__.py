@@ -11,10 +11,12 @@ fit from the model's values and its open-loop and residual checks, :class:`Calib
 from rczone.calibration.calibration import Calibration, calibrate, parameter_covariance
 from rczone.calibration.dataset import (
     ModelLike,
+    PreparedData,
     as_model,
     complete_stretch,
     dataset,
     frame_from,
+    prepare,
     time_index,
 )
 from rczone.calibration.prediction import (
@@ -31,6 +33,7 @@ __all__ = [
     "Calibration",
     "ModelLike",
     "Prediction",
+    "PreparedData",
     "as_model",
     "calibrate",
     "complete_stretch",
@@ -40,6 +43,7 @@ __all__ = [
     "parameter_covariance",
     "predict",
     "prediction",
+    "prepare",
     "saved_covariance",
     "time_index",
 ]

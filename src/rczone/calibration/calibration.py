@@ -16,14 +16,7 @@ import numpy as np
 import pandas as pd
 
 from rczone.calibration.bands import calibrate_band
-from rczone.calibration.dataset import (
-    ModelLike,
-    as_model,
-    dataset,
-    frame_from,
-    ignored_channels,
-    missing_inputs,
-)
+from rczone.calibration.dataset import ModelLike, PreparedData, as_model, prepare
 from rczone.data.excitation import input_excitation
 from rczone.estimation import Dataset, FitResult, fit
 from rczone.estimation.innovations import (
@@ -129,9 +122,10 @@ class Calibration(FitAccessors, Result):
         are not computed; the first read of any of them (``summary()``, ``to_dict()`` and the
         report read them) makes all three, as statsmodels computes ``bse`` on first access, and
         the fitted model's provenance then records the verdict (:func:`rczone.fit`; issue 34).
-    data : Dataset or None
-        The data set the fit was made on (the longest complete stretch of the frame, SI units),
-        which the checks after the fit reuse instead of building it again.
+    data : PreparedData or None
+        The data the fit was made on (:func:`~rczone.calibration.dataset.prepare`: the frame and
+        its data set, the longest complete stretch in SI units), which the checks after the fit
+        are handed instead of the frame, so that they do not build it again.
     """
 
     result: FitResult
@@ -150,7 +144,7 @@ class Calibration(FitAccessors, Result):
     excitation: Any = None
     verdict: Verdict = field(init=False)
     pending: Any = field(default=None, compare=False)
-    data: Dataset | None = field(default=None, compare=False)
+    data: PreparedData | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.pending is None:
@@ -377,7 +371,6 @@ def calibrate(
     provenance: Mapping[str, object] | None = None,
     uncertainty: bool = True,
     analyses: bool = True,
-    data: Dataset | None = None,
     progress: Any = None,
     **overrides: Any,
 ) -> Calibration:
@@ -387,9 +380,10 @@ def calibrate(
     ----------
     model : ZoneModel, RCNetwork, str or path
         A built-in name, a model file, a saved model (its values are the start) or a network.
-    frame : DataFrame
+    frame : DataFrame or PreparedData
         ``time`` (s) or a DatetimeIndex, and a column per model input and output (by name; the
-        model's conventions fill inputs the data lack).
+        model's conventions fill inputs the data lack); or the data set an entry point prepared
+        (:func:`~rczone.calibration.dataset.prepare`), fitted as it is.
     settings : FitSettings, optional
         How to fit (:class:`~rczone.estimation.settings.FitSettings`), carried whole to the method;
         default ``FitSettings()`` (ML, the global search), as ``rczone fit``. Its ``constants`` are
@@ -406,9 +400,6 @@ def calibrate(
         plausibility of the estimates. False (batch calibration, which stores the estimates and the
         open-loop errors only) skips them: the fit, its standard errors and the open-loop check
         are the same, the calibration's analyses are None.
-    data : Dataset, optional
-        ``dataset(model, frame, settings.constants)`` when the caller has built it already (the
-        methods of one zone in a batch share one); default built here.
     progress : object, optional
         Told how far the fit is (:func:`rczone.estimation.fit.fit`); None: nothing.
     **overrides
@@ -423,19 +414,9 @@ def calibrate(
     constants = settings.constants or None
     zm = as_model(model)
     net = zm.network
-    ignored = ignored_channels(frame)
-    frame = frame_from(frame)
-    used = zm.constants_used(frame, constants)
-    data = dataset(zm, frame, constants) if data is None else data
-    stretch = {
-        "samples": int(data.n_samples),
-        "of": len(frame),
-        "fraction": data.n_samples / max(len(frame), 1),
-        "start_s": float(data.t[0]),
-        "end_s": float(data.t[-1]),
-    }
-    if data.n_samples < len(frame):
-        stretch["missing"] = missing_inputs(zm, frame, constants)
+    prepared = prepare(zm, frame, constants)
+    data, ignored, stretch = prepared.dataset, prepared.ignored, prepared.stretch
+    used = zm.constants_used(prepared.frame, prepared.constants)
     free = settings.free_for(net)
     start = {k: v for k, v in {**zm.theta, **zm.noise}.items() if k in free}
     held = {k: v for k, v in zm.theta.items() if k not in free}
@@ -506,7 +487,7 @@ def calibrate(
         data_warnings=data.warnings,
         robust=robust,
         excitation=excitation,
-        data=data,
+        data=prepared,
     )
 
 

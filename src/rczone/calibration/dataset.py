@@ -2,7 +2,9 @@
 
 Shared by the fit, the prediction, diagnose and select: the model's own conventions for inputs the
 data lack (:class:`~rczone.models.zone.ModelInputs`), the frame's DatetimeIndex kept, and the
-longest complete stretch of a record.
+longest complete stretch of a record. :func:`prepare` is the one place a frame becomes a data set:
+what it returns (:class:`PreparedData`) is handed on unchanged, wherever a frame is accepted, so a
+fit, its checks and its analyses read the data set the entry point built.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -18,6 +21,7 @@ from rczone.data.quality import RczoneWarning
 from rczone.errors import DataError
 from rczone.estimation import Dataset
 from rczone.models import ZoneModel, load_model
+from rczone.models.zone import ModelInputs
 from rczone.network import RCNetwork
 
 ModelLike = ZoneModel | RCNetwork | str | os.PathLike
@@ -196,3 +200,94 @@ def dataset(
     return Dataset(
         t, u, m if m.shape[1] else None, y, net.input_names, net.flow_names, net.outputs, implausible
     )
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedData:
+    """A frame's data set for one model, built once by :func:`prepare` and then passed on unchanged.
+
+    Every function that takes a frame for a model also takes this (the fit, its checks, diagnose,
+    the profiles, the predictions, the smoother): given one prepared for the same signals and the
+    same constants, it reads its :attr:`dataset` instead of building another.
+
+    Attributes
+    ----------
+    frame : DataFrame
+        The data as given (time stamps, indicators and the channels no signal reads are read from
+        it).
+    dataset : Dataset
+        The model's signals (:func:`dataset`).
+    constants : mapping or None
+        The inputs held constant instead of read from ``frame``, as given.
+    signals : tuple
+        The input, flow and output names and input conventions the data set was built for.
+    missing : tuple of dict
+        The inputs with gaps, when the data set is a stretch of the frame (:func:`missing_inputs`).
+    """
+
+    frame: pd.DataFrame
+    dataset: Dataset
+    constants: Mapping[str, float] | None
+    signals: tuple[tuple[str, ...], tuple[str, ...], tuple[str, ...], ModelInputs]
+    missing: tuple[dict, ...] = ()
+
+    @property
+    def ignored(self) -> tuple[str, ...]:
+        """The channels of a column map no signal reads (:func:`ignored_channels`)."""
+        return ignored_channels(self.frame)
+
+    @property
+    def stretch(self) -> dict[str, object]:
+        """The samples used of the frame's (a record with gaps: the longest complete stretch)."""
+        data, rows = self.dataset, len(self.frame)
+        out: dict[str, object] = {
+            "samples": int(data.n_samples),
+            "of": rows,
+            "fraction": data.n_samples / max(rows, 1),
+            "start_s": float(data.t[0]),
+            "end_s": float(data.t[-1]),
+        }
+        if data.n_samples < rows:
+            out["missing"] = [dict(m) for m in self.missing]
+        return out
+
+
+def _signature(zm: ZoneModel) -> tuple:
+    net = zm.network
+    return (tuple(net.input_names), tuple(net.flow_names), tuple(net.outputs), zm.inputs)
+
+
+def prepare(
+    model: ModelLike,
+    frame: pd.DataFrame | PreparedData,
+    constants: Mapping[str, float] | None = None,
+) -> PreparedData:
+    """``frame``'s data set for ``model``: built here, or ``frame`` itself when it is already that.
+
+    Parameters
+    ----------
+    model : ZoneModel, RCNetwork, str or path
+    frame : DataFrame or PreparedData
+        The data (``time`` in s or a DatetimeIndex, a column per signal), or data prepared before:
+        returned as they are when prepared for the same signals and constants (None: the ones it
+        was prepared with), else prepared again from their frame.
+    constants : mapping, optional
+        Inputs held constant (SI units).
+
+    Returns
+    -------
+    PreparedData
+    """
+    zm = as_model(model)
+    if isinstance(frame, PreparedData):
+        constants = frame.constants if constants is None else constants
+        if frame.signals == _signature(zm) and _same(frame.constants, constants):
+            return frame
+        frame = frame.frame
+    data = dataset(zm, frame, constants)
+    missing = tuple(missing_inputs(zm, frame, constants)) if data.n_samples < len(frame) else ()
+    return PreparedData(frame, data, constants, _signature(zm), missing)
+
+
+def _same(a: Mapping[str, float] | None, b: Mapping[str, float] | None) -> bool:
+    return dict(a or {}) == dict(b or {})

@@ -22,9 +22,10 @@ from rczone.calibration.calibration import (
 from rczone.calibration.dataset import (
     EPOCH_SECONDS,
     ModelLike,
+    PreparedData,
     as_model,
-    dataset,
     ignored_channels,
+    prepare,
     time_index,
 )
 from rczone.errors import DataError
@@ -53,12 +54,14 @@ from rczone.simulation.simulate import HOLDS
 
 
 def predict(
-    model: ModelLike, frame: pd.DataFrame, constants: Mapping[str, float] | None = None
+    model: ModelLike, frame: pd.DataFrame | PreparedData, constants: Mapping[str, float] | None = None
 ) -> OpenLoopError:
-    """Open-loop simulation of a model on data (the measured states start at their first measurement)."""
+    """Open-loop simulation of a model on data (the measured states start at their first measurement).
+
+    ``frame`` may be data prepared for the model (:func:`~rczone.calibration.dataset.prepare`).
+    """
     zm = as_model(model)
-    data = dataset(zm, frame, constants)
-    return open_loop_error(zm.network, dict(zm.theta), data)
+    return open_loop_error(zm.network, dict(zm.theta), prepare(zm, frame, constants).dataset)
 
 
 class HiddenStates(NamedTuple):
@@ -468,8 +471,8 @@ def prediction_setup(
     Parameters
     ----------
     model : ZoneModel, RCNetwork, str or path
-    frame : DataFrame
-        The data, warm-up included.
+    frame : DataFrame or PreparedData
+        The data, warm-up included (or prepared for the model: :func:`~rczone.calibration.dataset.prepare`).
     constants : mapping, optional
         Inputs held constant (SI units).
     start : float, optional
@@ -486,8 +489,9 @@ def prediction_setup(
         raise DataError(f"hold must be one of {', '.join(HOLDS)}, got {hold!r}")
     if initial_state not in INITIAL_STATES:
         raise DataError(f"initial_state must be one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
-    validation.measured_outputs(frame, zm.network.outputs)  # a measurement of 1e308 degC starts nothing
-    data = dataset(zm, frame, constants)
+    raw = frame.frame if isinstance(frame, PreparedData) else frame
+    validation.measured_outputs(raw, zm.network.outputs)  # a measurement of 1e308 degC starts nothing
+    data = prepare(zm, frame, constants).dataset
     first = 0 if start is None else int(np.searchsorted(data.t, start))
     if first >= data.n_samples:
         raise DataError("the warm-up covers every sample: nothing is left to predict; give a shorter warm-up")
@@ -581,8 +585,8 @@ def prediction(
     Parameters
     ----------
     model : ZoneModel, RCNetwork, str or path
-    frame : DataFrame
-        The data, warm-up included.
+    frame : DataFrame or PreparedData
+        The data, warm-up included (or prepared for the model: :func:`~rczone.calibration.dataset.prepare`).
     constants : mapping, optional
         Inputs held constant (SI units).
     steps : int, optional
@@ -623,8 +627,9 @@ def prediction(
         setup = prediction_setup(zm, frame, constants, start=start, initial_state=initial_state, hold=hold)
         if steps is not None:
             validation.steps_ahead(steps, len(setup.data.t) - setup.first)
+        raw = frame.frame if isinstance(frame, PreparedData) else frame
         return setup_prediction(
-            setup, steps, parameters=parameters, calibrated=calibrated, frame=frame, label=label
+            setup, steps, parameters=parameters, calibrated=calibrated, frame=raw, label=label
         )
 
 

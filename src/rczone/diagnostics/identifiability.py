@@ -637,7 +637,6 @@ def diagnose(
     operating_point: str = "auto",
     seed: int = 0,
     hold: str | None = None,
-    data: Dataset | None = None,
 ) -> IdentifiabilityReport:
     """Tell whether ``frame`` can identify the ``free`` parameters of ``model``.
 
@@ -650,6 +649,8 @@ def diagnose(
         ``time`` (s) or a DatetimeIndex, and the model's signals by name (the model's conventions
         fill inputs the data lack, e.g. a default heat gain or a mean of surrounding rooms). Every
         output of the model is used; missing output samples are skipped.
+        Or data prepared for the model (:func:`rczone.calibration.dataset.prepare`; a fit's
+        :attr:`rczone.calibration.Calibration.data`), read as they are.
     free : sequence of str, optional
         Parameters to diagnose; default the model's free resistances, capacitances and gains.
     theta : mapping, optional
@@ -678,15 +679,12 @@ def diagnose(
         Inputs between samples, in the sensitivities, the responses and the quick fit (held or
         linear, as in :func:`rczone.simulation.simulate`; on coarse data the choice moves the
         optimum); default the one a fitted model was fitted with (its provenance), else ``"zoh"``.
-    data : Dataset, optional
-        ``frame``'s data set for ``model`` with ``constants`` when the caller has it (a fit's,
-        :attr:`rczone.calibration.Calibration.data`); default built from ``frame``.
 
     Returns
     -------
     IdentifiabilityReport
     """
-    from rczone.calibration import dataset, frame_from
+    from rczone.calibration import frame_from, prepare
     from rczone.calibration.prediction import model_hold
     from rczone.models import load_model
     from rczone.simulation.simulate import HOLDS
@@ -707,8 +705,8 @@ def diagnose(
     if not free:
         raise ParameterError(f"model {zm.label!r} has no free parameter to diagnose; name some with free")
     check_free(net, free)
-    frame = frame_from(frame)
-    data = dataset(zm, frame, constants) if data is None else data
+    prepared = prepare(zm, frame, constants)
+    frame, data, constants = frame_from(prepared.frame), prepared.dataset, prepared.constants
     if heat_input == "auto":
         offsets = guessed_heat_inputs(net, data)
     else:

@@ -31,7 +31,7 @@ import pandas as pd
 from scipy.special import chdtri
 
 from rczone.errors import ParameterError
-from rczone.estimation import Dataset, FitResult
+from rczone.estimation import FitResult
 from rczone.estimation.costs import MAP_CORRELATION_TIME, PRIOR_SPREAD, Objective, auto_initial_state
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import make_spec
@@ -110,12 +110,12 @@ def _inside(value: float, lo: float, hi: float) -> float:
     return float(min(max(value, lo + eps), hi - eps))
 
 
-def _objective(model, frame: pd.DataFrame, res: FitResult, constants, data=None) -> tuple[Objective, float]:
-    from rczone.calibration import as_model, dataset
+def _objective(model, frame, res: FitResult, constants) -> tuple[Objective, float]:
+    from rczone.calibration import as_model, prepare
 
     zm = as_model(model)
     network = zm.network
-    data = dataset(zm, frame, constants) if data is None else data
+    data = prepare(zm, frame, constants).dataset
     ss0 = network.state_space()
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
     x0_auto = {initial_state_name(s): float(v) for s, v in zip(ss0.state_names, x0a)}
@@ -152,7 +152,6 @@ def profile_checks(
     factor: float = 10.0,
     n_points: int = 9,
     constants: Mapping[str, float] | None = None,
-    data: Dataset | None = None,
 ) -> dict[str, ProfileCheck]:
     """Profile each free resistance and capacitance of a fit over ``[est / factor, est * factor]``.
 
@@ -160,8 +159,8 @@ def profile_checks(
     ----------
     network : RCNetwork or ZoneModel
         The fitted structure (as passed to the fit; a model brings its input conventions).
-    frame : DataFrame
-        The calibration data.
+    frame : DataFrame or PreparedData
+        The calibration data (or the fit's, :attr:`Calibration.data`, read as they are).
     res : FitResult
     names : sequence of str, optional
         Parameters to profile; default every free resistance and capacitance.
@@ -171,8 +170,6 @@ def profile_checks(
         Grid points (odd, so the estimate is one of them).
     constants : mapping, optional
         Constant inputs, as in the fit.
-    data : Dataset, optional
-        The data set the fit was made on (:attr:`Calibration.data`); default built from ``frame``.
 
     Returns
     -------
@@ -180,7 +177,7 @@ def profile_checks(
     """
     if not factor > 1 or n_points < 3:
         raise ParameterError(f"profile needs factor > 1 and n_points >= 3, got {factor}, {n_points}")
-    obj, w = _objective(network, frame, res, constants, data)
+    obj, w = _objective(network, frame, res, constants)
     network = obj.network
     if names is None:
         names = [

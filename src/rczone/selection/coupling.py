@@ -77,7 +77,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import ndtr
 
-from rczone.calibration import Calibration, dataset
+from rczone.calibration import Calibration, prepare
 from rczone.errors import ParameterError
 from rczone.estimation.data import Dataset
 from rczone.estimation.engines import run_filter
@@ -410,7 +410,7 @@ def conditional_logliks(
     t_ref = None
     measured = None
     for name, cal in calibrations.items():
-        data = dataset(cal.model, frame, constants)
+        data = prepare(cal.model, frame, constants).dataset
         if t_ref is None:
             t_ref = data.t
             cols = [list(data.output_names).index(o) for o in basis.targets]

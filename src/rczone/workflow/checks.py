@@ -14,10 +14,9 @@ from collections.abc import Callable, Mapping
 
 import pandas as pd
 
-from rczone.calibration import Calibration, calibrate, predict
+from rczone.calibration import Calibration, PreparedData, calibrate, predict, prepare
 from rczone.calibration.calibration import stamped
 from rczone.calibration.evidence import verdict_fit, with_holdout
-from rczone.estimation import Dataset
 from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.workflow.holdout import before, score_held_out
@@ -36,7 +35,6 @@ def fit_and_check(
     others: Mapping[str, pd.DataFrame] | None = None,
     progress: Callable[[str], None] = _quiet,
     analyses: bool = True,
-    data: Dataset | None = None,
     holdout: float | None = None,
 ) -> Calibration:
     """Fit ``model`` to ``frame`` with ``settings``, then (``settings.checks``) check the fit.
@@ -45,8 +43,10 @@ def fit_and_check(
     ----------
     model : ZoneModel
         The model; its values are the start.
-    frame : DataFrame
-        The data (``time`` in s or a DatetimeIndex, a column per signal).
+    frame : DataFrame or PreparedData
+        The data (``time`` in s or a DatetimeIndex, a column per signal), or the data set the
+        caller prepared (:func:`rczone.calibration.prepare`; the methods of one zone in a batch
+        share one).
     settings : FitSettings
         How to fit and what to check.
     label : str
@@ -59,9 +59,6 @@ def fit_and_check(
     analyses : bool
         The analyses after the fit that a reader looks at (:func:`rczone.calibration.calibrate`);
         batch calibration, which stores estimates and errors only, skips them.
-    data : Dataset, optional
-        The frame's data set with ``settings.constants`` when the caller has built it already
-        (:func:`rczone.calibration.calibrate`).
     holdout : float, optional
         Where a held-out part of ``frame`` starts (:func:`rczone.workflow.holdout.split_time`): the
         model is fitted and checked on the data before it and scored on the rest
@@ -72,14 +69,14 @@ def fit_and_check(
     Calibration
     """
     progress(f"fitting {model.label} to {label} ({settings.method})")
-    full, frame = frame, before(frame, holdout)
+    full = frame.frame if isinstance(frame, PreparedData) else frame
+    frame = frame if holdout is None else before(full, holdout)
     cal = calibrate(
         model,
         frame,
         settings,
         provenance={"data": label, "model": model.label},
         analyses=analyses,
-        data=data,
         progress=progress if hasattr(progress, "advance") else None,  # a bar that counts the searches
     )
     if settings.checks or others:
@@ -184,14 +181,19 @@ class PostFitChecks:
         from rczone.diagnostics import diagnose
         from rczone.diagnostics.postfit import compare_fits, far_from_construction, profile_checks
 
-        settings, frame, progress = self.settings, self.frame, self.progress
+        settings, progress = self.settings, self.progress
         r, zm = cal.result, cal.model
-        used = zm.provenance.get("constants") or {}
+        # the fit's own data set (a calibration made elsewhere: the frame, as it was fitted)
+        data = (
+            cal.data
+            if cal.data is not None
+            else prepare(zm, self.frame, zm.provenance.get("constants") or None)
+        )
         label = cal.data_label
         prof = {}
         if settings.profiles and len(zm.network.outputs) == 1:
             progress("profiling the estimates")
-            prof = profile_checks(zm, frame, r, constants=used, data=cal.data)
+            prof = profile_checks(zm, data, r)
             prof = {k: v.to_dict() for k, v in prof.items()}
         fits = {label: verdict_fit(cal)}  # robust errors when the innovations are not white (issue 38)
         validation = {}
@@ -214,7 +216,5 @@ class PostFitChecks:
         diag = None
         if rc:
             progress("diagnosing identifiability at the estimates")
-            diag = diagnose(
-                zm, frame, free=rc, constants=used, heat_input=None, operating_point="model", data=cal.data
-            )
+            diag = diagnose(zm, data, free=rc, heat_input=None, operating_point="model")
         return checks, diag

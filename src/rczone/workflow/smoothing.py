@@ -13,7 +13,7 @@ from collections.abc import Mapping
 
 import pandas as pd
 
-from rczone.calibration import ModelLike, as_model, dataset, noise_values, time_index
+from rczone.calibration import ModelLike, as_model, noise_values, prepare, time_index
 from rczone.calibration.prediction import model_hold
 from rczone.errors import DataError
 from rczone.estimation.smoother import SmoothedStates, smooth_states
@@ -67,7 +67,7 @@ def smooth(
             f"smoothing needs the model's noise levels and {zm.label} has none; fit it by ML"
             " (rczone fit --method ml --save-model ...)"
         )
-    data_set = dataset(zm, frame, constants)
+    data_set = prepare(zm, frame, constants).dataset
     out = smooth_states(zm.network, {**zm.theta, **values}, data_set, hold=model_hold(zm))
     return SmoothedStates(
         data_set.t,

@@ -110,10 +110,12 @@ def test_without_analyses_the_fit_and_its_open_loop_check_are_the_full_calibrati
 
 
 def test_a_data_set_built_by_the_caller_gives_the_same_calibration(zone, ml):
-    from rczone.calibration.dataset import dataset
+    from rczone.calibration.dataset import prepare
 
     frame = zone.iloc[:400]
-    given = calibrate(TRUE_MODEL, frame, method="ml", n_starts=2, data=dataset(TRUE_MODEL, frame))
+    prepared = prepare(TRUE_MODEL, frame)
+    given = calibrate(TRUE_MODEL, prepared, method="ml", n_starts=2)
+    assert given.data is prepared  # carried unchanged, not built again
     assert given.result.estimates == ml.result.estimates and given.result.std_errors == ml.result.std_errors
     np.testing.assert_array_equal(given.open_loop.error, ml.open_loop.error)
     assert given.model.provenance["stretch"] == ml.model.provenance["stretch"]

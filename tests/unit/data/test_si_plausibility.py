@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import rczone
-from rczone.calibration.dataset import dataset
+from rczone.calibration.dataset import dataset, prepare
 from rczone.cli.main import main
 from rczone.data import RczoneWarning
 from rczone.data.units import signal_warnings
@@ -100,6 +100,6 @@ def test_a_batch_zone_from_a_frame_is_flagged(fahrenheit):
     from rczone.calibration import calibrate
 
     with pytest.warns(RczoneWarning, match="degF"):
-        data = dataset(MODEL, fahrenheit)
-    cal = calibrate(MODEL, fahrenheit, method="ls", n_starts=1, analyses=False, data=data)
-    assert not cal.verdict.trustworthy and cal.data_warnings == data.warnings
+        data = prepare(MODEL, fahrenheit)
+    cal = calibrate(MODEL, data, method="ls", n_starts=1, analyses=False)
+    assert not cal.verdict.trustworthy and cal.data_warnings == data.dataset.warnings
