@@ -9,6 +9,8 @@ which may keep only a complete stretch of the frame, is split at the same instan
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pandas as pd
 
@@ -38,6 +40,28 @@ def _time(text: str, t: np.ndarray, timezone: str, option: str) -> float | None:
             " give it with its UTC offset, e.g. 2014-11-02T01:30-05:00"
         ) from None
     return ts.timestamp()
+
+
+def duration_seconds(text: str) -> float:
+    """A positive duration with its unit (``1d``, ``6h``, ``30min``, ``2 days``) in seconds.
+
+    A lower-case ``d`` means days, as the options' help says (pandas deprecates that spelling).
+
+    Raises
+    ------
+    ValueError
+        Not a positive duration with a unit.
+    """
+    text = str(text).strip()
+    if not any(c.isalpha() for c in text):
+        raise ValueError(f"no unit in {text!r}")
+    try:
+        seconds = pd.Timedelta(re.sub(r"(?<=[0-9\s])d$", "D", text)).total_seconds()
+    except (TypeError, OverflowError) as exc:
+        raise ValueError(str(exc)) from None
+    if not seconds > 0:
+        raise ValueError(f"{text!r} is not positive")
+    return seconds
 
 
 def _inside(value: float, t: np.ndarray, option: str, text: str) -> float:
@@ -114,10 +138,8 @@ def warmup_end(t: np.ndarray, spec: str, *, timezone: str = "UTC") -> float:
     value = _time(text, t, timezone, "--warmup")
     if value is None:
         try:
-            seconds = pd.Timedelta(text).total_seconds()
-            if not seconds > 0 or not any(c.isalpha() for c in text):
-                raise ValueError
-        except (ValueError, OverflowError, TypeError):
+            seconds = duration_seconds(text)
+        except ValueError:
             raise ParameterError(
                 f"--warmup must be a duration with its unit (e.g. 1d, 6h, 30min) or a time (e.g."
                 f" 2009-02-09T12:00), got {text!r}"

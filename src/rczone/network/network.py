@@ -731,7 +731,15 @@ class RCNetwork:
             D = D + st["Cz"] @ Lz
         cap = np.array([v(c) for c in st["cap"]], dtype)
         _check_positive(cap, st["cap"], "capacity")
-        inv = (1.0 / cap)[:, None]
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # refused just below,
+            inv = (1.0 / cap)[:, None]  # in one line, not after numpy's overflow warnings
+        tiny = np.flatnonzero(~np.isfinite(inv[:, 0]))
+        if tiny.size:
+            i = int(tiny[0])
+            raise ParameterError(
+                f"capacity {st['cap'][i]!r} = {cap.real[i]:g} J/K is too small (its inverse overflows);"
+                " give a capacity in J/K"
+            )
         Nx = np.ascontiguousarray(Nf[:, xs][:, :, xs] * inv[None])  # fancy indexing leaves it strided
         A, B, M = Axx * inv, Bx[:, :p] * inv, Mf[:, xs] * inv[None]
         if not nl:

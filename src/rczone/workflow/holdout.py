@@ -113,7 +113,6 @@ def conformal_settings(window: str | None, online: bool, start: float | None):
     -------
     ConformalSettings or None
     """
-    import pandas as pd
 
     from rczone.calibration.conformal import ConformalSettings
     from rczone.errors import ParameterError
@@ -124,11 +123,11 @@ def conformal_settings(window: str | None, online: bool, start: float | None):
         return None
     if start is None:
         raise ParameterError("--conformal calibrates on the end of the warm-up: give --warmup too")
+    from rczone.calibration.holdout import duration_seconds
+
     try:
-        seconds = pd.Timedelta(window.strip()).total_seconds()
-        if not seconds > 0 or not any(c.isalpha() for c in window):
-            raise ValueError
-    except (ValueError, TypeError, OverflowError):
+        seconds = duration_seconds(window)
+    except ValueError:
         raise ParameterError(
             f"--conformal must be a duration with its unit (e.g. 1d, 12h), got {window!r}"
         ) from None

@@ -197,3 +197,14 @@ def test_bad_initial_state_shape():
         simulate(
             second_order().state_space(), np.arange(3.0), np.zeros((3, 4)), np.zeros((3, 1)), x0=np.zeros(3)
         )
+
+
+def test_a_capacity_whose_inverse_overflows_is_one_error_without_numpy_warnings():
+    import warnings
+
+    from rczone.models import load_model
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's overflow warning would be raised here first
+        with pytest.raises(ParameterError, match=r"capacity 'Ci' = 4\.9\d*e-324 J/K is too small"):
+            load_model("Ti").with_values({"Ci": 5e-324}).network.state_space()
