@@ -9,6 +9,13 @@ console script on (a Ctrl-C dropped while the command modules import counts too)
 raises as Python's own handler does. A SIGTERM is taken as a Ctrl-C: the command ends 130 and
 ends its worker processes (a process killed outright runs no handler; fit-many's workers then end
 by themselves, :func:`rczone.batch.runner._end_with_parent`).
+
+Python runs a signal's handler only when the main thread returns to the interpreter, which a
+numba compile (LLVM) does not do for tens of seconds on a first run. The signal is also written,
+by the C-level handler, to a wake-up pipe (:func:`signal.set_wakeup_fd`) that a watchdog thread
+reads: when the handler has not run :data:`CTRL_C_STUCK_S` after the signal, the main thread is
+stuck in compiled code and the process ends at once, exit 130 (outputs are written atomically, so
+an interrupted command leaves none half written).
 """
 
 from __future__ import annotations
@@ -18,10 +25,15 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator
 
 #: After a Ctrl-C, the seconds a command has to wind down before its process ends at once (exit 130).
 CTRL_C_GRACE_S = 30.0
+
+#: After a Ctrl-C, the seconds Python has to run its handler; longer, the main thread is stuck in
+#: compiled code (a numba compile) and the process ends at once (exit 130).
+CTRL_C_STUCK_S = 3.0
 
 _seen: list[bool] = []  # a Ctrl-C arrived while the outermost block was active
 _depth = [0]  # blocks active now (the console script's and main()'s nest)
@@ -69,9 +81,12 @@ def noting_ctrl_c() -> Iterator[Callable[[], bool]]:
     term = signal.getsignal(signal.SIGTERM)
     if term == signal.SIG_DFL:  # SIGTERM (kill, a job scheduler) ends a command as Ctrl-C does
         signal.signal(signal.SIGTERM, on_ctrl_c)
+    watchdog = _Watchdog.start({signal.SIGINT, *([signal.SIGTERM] if term == signal.SIG_DFL else [])})
     try:
         yield _arrived
     finally:
+        if watchdog is not None:
+            watchdog.stop()
         signal.signal(signal.SIGINT, signal.default_int_handler)
         if term == signal.SIG_DFL:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
@@ -79,6 +94,61 @@ def noting_ctrl_c() -> Iterator[Callable[[], bool]]:
         for timer in timers:  # the command ended: nothing is left to end (nor a caller's process)
             timer.cancel()
             timer.join(timeout=5)
+
+
+class _Watchdog:
+    """Ends the process when a signal's Python handler does not run in time (module notes)."""
+
+    def __init__(self, read_fd: int, write_fd: int, previous: int, watched: set[int]):
+        self.read_fd, self.write_fd, self.previous = read_fd, write_fd, previous
+        self.watched = watched
+        self.thread = threading.Thread(target=self._watch, name="rczone-ctrl-c", daemon=True)
+
+    @classmethod
+    def start(cls, signals: set[int]) -> _Watchdog | None:
+        """Watch ``signals`` (those handled by :func:`noting_ctrl_c`) from now on.
+
+        None where the wake-up descriptor is another's (an event loop's) or there is none.
+        """
+        try:
+            read_fd, write_fd = os.pipe()
+            os.set_blocking(write_fd, False)
+            previous = signal.set_wakeup_fd(write_fd, warn_on_full_buffer=False)
+        except (OSError, ValueError, AttributeError):  # pragma: no cover - no pipes or not the main thread
+            return None
+        if previous != -1:  # someone else's: give it back and do without
+            signal.set_wakeup_fd(previous)
+            os.close(read_fd)
+            os.close(write_fd)
+            return None
+        dog = cls(read_fd, write_fd, previous, {int(n) for n in signals})
+        dog.thread.start()
+        return dog
+
+    def _watch(self) -> None:
+        while True:
+            try:
+                got = os.read(self.read_fd, 64)
+            except OSError:
+                return
+            if not got:  # the pipe was closed: the command ended
+                return
+            if self.watched & set(got) and not _seen:
+                deadline = time.monotonic() + CTRL_C_STUCK_S
+                while not _seen and time.monotonic() < deadline:
+                    time.sleep(0.05)
+                if not _seen and _depth[0]:
+                    _end_now()
+
+    def stop(self) -> None:
+        """Give the wake-up descriptor back and end the thread."""
+        with contextlib.suppress(OSError, ValueError):
+            signal.set_wakeup_fd(self.previous)
+        with contextlib.suppress(OSError):
+            os.close(self.write_fd)  # the reader sees the end of the pipe
+        self.thread.join(timeout=5)
+        with contextlib.suppress(OSError):
+            os.close(self.read_fd)
 
 
 def _end_now() -> None:  # pragma: no cover - runs in a subprocess of the tests

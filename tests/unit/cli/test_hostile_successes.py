@@ -384,3 +384,48 @@ def test_an_unrelated_error_is_not_taken_for_ctrl_c(monkeypatch):
     monkeypatch.setattr(cli_main, "app", broken)
     with pytest.raises(RuntimeError, match="a bug"):
         cli_main.main(["models"])
+
+
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_a_ctrl_c_while_compiled_code_runs_ends_the_process_at_once():
+    """A signal's Python handler waits for the main thread to leave C code (an LLVM pass of a numba
+    compile, a BLAS call); the watchdog ends the process after CTRL_C_STUCK_S, exit 130, "aborted".
+    Without it the handler would run after the product: "finished", then an uncaught interrupt."""
+    script = (
+        "import os, signal, threading\n"
+        "os.environ['OPENBLAS_NUM_THREADS'] = '1'\n"
+        "import numpy as np\n"
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
+        "import rczone.cli.interrupt as m\n"
+        "m.CTRL_C_STUCK_S = 0.3\n"
+        "a = np.ones((4000, 4000))\n"
+        "with m.noting_ctrl_c():\n"
+        "    threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT)).start()\n"
+        "    a @ a  # seconds in BLAS, the GIL released, no signal checked\n"
+        "    print('finished', flush=True)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 130 and "aborted" in proc.stderr, proc.stderr
+    assert "finished" not in proc.stdout
+
+
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_the_watchdog_leaves_the_wake_up_descriptor_as_it_found_it():
+    import signal
+
+    from rczone.cli.interrupt import noting_ctrl_c
+
+    before = signal.set_wakeup_fd(-1)
+    signal.set_wakeup_fd(before)
+    previous = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with noting_ctrl_c():
+            inside = signal.set_wakeup_fd(-1)
+            signal.set_wakeup_fd(inside)
+            assert inside != -1  # watched
+        after = signal.set_wakeup_fd(-1)
+        signal.set_wakeup_fd(after)
+        assert after == before
+    finally:
+        signal.signal(signal.SIGINT, previous)
