@@ -21,6 +21,8 @@ from rczone.emulators.idf import IdfObject
 from rczone.emulators.plant import SETPOINT_LIMITS, EnergyPlusPlant
 from rczone.errors import EmulatorError
 
+pytestmark = pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
+
 ZONE = "Perimeter_ZN_1"
 #: The keys of the virtual building's closed-loop JSON (tests/unit/control).
 VIRTUAL_KEYS = {

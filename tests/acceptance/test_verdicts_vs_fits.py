@@ -21,6 +21,8 @@ import pytest
 from tests.acceptance.survey import FITS, FREE, REGIMES, STRUCTURAL_FACTOR, night_outcome, summarize
 from tests.acceptance.truth import hour_scale_wall_resistance, steady_state_equivalent
 
+pytestmark = pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
+
 FAST_SEEDS = range(100, 108)
 SLOW_SEEDS = range(200, 230)
 

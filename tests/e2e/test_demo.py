@@ -9,6 +9,8 @@ import pytest
 from rczone.cli.main import main
 from rczone.models import get_model
 
+pytestmark = pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
+
 ORDERS = ("full-scale", "second-order", "first-order")
 
 

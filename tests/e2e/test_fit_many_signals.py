@@ -28,9 +28,10 @@ import pytest
 import rczone
 from tests.unit.batch.test_faults import write_manifest
 
-pytestmark = pytest.mark.skipif(
-    not sys.platform.startswith("linux"), reason="process groups counted through /proc"
-)
+pytestmark = [
+    pytest.mark.slow,  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
+    pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups counted through /proc"),
+]
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -55,6 +55,7 @@ mathtext = st.lists(st.sampled_from([*"$\\{}^_ab", "\\frac", "\\sqrt", "$$"]), m
 )
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 @FAST
 @given(mathtext)
 def test_mathtext_in_figure_texts(s):

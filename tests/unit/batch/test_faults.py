@@ -101,6 +101,7 @@ def stored_errors(out: Path) -> list[str]:
     return [json.loads(p.read_text())["error"] for p in (out / "parts").glob("*.json")]
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_killing_a_worker_loses_nothing_and_stores_no_failure(tmp_path, quick, monkeypatch):
     """Defect 1: killing one worker stored BrokenProcessPool as the result of 376 of 400 zones."""
     monkeypatch.setenv("RCZONE_TEST_SLEEP", "0.3")
@@ -209,6 +210,7 @@ print(run.computed)
 """
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_two_runs_into_one_folder_never_disagree(tmp_path, quick, capsys):
     """Defect 8: concurrent runs doubled the work and left results.parquet disagreeing with summary.json."""
     zones = [f"z{i}" for i in range(10)]

@@ -38,6 +38,7 @@ def manifest(tmp_path):
     return read_manifest(tmp_path / "m.toml")
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_failing_zones_are_recorded_and_the_batch_goes_on(tmp_path, manifest):
     run = run_batch(manifest, tmp_path / "out", backend="processes", workers=2)
     assert (run.total, run.computed, run.failed, run.skipped) == (3, 3, 2, 0)
@@ -72,6 +73,7 @@ def test_scheduler_without_dask_is_a_clear_error(tmp_path, manifest, monkeypatch
         run_batch(manifest, tmp_path / "out", scheduler="tcp://127.0.0.1:1")
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_killed_batch_reruns_without_losing_or_recomputing(tmp_path):
     """kill -9 the whole process group midway, rerun: every result once, none computed twice."""
     n = 16
@@ -215,6 +217,7 @@ def test_the_manifests_fit_settings_reach_the_fit(tmp_path):
     assert {n for n in every if f"{n}_se" in rows["measured"]} == measured
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_a_local_clusters_worker_leaves_without_teardown_but_flushes_its_output():
     # what _connect runs in its own workers: the process ends with code 0 and its buffered output
     # (a pipe: fully buffered) is written before it leaves
@@ -237,6 +240,7 @@ def _profiler_setting() -> bool:
     return bool(dask.config.get("distributed.worker.profile.enabled"))
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_the_runs_own_cluster_runs_its_workers_without_the_statistical_profiler():
     pytest.importorskip("dask.distributed")
     from rczone.batch.runner import _close, _connect

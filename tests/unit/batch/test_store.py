@@ -122,6 +122,7 @@ def test_done_needs_the_same_fingerprint(tmp_path):
     assert ResultStore(tmp_path / "out").done(m.tasks) == set()
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_one_run_at_a_time_holds_the_folder(tmp_path):
     """Issue 14, defect 8: a second run into the same folder is refused with one line."""
     store = ResultStore(tmp_path)

@@ -112,6 +112,7 @@ def test_a_parameter_the_data_cannot_see_gives_an_indefinite_hessian_no_standard
     assert "Hessian not positive definite" in out
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_starts_that_reach_the_same_cost_but_disagree_are_flagged_and_exit_3(zone, capsys) -> None:
     # the envelope resistance split into two parts with no capacity between: only their sum counts
     split = (
@@ -134,6 +135,7 @@ def test_starts_that_reach_the_same_cost_but_disagree_are_flagged_and_exit_3(zon
     assert est["Ra"]["estimate"] + est["Rb"]["estimate"] == pytest.approx(1e-2, rel=0.1)
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_fit_many_exits_3_when_a_finished_fit_is_flagged(zone, capsys) -> None:
     """A batch whose fits all finish, one of them at a bound: the results are written, exit code 3."""
     (zone / "bounded.toml").write_text(

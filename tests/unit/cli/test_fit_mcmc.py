@@ -48,6 +48,7 @@ def zone(tmp_path_factory):
     return d
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_a_short_run_writes_everything_and_exits_3_because_it_is_not_converged(zone, capsys) -> None:
     out = zone / "fit.json"
     args = ["fit", str(zone / "zone.csv"), "--model", str(zone / "zone.toml"), "--method", "mcmc"]
@@ -115,6 +116,7 @@ def test_sampler_options_without_mcmc_are_refused_not_ignored(zone, capsys) -> N
     assert len([ln for ln in err.splitlines() if ln.strip()]) == 1
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_fit_many_samples_with_the_manifest_sampler_table(zone, tmp_path, capsys) -> None:
     """fit-many hands the manifest's draws/tune/chains to the sampler (the McmcOptions of fit)."""
     manifest = tmp_path / "m.toml"

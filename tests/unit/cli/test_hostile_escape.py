@@ -188,6 +188,7 @@ def test_json_into_a_fifo_without_reader_is_one_line_not_a_hang(tmp_path, capsys
     assert fifo.is_fifo()
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_json_through_a_link_to_dev_stdout_prints_it(tmp_path):
     link = tmp_path / "out.json"
     link.symlink_to("/dev/stdout")
@@ -202,6 +203,7 @@ def test_json_through_a_link_to_dev_stdout_prints_it(tmp_path):
     assert json.loads(proc.stdout)["data"] if "data" in json.loads(proc.stdout) else json.loads(proc.stdout)
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_the_batch_store_imports_where_fcntl_does_not_exist():
     """Issue 19: ``import fcntl`` at module level killed fit-many on Windows with a traceback."""
     code = "import sys; sys.modules['fcntl'] = None; import rczone.batch.store, rczone.cli.main; print('ok')"

@@ -235,6 +235,7 @@ def test_ctrl_c_in_fit_exits_130_and_writes_nothing(tmp_path):
     assert not out.exists()
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 @pytest.mark.skipif(os.name == "nt", reason="process groups")
 def test_ctrl_c_in_fit_many_exits_130(tmp_path):
     # 100 zones: about 6 s of fitting on one worker, so the interrupt half a second after the run

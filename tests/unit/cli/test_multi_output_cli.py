@@ -140,6 +140,7 @@ def test_diagnose_analyses_both_outputs(rooms, fitted, capsys):
     assert "T1, T2" in capsys.readouterr().out
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_fit_many_reads_the_models_columns(rooms, fitted):
     (rooms / "batch.toml").write_text(
         'model = "two.toml"\nmethods = ["ml"]\n[[zone]]\nid = "east"\ndata = "two.csv"\n'

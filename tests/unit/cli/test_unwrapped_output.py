@@ -25,6 +25,7 @@ def continuation_rows(text: str) -> list[str]:
     return [r for r in rows if not r.split("│")[1].strip()]
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_a_piped_table_keeps_each_row_on_one_line():
     env = {k: v for k, v in os.environ.items() if k != "COLUMNS"}
     proc = subprocess.run(

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.unit.entrypoints import install
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -36,6 +38,7 @@ print(r.setup["controller"], r.scores["constraint_violations"])
 """
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_the_example_controller_runs_as_an_installed_plug_in(tmp_path):
     env = _installed(tmp_path)
     out = tmp_path / "s.json"

@@ -17,6 +17,8 @@ from rczone.control.mpc import MPC, Forecast, MPCSettings
 from rczone.errors import InputShapeError, ParameterError
 from rczone.models import load_model
 
+pytestmark = pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
+
 DT = 600.0
 P_MAX = 3000.0
 DAYS = 2

@@ -75,6 +75,7 @@ def test_bad_profile_arguments(net, forced_fit, kwargs, match):
         profile_checks(net, frame, cal.result, **kwargs)
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_cli_fit_check_on_other_data_writes_checks(tmp_path, capsys):
     night("forced", seed=3, hours=6, theta=TRUE).to_csv(tmp_path / "a.csv", index=False)
     night("forced", seed=4, hours=6, theta={"Rw": 0.004, "Cr": 6e5}).to_csv(tmp_path / "b.csv", index=False)

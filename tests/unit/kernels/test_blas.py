@@ -42,6 +42,7 @@ for chosen in (None, "2"):  # then as if the user had set OPENBLAS_NUM_THREADS=2
 """
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_a_fit_runs_blas_on_one_thread_and_restores_the_count_unless_the_user_chose() -> None:
     env = {
         k: v

@@ -55,6 +55,7 @@ def _child(site: Path, home: Path) -> dict:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_a_read_only_installed_copy_caches_in_the_users_folder(tmp_path):
     site, home = tmp_path / "site", tmp_path / "home"
     home.mkdir()

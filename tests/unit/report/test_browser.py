@@ -16,9 +16,10 @@ import pytest
 from rczone.cli.main import main
 
 BROWSER = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
-pytestmark = pytest.mark.skipif(
-    BROWSER is None, reason="headless Chromium not installed (apt install chromium)"
-)
+pytestmark = [
+    pytest.mark.slow,  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
+    pytest.mark.skipif(BROWSER is None, reason="headless Chromium not installed (apt install chromium)"),
+]
 
 HEAD = """<script>
 window.__errors = [];

@@ -64,6 +64,7 @@ def captured(monkeypatch):
     return got
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_the_demos_log_axes_are_typeset_not_printed_as_tex():
     from rczone.study.paper import paper_weights_study
 

@@ -18,6 +18,7 @@ def zone():
     return prbs_zone(days=1, seed=4)
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_ml_report_shows_innovations_profiles_and_units(zone, tmp_path):
     cal = calibrate(TRUE_MODEL, zone, method="ml", n_starts=1)
     prof = {
@@ -40,6 +41,7 @@ def test_ml_report_shows_innovations_profiles_and_units(zone, tmp_path):
     assert (tmp_path / "profiles.png").stat().st_size > 1000
 
 
+@pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
 def test_ls_report_labels_open_loop_residuals(zone):
     cal = calibrate(TRUE_MODEL, zone, method="ls", n_starts=1)
     html = fit_report(cal, zone, "zone", TRUE_MODEL, None).render()
