@@ -10,7 +10,9 @@ in a first pass, then runs the filter recursion unrolled for two states in a sec
 the general filter (:func:`rczone.kernels.kalman.kalman_filter`) specialized by hand: the
 same sequential update and time update, the same steady-state rule, so the same ``-log L``
 to rounding (tested against it); it is used only where it is measurably faster
-(``docs/performance.md``), and never for gradients.
+(``docs/performance.md``), and never for gradients. :func:`filter_rc2` is the same recursion (without
+the steady state) over given discrete matrices with every intermediate result kept (what the
+prediction bands of a 2-state model read), a small kernel: a first fit does not compile the general filter.
 
 References
 ----------
