@@ -16,7 +16,8 @@ missing output is skipped on its own, and the likelihood is exact [2]_.
 
 There is one filter, :func:`rczone.kernels.kalman.kalman_filter` (compiled, with the
 forward sensitivities of the likelihood); :func:`kalman_filter_arrays`, :func:`kalman_nll`
-and :func:`kalman_innovations_fast` call it. Its plain NumPy twin lives in the tests
+and :func:`kalman_innovations_fast` call it (for a 2-state, 1-output problem its unrolled twin
+:func:`rczone.kernels.rc2.filter_rc2`). Its plain NumPy twin lives in the tests
 (``tests/oracles.py``), which compare the two, and both with a brute-force joint Gaussian
 density. :func:`kalman_nll_rc2` runs the fused 2-state kernel of :mod:`rczone.kernels.rc2`.
 
@@ -50,7 +51,7 @@ from rczone.kernels.arrays import (
     writable,
 )
 from rczone.kernels.kalman import STEADY_RTOL, kalman_filter, no_sensitivities, outputs
-from rczone.kernels.rc2 import nll_rc2
+from rczone.kernels.rc2 import filter_rc2, nll_rc2
 from rczone.network.statespace import BilinearStateSpace
 from rczone.simulation.discretize import SYMMETRY_RTOL, interval_discretization, symmetrizing_scale
 from rczone.simulation.intervals import interval_keys, unique_rows
@@ -174,11 +175,53 @@ class FilterOutput:
 # --------------------------------------------------------------------------- the compiled filter
 
 
-def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, FilterTrace]:
+def _two_state(problem: FilterProblem) -> bool:
+    """Whether ``problem`` has two states and one output: :func:`rczone.kernels.rc2.filter_rc2` runs it."""
+    return problem.Phi.shape[1] == 2 and problem.y.shape[1] == 1
+
+
+def _compiled_rc2(problem: FilterProblem) -> tuple[float, int, FilterTrace]:
+    """Run :func:`rczone.kernels.rc2.filter_rc2` on a 2-state, 1-output ``problem``; as :func:`_compiled`."""
+    f = writable  # one specialization whatever the arrays' origin
+    N, p = problem.y.shape[0], problem.u.shape[1]
+    trace = FilterTrace(
+        np.full((N, 1), np.nan),
+        np.zeros((0, 1, 0)),
+        np.empty((N, 2)),
+        np.empty((N, 2)),
+        np.empty((N, 2, 2)),
+        np.empty((N, 1, 1)),
+        np.empty((N, 2, 2)),
+    )
+    nll, n_obs = filter_rc2(
+        Dynamics(*(f(a) for a in (problem.Phi, problem.G0, problem.G1, problem.Qd))),
+        Observation(
+            f(problem.C),
+            f(problem.D),
+            f(measurement_variances(problem.R)),
+            np.empty((1, 0, 2)),
+            np.empty((1, 0, p)),
+            np.empty((1, 0)),
+        ),
+        FilterStart(f(problem.x0), f(problem.P0), np.empty((0, 2)), np.empty((0, 2, 2))),
+        Series(f(problem.u), f(problem.y), f(problem.which, np.int64)),
+        bool(np.any(problem.G1)),
+        trace,
+    )
+    if n_obs < 0:
+        raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")
+    return float(nll + 0.5 * n_obs * _LOG_2PI), n_obs, trace
+
+
+def _compiled(problem: FilterProblem, *, keep: bool, general: bool = False) -> tuple[float, int, FilterTrace]:
     """Run :func:`rczone.kernels.kalman.kalman_filter` on ``problem``.
 
-    With ``keep`` the intermediate results are returned too (the trace of the kernel).
+    With ``keep`` the intermediate results are returned too (the trace of the kernel). A 2-state,
+    1-output problem runs :func:`rczone.kernels.rc2.filter_rc2` instead (the same filter unrolled,
+    no steady state: equal within the general filter's steady-state tolerance), unless ``general``.
     """
+    if not general and _two_state(problem):
+        return _compiled_rc2(problem)
     Phi, Gamma0, Gamma1, Qd, which = problem.Phi, problem.G0, problem.G1, problem.Qd, problem.which
     u, y, x0, P0, C, D, R = problem.u, problem.y, problem.x0, problem.P0, problem.C, problem.D, problem.R
     f = writable  # read-only arrays (a Dataset's, np.diag's views) would compile a second specialization
@@ -207,14 +250,16 @@ def _compiled(problem: FilterProblem, *, keep: bool) -> tuple[float, int, Filter
     return float(nll + 0.5 * n_obs * _LOG_2PI), n_obs, outs
 
 
-def kalman_filter_arrays(problem: FilterProblem) -> FilterOutput:
+def kalman_filter_arrays(problem: FilterProblem, *, general: bool = False) -> FilterOutput:
     """The compiled filter over ``problem``, with every intermediate result.
 
     ``x0, P0`` are the prior of the state at the first sample (the first measurement is used
     in the likelihood). The observed outputs of each sample are processed one at a time;
-    missing ones (NaN in ``y``) are skipped.
+    missing ones (NaN in ``y``) are skipped. A 2-state, 1-output problem runs the unrolled
+    2-state filter (:func:`rczone.kernels.rc2.filter_rc2`; a small kernel, so a first run that
+    needs a 2-state model's bands does not compile the general one), unless ``general``.
     """
-    nll, n_obs, trace = _compiled(problem, keep=True)
+    nll, n_obs, trace = _compiled(problem, keep=True, general=general)
     return FilterOutput(
         nll=nll,
         innovations=trace.e,

@@ -10,7 +10,9 @@ in a first pass, then runs the filter recursion unrolled for two states in a sec
 the general filter (:func:`rczone.kernels.kalman.kalman_filter`) specialized by hand: the
 same sequential update and time update, the same steady-state rule, so the same ``-log L``
 to rounding (tested against it); it is used only where it is measurably faster
-(``docs/performance.md``), and never for gradients.
+(``docs/performance.md``), and never for gradients. :func:`filter_rc2` is the same recursion (without
+the steady state) over given discrete matrices with every intermediate result kept (what the
+prediction bands of a 2-state model read), a small kernel: a first fit does not compile the general filter.
 
 References
 ----------
@@ -25,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import Rc2Model
+from rczone.kernels.arrays import Dynamics, FilterStart, FilterTrace, Observation, Rc2Model, Series
 from rczone.kernels.discretize import rc2_discretize
 
 
@@ -402,3 +404,105 @@ def simulate_rc2(
                 v += D[i, j] * u[k, j]
             y[k, i] = v
     return 0
+
+
+@njit(cache=True, error_model="numpy", fastmath={"reassoc", "contract"})
+def filter_rc2(
+    dyn: Dynamics, obs: Observation, prior: FilterStart, series: Series, foh: bool, trace: FilterTrace
+) -> tuple[float, int]:
+    """The Kalman filter of a 2-state, 1-output model over given discrete matrices, every intermediate result kept.
+
+    The general filter (:func:`rczone.kernels.kalman.kalman_filter` without derivatives and with
+    a full trace) unrolled for two states and one output, as the forward pass of
+    :func:`rczone.kernels.adjoint.nll_rc2_adjoint`: the same measurement update ``s = c'Pc + r``,
+    ``g = Pc``, ``x += g e/s``, ``P -= g g'/s`` and time update ``x = Phi x + G0 u_k (+ G1
+    u_k+1)``, ``P = Phi P Phi' + Qd`` [1]_. It runs the recursion to the end (no steady state),
+    so its results equal the general filter's within that filter's steady-state tolerance. A
+    small kernel of its own: what a 2-state model's prediction bands need costs a second of
+    compilation instead of the general filter's twenty (``docs/performance.md``).
+
+    Parameters
+    ----------
+    dyn : Dynamics
+        ``Phi, G0, G1, Qd`` of each distinct interval, shapes (K, 2, 2), (K, 2, p), (K, 2, p), (K, 2, 2).
+    obs : Observation
+        ``C`` (1, 2), ``D`` (1, p), ``r`` (1,); the derivatives are not read.
+    prior : FilterStart
+        Mean (2,) and covariance (2, 2) of the state at the first sample; the derivatives are not read.
+    series : Series
+        Inputs (N, p), outputs (N, 1) (NaN where missing), the interval of each step (N - 1,).
+    foh : bool
+        First-order hold of the inputs.
+    trace : FilterTrace
+        Receives, each with N rows: the innovations ``e`` (N, 1) (left as they are where ``y`` is
+        missing), predicted states ``xp`` (N, 2), filtered states ``xf`` (N, 2), predicted
+        covariances ``Pp`` (N, 2, 2), innovation variances ``S`` (N, 1, 1) (also where ``y`` is
+        missing), filtered covariances ``Pf`` (N, 2, 2); ``de`` is not written.
+
+    Returns
+    -------
+    nll : float
+        ``sum 0.5 (log s + e^2/s)`` over the observed samples (without ``0.5 n log 2 pi``); NaN
+        for a non-positive innovation variance.
+    n_obs : int
+        Observed samples; -1 for an invalid model.
+
+    References
+    ----------
+    .. [1] H. Madsen, *Time Series Analysis*, Chapman & Hall/CRC, 2007, section 10.3 (the Kalman filter).
+    """
+    Phi, G0, G1, Qd = dyn
+    u, y, which = series
+    c0, c1, r = obs.C[0, 0], obs.C[0, 1], obs.r[0]
+    n_t = y.shape[0]
+    p = u.shape[1]
+    x_0, x_1 = prior.x0[0], prior.x0[1]
+    p00, p01, p11 = prior.P0[0, 0], 0.5 * (prior.P0[0, 1] + prior.P0[1, 0]), prior.P0[1, 1]
+    nll = 0.0
+    n_obs = 0
+    for k in range(n_t):
+        trace.xp[k, 0], trace.xp[k, 1] = x_0, x_1
+        trace.Pp[k, 0, 0], trace.Pp[k, 0, 1], trace.Pp[k, 1, 0], trace.Pp[k, 1, 1] = p00, p01, p01, p11
+        g0 = p00 * c0 + p01 * c1
+        g1 = p01 * c0 + p11 * c1
+        s = r + c0 * g0 + c1 * g1
+        trace.S[k, 0, 0] = s
+        yk = y[k, 0]
+        if yk == yk:
+            e = yk - c0 * x_0 - c1 * x_1
+            for j in range(p):
+                e -= obs.D[0, j] * u[k, j]
+            if not s > 0.0:
+                return math.nan, -1
+            inv = 1.0 / s
+            x_0 += g0 * e * inv
+            x_1 += g1 * e * inv
+            p00 -= g0 * g0 * inv
+            p01 -= g0 * g1 * inv
+            p11 -= g1 * g1 * inv
+            nll += 0.5 * (math.log(s) + e * e * inv)
+            n_obs += 1
+            trace.e[k, 0] = e
+        trace.xf[k, 0], trace.xf[k, 1] = x_0, x_1
+        trace.Pf[k, 0, 0], trace.Pf[k, 0, 1], trace.Pf[k, 1, 0], trace.Pf[k, 1, 1] = p00, p01, p01, p11
+        if k == n_t - 1:
+            break
+        w = which[k]
+        n0 = Phi[w, 0, 0] * x_0 + Phi[w, 0, 1] * x_1
+        n1 = Phi[w, 1, 0] * x_0 + Phi[w, 1, 1] * x_1
+        for j in range(p):
+            n0 += G0[w, 0, j] * u[k, j]
+            n1 += G0[w, 1, j] * u[k, j]
+            if foh:
+                n0 += G1[w, 0, j] * u[k + 1, j]
+                n1 += G1[w, 1, j] * u[k + 1, j]
+        x_0, x_1 = n0, n1
+        f00, f01, f10, f11 = Phi[w, 0, 0], Phi[w, 0, 1], Phi[w, 1, 0], Phi[w, 1, 1]
+        a0 = f00 * p00 + f01 * p01
+        a1 = f00 * p01 + f01 * p11
+        b0 = f10 * p00 + f11 * p01
+        b1 = f10 * p01 + f11 * p11
+        p00 = Qd[w, 0, 0] + a0 * f00 + a1 * f01
+        p01 = 0.5 * (Qd[w, 0, 1] + Qd[w, 1, 0]) + a0 * f10 + a1 * f11
+        p11 = Qd[w, 1, 1] + b0 * f10 + b1 * f11
+    return nll, n_obs
