@@ -155,3 +155,16 @@ def test_the_four_room_model_of_the_docs_equals_the_general_engine() -> None:
         j_ref, g_ref = slow.value_and_gradient(eta)
         assert j == pytest.approx(j_ref, rel=1e-11)
         np.testing.assert_allclose(g, g_ref, rtol=0, atol=1e-8 * np.linalg.norm(g_ref))
+
+
+def test_the_compile_count_pairs_of_rooms_take_the_compiled_engine() -> None:
+    """The generated two-room pairs whose fits ``tests/unit/kernels/test_compile_once.py`` counts
+    compilations of (a circuit's shares, or apertures) run on the compiled engine, so that test
+    counts the compiled kernels' specializations for models with parameter gains and ties."""
+    from tests.unit.kernels.test_compile_once import ROOMS, rooms_case
+
+    for name in ROOMS:
+        net, frame = rooms_case(name)
+        data = Dataset.from_frame(frame, net, time="time")
+        obj = Objective(net, data, _spec(net, "ml"), "ml")
+        assert obj.engine == "compiled" and obj.compiled.slots.gain_idx.size == 2, name
