@@ -1,13 +1,16 @@
 """When an estimation problem can run as one compiled call, and the arrays it runs on.
 
 A problem qualifies when the network has its plain conductance form (every node
-capacitive, numeric heat gains and ``cp``), every resistor, capacity, noise level and given
+capacitive, numeric ``cp``), every resistor, capacity, noise level and given
 initial state is a constant or proportional to one free parameter (``R1 = Rw/2`` is;
-``R = Ra + Rb`` is not), and the checks the Python path makes on every parameter cannot fail
-unseen: every tied parameter of the network (used by an element or not) is proportional,
-every resistance and capacitance is positive by construction (positive constants, positive
-factors of log-transformed free parameters), and every free parameter that sets an element
-value is log-transformed. Then :mod:`rczone.kernels.problem` computes the cost and its
+``R = Ra + Rb`` is not), every heat-input gain is affine in the free parameters (a circuit's
+shares ``s_1`` and ``1 - s_1``, :mod:`rczone.models.multizone`; packed as the terms of
+``Gb = Gb0 + sum_t k_t theta[idx_t]``, so the gains stay data to one compiled kernel), and the
+checks the Python path makes on every parameter cannot fail unseen: every tied parameter of the
+network (used by an element or not) is affine, and proportional where its kind must be positive
+(resistances, capacitances, magnitudes, times), every such value is positive by construction
+(positive constants, positive factors of log-transformed free parameters), and every free
+parameter that sets an element value is log-transformed. Then :mod:`rczone.kernels.problem` computes the cost and its
 gradient, and :func:`rczone.kernels.neldermead.nelder_mead` minimizes it without
 returning to Python. Anything else returns None and takes the general engine of
 :mod:`rczone.estimation.costs`, with the same results.
@@ -31,7 +34,7 @@ from rczone.kernels.arrays import (
 )
 from rczone.kernels.kalman import STEADY_RTOL
 from rczone.kernels.problem import cost, theta_of_z
-from rczone.network.parameters import proportional_base
+from rczone.network.parameters import POSITIVE_KINDS, affine_tie, proportional_base
 from rczone.network.stochastic import (
     initial_spread_names,
     initial_state_names,
@@ -74,16 +77,19 @@ def _always_valid(objective) -> bool:
     """Whether every parameter value the Python path checks is valid for every free value.
 
     The compiled cost checks only the values it uses; the Python path resolves and checks
-    every declared parameter. They agree when nothing can fail: every tie proportional, every
-    resistance and capacitance a positive multiple of a positive value.
+    every declared parameter. They agree when nothing can fail: every tie affine (finite for
+    finite values), every value of a positive kind a positive multiple of a positive value.
     """
     spec = objective.spec
-    for name, p in objective.network.parameters.items():
-        base = proportional_base(objective.network.parameters, name)
+    params = objective.network.parameters
+    for name, p in params.items():
+        if p.kind not in POSITIVE_KINDS:
+            if affine_tie(params, name) is None:
+                return False
+            continue
+        base = proportional_base(params, name)
         if base is None:
             return False
-        if p.kind not in ("resistance", "capacitance"):
-            continue
         k, b = base
         if b is None:
             sign = k
@@ -94,6 +100,34 @@ def _always_valid(objective) -> bool:
         if not sign > 0:
             return False
     return True
+
+
+def _gain_terms(objective, form) -> tuple[np.ndarray, tuple[np.ndarray, ...]] | None:
+    """``(Gb_const, (state, input, idx, k))``: the parameter gains' constants and their terms in ``theta``.
+
+    Each gain ``(state, input, name)`` of the conductance ``form`` is an affine tie
+    (:class:`rczone.network.parameters.AffineTie`) of base
+    parameters; the constant and the fixed bases' share go to ``Gb_const`` (n, p), each free base
+    is one term. None where a gain is not affine or a base has no value.
+    """
+    spec, params = objective.spec, objective.network.parameters
+    gb = np.array(form.Gb0, dtype=float, copy=True)
+    terms: list[tuple[int, int, int, float]] = []
+    for i, j, name in form.gains:
+        tie = affine_tie(params, name)
+        if tie is None:
+            return None
+        gb[i, j] += tie.constant
+        for base, k in tie.terms:
+            if base in spec.names:
+                terms.append((i, j, spec.names.index(base), k))
+            elif base in spec.fixed:
+                gb[i, j] += k * float(spec.fixed[base])
+            else:
+                return None
+    cols = list(zip(*terms, strict=True)) if terms else [(), (), (), ()]
+    ints = tuple(np.array(c, dtype=np.int64) for c in cols[:3])
+    return gb, (*ints, np.array(cols[3], dtype=float))
 
 
 def _slots(objective, names) -> tuple[np.ndarray, np.ndarray] | None:
@@ -108,6 +142,9 @@ def compiled_problem(objective) -> Problem | None:
     net, data, spec = objective.network, objective.data, objective.spec
     form = net.conductance_form
     if objective.method not in REGISTRY or form is None or not _always_valid(objective):
+        return None
+    gains = _gain_terms(objective, form)
+    if gains is None:
         return None
     states = net.state_names
     elements = []
@@ -147,10 +184,10 @@ def compiled_problem(objective) -> Problem | None:
     return Problem(
         _kind(objective.method),
         ConductanceArrays(
-            form.L, form.P, form.E, form.Gb0, form.Nf, form.Mf, np.array(form.output_state, dtype=np.int64)
+            form.L, form.P, form.E, c(gains[0]), form.Nf, form.Mf, np.array(form.output_state, dtype=np.int64)
         ),
         ProblemData(c(data.t), c(data.m), c(data.u), c(data.y), c(keys), c(which), c(groups)),
-        Slots(*elements[0], *elements[1], *noise[0], *noise[1], *noise[2], x0_idx, x0_k, given),
+        Slots(*elements[0], *elements[1], *noise[0], *noise[1], *noise[2], x0_idx, x0_k, given, *gains[1]),
         SearchBox(c(spec.eta_lower), c(spec.eta_upper), c(spec.log, dtype=bool)),
         penalty,
         ProblemConstants(objective.hold == "foh", float(SYMMETRY_RTOL), float(STEADY_RTOL), fused),

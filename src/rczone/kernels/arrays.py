@@ -246,9 +246,12 @@ class ProblemData(NamedTuple):
 
 
 class Slots(NamedTuple):
-    """Where each element, noise level and initial state takes its value.
+    """Where each element, noise level, initial state and heat-input gain takes its value.
 
-    A slot ``(idx, k)`` has the value ``k * theta[idx]``, or ``k`` when ``idx < 0``.
+    A slot ``(idx, k)`` has the value ``k * theta[idx]``, or ``k`` when ``idx < 0``. The heat-input
+    gains that are parameters are affine in ``theta``, ``Gb = Gb0 + sum_t k_t theta[idx_t] e_i e_j'``
+    (a circuit's last share ``1 - s_1 - s_2`` is three terms: its constant is in ``Gb0``): term ``t``
+    adds ``gain_k[t] * theta[gain_idx[t]]`` to ``Gb[gain_state[t], gain_input[t]]``.
     """
 
     res_idx: np.ndarray
@@ -264,6 +267,10 @@ class Slots(NamedTuple):
     x0_idx: np.ndarray  #: initial state, per state
     x0_k: np.ndarray
     x0_given: np.ndarray  #: bool, given (else derived from the data)
+    gain_state: np.ndarray  #: (ng,) int64, the state (row of ``Gb``) of each gain term
+    gain_input: np.ndarray  #: (ng,) int64, the input (column of ``Gb``)
+    gain_idx: np.ndarray  #: (ng,) int64, the parameter of each term
+    gain_k: np.ndarray  #: (ng,) its coefficient, W per unit input and unit parameter
 
 
 class SearchBox(NamedTuple):

@@ -1,15 +1,17 @@
 """Compiled cost and gradient of a packed estimation problem: from parameter values to ``J`` in one call.
 
-For a network in conductance form (every node capacitive, numeric heat gains and ``cp``)
+For a network in conductance form (every node capacitive, numeric ``cp``)
 whose resistances, capacities, noise levels and initial states are each a constant or
-proportional to one free parameter (the packing is
+proportional to one free parameter, and whose heat-input gains are affine in them (the packing is
 :func:`rczone.estimation.compiled.compiled_problem`), :func:`evaluate`
 
 * maps ``theta`` to the element values (``k * theta[i]`` or a constant) and assembles
-  ``A = -diag(1/c) L' diag(1/R) L``, ``B = diag(1/c) (P' diag(1/R) E + Gb0)``,
+  ``A = -diag(1/c) L' diag(1/R) L``, ``B = diag(1/c) (P' diag(1/R) E + Gb)``,
   ``N = diag(1/c) Nf``, ``M = diag(1/c) Mf`` (:attr:`rczone.network.RCNetwork.conductance_form`),
+  with heat-input gains affine in ``theta``, ``Gb = Gb0 + sum_t k_t theta[idx_t] e_i e_j'`` (a
+  circuit's shares and its last share ``1 - s_1 - ...``; :class:`rczone.kernels.arrays.Slots`),
   and, for the gradient, their exact derivatives (``dA/dR_k = diag(1/c) L_k' L_k / R_k^2``;
-  a capacity scales its row);
+  a capacity scales its row; a gain term adds ``k_t / c_i`` to ``dB[i, j]``);
 * starts the measured states at their first measurement and the others at the steady state
   given them (as :func:`rczone.estimation.costs.auto_initial_state`), unless ``x0`` values
   are given, and differentiates that too;
@@ -195,7 +197,7 @@ def assemble_derivatives(
     form : ConductanceArrays
         The network in conductance form.
     slots : Slots
-        The resistances' and capacities' slots are read.
+        The resistances', capacities' and heat-input gains' slots are read.
     res : ndarray, shape (nr,)
         Resistances, K/W.
     mod : Assembled
@@ -231,6 +233,11 @@ def assemble_derivatives(
             if P[k, i] != 0.0:
                 for j in range(p):
                     dB0[d, i, j] -= P[k, i] * w * E[k, j] / cap[i]
+    for t in range(slots.gain_state.shape[0]):
+        d = slots.gain_idx[t]
+        if d >= 0:  # B0 = Gb / c: dB0/dtheta = k / c in the gain's place
+            i = slots.gain_state[t]
+            dB0[d, i, slots.gain_input[t]] += slots.gain_k[t] / cap[i]
     for i in range(n):
         d = cap_idx[i]
         if d < 0:
@@ -441,6 +448,13 @@ def assembled(theta: np.ndarray, prob, q: int) -> tuple[Assembled, AssembledDeri
     n = prob.form.L.shape[1]
     ny = out_state.shape[0]
     A0, N, B0, M = assemble(prob.form, vals.res, vals.cap)
+    # the heat-input gains that are parameters, affine in theta (Slots)
+    gain_state, gain_input = sl.gain_state, sl.gain_input
+    for t in range(gain_state.shape[0]):
+        i = gain_state[t]
+        gain = _slot(theta, sl.gain_idx[t], sl.gain_k[t])
+        valid = valid and abs(gain) < math.inf
+        B0[i, gain_input[t]] += gain / vals.cap[i]
     qc = np.zeros(n)
     P0 = np.zeros((n, n))
     r = np.ones(ny)

@@ -202,6 +202,8 @@ class ConductanceForm:
     resistances: tuple
     capacities: tuple
     output_state: tuple[int, ...]
+    gains: tuple[tuple[int, int, str], ...] = ()
+    """Heat-input gains that are parameters: ``(state, input, parameter)``, added to ``Gb0``."""
 
 
 class BilinearMatrices(NamedTuple):
@@ -790,12 +792,13 @@ class RCNetwork:
         """The network as constant arrays and parameter lists, for compiled assembly.
 
         ``G = L' diag(1/R) L``, ``Gb = P' diag(1/R) E + Gb0``, ``A = -G / c``, ``B = Gb / c``,
-        ``N_k = Nf_k / c``, ``M_k = Mf_k / c`` (rows divided by the capacities). Available when
-        every node is capacitive (no Kron reduction) and heat-input gains and supply-air ``cp``
-        are numbers; None otherwise.
+        ``N_k = Nf_k / c``, ``M_k = Mf_k / c`` (rows divided by the capacities); the heat-input
+        gains that are parameters (a circuit's shares, a window's aperture) are listed in
+        ``gains`` and add their values to ``Gb``. Available when every node is capacitive (no Kron
+        reduction) and supply-air ``cp`` are numbers; None otherwise.
         """
         st = self._structure
-        if st["zs"].size or st["heat"] or st["air"] or self.disturbances:
+        if st["zs"].size or st["air"] or self.disturbances:
             return None
         return ConductanceForm(
             L=st["L"],
@@ -807,6 +810,7 @@ class RCNetwork:
             resistances=tuple(st["res"]),
             capacities=tuple(st["cap"]),
             output_state=tuple(self.state_names.index(o) for o in self.outputs),
+            gains=tuple((int(i), int(j), g) for i, j, g in st["heat"]),
         )
 
     def conductance_values(self, theta: Mapping[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:

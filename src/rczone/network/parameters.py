@@ -339,50 +339,95 @@ def _evaluate(expr: str, values: Mapping[str, Number]) -> Number:
     return v
 
 
+@dataclass(frozen=True)
+class AffineTie:
+    """A parameter as an affine function of base parameters: ``constant + sum k * value(base)``.
+
+    ``terms`` holds ``(base, k)`` pairs, each base once, in the order the expression first names
+    it, without zero coefficients; a base parameter is ``AffineTie(0, ((name, 1),))``. What the
+    compiled costs hold instead of an expression (:func:`affine_tie`).
+    """
+
+    constant: float
+    terms: tuple[tuple[str, float], ...]
+
+
+def affine_tie(params: Mapping[str, Parameter], name: str) -> AffineTie | None:
+    """The parameter ``name`` as an :class:`AffineTie` of base parameters, or None where it is not affine.
+
+    Follows chains of ties (``R1 = Rw/2``, ``R2 = 3 * R1 / 4``) and sums of them (a circuit's
+    last share ``1 - s_1 - s_2``, :mod:`rczone.models.multizone`): numbers, names, ``+``, ``-``,
+    products with a number and divisions by a nonzero number. A product or quotient of two
+    parameters, a power or a non-finite constant is None. Compiled costs use this to go from the
+    free parameters to every element value and heat-input gain without evaluating expressions.
+    """
+    memo: dict[str, tuple[float, dict[str, float]] | None] = {}
+
+    def of(name: str) -> tuple[float, dict[str, float]] | None:
+        # once per parameter: a chain of ties that each use the previous one twice (S1 = S0*S0,
+        # S2 = S1*S1, ...) would otherwise be walked 2**n times
+        if name not in memo:
+            p = params[name]
+            memo[name] = walk(ast.parse(p.expr, mode="eval").body) if p.is_tied else (0.0, {name: 1.0})
+        return memo[name]
+
+    def scaled(a: tuple[float, dict[str, float]], k: float) -> tuple[float, dict[str, float]]:
+        return a[0] * k, {b: c * k for b, c in a[1].items()}
+
+    def walk(node: ast.AST) -> tuple[float, dict[str, float]] | None:
+        # the expressions were validated (and so bounded, and their chains by MAX_TIE_CHAIN) when
+        # the parameters were declared
+        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
+            return float(node.value), {}
+        if isinstance(node, ast.Name):
+            return of(node.id) if node.id in params else None
+        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+            inner = walk(node.operand)
+            return None if inner is None else scaled(inner, -1.0 if isinstance(node.op, ast.USub) else 1.0)
+        if not isinstance(node, ast.BinOp):
+            return None
+        a, b = walk(node.left), walk(node.right)
+        if a is None or b is None:
+            return None
+        if isinstance(node.op, (ast.Add, ast.Sub)):
+            sign = 1.0 if isinstance(node.op, ast.Add) else -1.0
+            terms = dict(a[1])
+            for base, k in b[1].items():
+                terms[base] = terms.get(base, 0.0) + sign * k
+            return a[0] + sign * b[0], terms
+        if isinstance(node.op, ast.Mult) and not (a[1] and b[1]):
+            return scaled(b, a[0]) if not a[1] else scaled(a, b[0])
+        if isinstance(node.op, ast.Div) and not b[1] and b[0] != 0.0:
+            return scaled(a, 1.0 / b[0])
+        return None
+
+    found = walk(ast.Name(id=name)) if name in params else None
+    if found is None:
+        return None
+    constant, terms = found
+    kept = tuple((b, k) for b, k in terms.items() if k != 0.0)
+    if not all(math.isfinite(v) for v in (constant, *(k for _, k in kept))):
+        return None
+    return AffineTie(constant, kept)
+
+
 def proportional_base(params: Mapping[str, Parameter], name: str) -> tuple[float, str | None] | None:
     """``(k, base)`` with ``value(name) = k * value(base)`` for every value of ``base``.
 
     A base parameter is ``(1, name)``; a tie such as ``R1 = Rw/2`` is ``(0.5, "Rw")``, also
     through chains of ties; an expression of numbers only is ``(value, None)``. Anything else
-    (a sum of parameters, a power, a product of two parameters) is None. Compiled costs use
-    this to go from the free parameters to every element value without evaluating
-    expressions.
+    (a sum of parameters, a power, a product of two parameters) is None: the special case of
+    :func:`affine_tie` that resistances and capacities, positive by construction, may take.
     """
-
-    memo: dict[str, tuple[float, str | None] | None] = {}
-
-    def of(name: str) -> tuple[float, str | None] | None:
-        # once per parameter: a chain of ties that each use the previous one twice (S1 = S0*S0,
-        # S2 = S1*S1, ...) would otherwise be walked 2**n times
-        if name not in memo:
-            p = params[name]
-            memo[name] = walk(ast.parse(p.expr, mode="eval").body) if p.is_tied else (1.0, name)
-        return memo[name]
-
-    def walk(node: ast.AST) -> tuple[float, str | None] | None:
-        # the expressions were validated (and so bounded, and their chains by MAX_TIE_CHAIN) when
-        # the parameters were declared
-        if isinstance(node, ast.Constant) and isinstance(node.value, (int, float)):
-            return float(node.value), None
-        if isinstance(node, ast.Name):
-            return of(node.id) if node.id in params else None
-        if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-            inner = walk(node.operand)
-            if inner is None:
-                return None
-            return (-inner[0] if isinstance(node.op, ast.USub) else inner[0]), inner[1]
-        if isinstance(node, ast.BinOp) and isinstance(node.op, (ast.Mult, ast.Div)):
-            a, b = walk(node.left), walk(node.right)
-            if a is None or b is None or (a[1] is not None and b[1] is not None):
-                return None
-            if isinstance(node.op, ast.Mult):
-                return a[0] * b[0], a[1] or b[1]
-            if b[1] is not None or b[0] == 0.0:
-                return None
-            return a[0] / b[0], a[1]
+    tie = affine_tie(params, name)
+    if tie is None:
         return None
-
-    return of(name)
+    if not tie.terms:
+        return tie.constant, None
+    if len(tie.terms) == 1 and tie.constant == 0.0:
+        base, k = tie.terms[0]
+        return k, base
+    return None
 
 
 MAX_TIE_CHAIN = 32

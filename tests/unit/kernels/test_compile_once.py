@@ -29,8 +29,9 @@ GENERAL = ("first-order", "Ti")  # one state: the general packed kernels
 #: Two generated two-room joint models of one size (4 states, 2 outputs; ``rczone models generate``,
 #: docs/multizone.md): one heating circuit split between the rooms by an estimated share (a tied
 #: ``1 - s``), or a heater per room and the sun through an aperture per room. Both have heat-input
-#: gains that are parameters, so both take the general engine (the four-room model of
-#: docs/multizone.md does too), with several outputs: paths the one-room pairs do not take.
+#: gains that are parameters, packed as affine terms of the compiled problem (its ``Slots.gain_*``:
+#: the shares and apertures are data, not structure), with several outputs: paths the one-room
+#: pairs do not take.
 ROOMS = ("rooms-one-circuit", "rooms-heaters-and-sun")
 
 
