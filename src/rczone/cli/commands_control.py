@@ -154,6 +154,11 @@ def control_test(
     if emulator != "virtual":  # a registered or plug-in emulator, with the options every plant has
         from rczone.emulators.registry import make_plant
 
+        if compare is not None or study is not None or report_dir is not None or forecast is not None:
+            raise ParameterError(
+                "--compare, --study, --report and --forecast are for the virtual building and energyplus;"
+                f" on {emulator!r} run each controller alone"
+            )
         limit = {} if heat_limit is None else {"heat_limit": heat_limit}
         plant = make_plant(emulator, days=days, seed=seed, price=price, **limit)
         res = closed_loop_test(

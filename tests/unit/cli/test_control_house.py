@@ -74,6 +74,7 @@ def test_the_mpc_keeps_the_band_at_least_as_well_as_the_thermostat_over_two_seed
         (["--controller", "oracle"], "oracle"),
         (["--controller", "mpc", "--model", "second-order"], "heater input"),
         (["--emulator", "virtual", "--heat-limit", "100"], "--heat-limit"),
+        (["--compare", "thermostat,mpc"], "run each controller alone"),
     ],
 )
 def test_house_mistakes_are_one_line_and_exit_2(tmp_path, capsys, extra, match):
@@ -83,3 +84,35 @@ def test_house_mistakes_are_one_line_and_exit_2(tmp_path, capsys, extra, match):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and match in err
     assert not out.exists()
+
+
+def heater_record(path, days=4, seed=5):
+    """A 10-min record of the house under random heater steps (hourly, 0 to 3 kW): a heater test."""
+    plant = HousePlant(days=days, seed=seed)
+    rng = np.random.default_rng(1)
+    rows, level = [], 0.0
+    while plant.time < plant.end - 1e-9:
+        if plant.k % 60 == 0:
+            level = float(rng.choice([0.0, 1000.0, 2000.0, 3000.0]))
+        to = plant.measure()["To"]
+        y = plant.step({"P_house": level})
+        rows.append((y["time"], y["Ti_house"], to, level))
+    t, ti, to, ph = np.array(rows[9::10]).T
+    stamps = np.datetime64("2026-01-01T00:00") + ((t - t[0]) * 1e3).astype("timedelta64[ms]")
+    lines = ["time,Ti,To,Ph"] + [f"{s},{a:.4f},{b:.4f},{c:.1f}" for s, a, b, c in zip(stamps, ti, to, ph)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.slow
+def test_a_model_fitted_on_a_heater_record_runs_the_house_from_the_cli(tmp_path, plants):
+    # the user's path: a heater test, `rczone fit` of the TiTe+heater family, then the closed loop
+    heater_record(tmp_path / "heater.csv")
+    fitted = tmp_path / "fitted.json"
+    fit = ["fit", str(tmp_path / "heater.csv"), "--model", "TiTe+heater", "--save-model", str(fitted)]
+    assert main([*fit, "--no-profiles", "--quiet"]) in (0, 3)  # 3: Te collapses (a 1-state house)
+    out = tmp_path / "mpc.json"
+    args = ["control-test", "--emulator", "house", "--model", str(fitted), "--controller", "mpc"]
+    assert main([*args, "--days", "1", "--heat-limit", str(LIMIT), "--json", str(out)]) == 0
+    held_to_the_limit(plants[-1])
+    thermostat = run(tmp_path, "thermostat", 0, 1)
+    assert json.loads(out.read_text())["comfort_Kh"] <= thermostat["comfort_Kh"]
