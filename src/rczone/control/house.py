@@ -24,7 +24,8 @@ Names (SI; ``house`` is the zone):
   per control interval;
 * **KPIs**: ``comfort_Kh`` (the true room temperature's distance outside the band over the
   occupied hours), ``energy_kWh`` and ``cost`` (the delivered heat, weighted by the price),
-  ``peak_power_kW``, ``constraint_violations`` (commands outside the heater's limits).
+  ``peak_power_kW``, ``constraint_violations`` (commands outside the heater's limits); with a model,
+  its prediction errors (:meth:`HousePlant.prediction_scores`).
 
 The comfort band: 20-23 degC while occupied (7 am to 7 pm), 15-26 degC otherwise.
 
@@ -199,9 +200,31 @@ class HousePlant:
         n = forecast_steps(horizon, iv)
         return {f"heat_min_{ZONE}": np.zeros(n), f"heat_max_{ZONE}": np.full(n, self.heat_limit)}
 
-    def prediction_scores(self, values, t, model, *, zone=ZONE, noise_floor=0.0) -> dict[str, None]:
-        """Not scored on the house (the prediction scores read supply-air meters): None each."""
-        return dict.fromkeys(("prediction_rmse_K", "prediction_1h_rmse_K", "open_loop_rmse_K"))
+    def prediction_scores(
+        self, values: Mapping[str, np.ndarray], t: np.ndarray, model, *, zone: str = ZONE, noise_floor: float
+    ) -> dict[str, float | None]:
+        """The model's prediction errors on the run's measurements (:mod:`rczone.control.prediction`).
+
+        The outdoor temperature and the heater's metered power (the model's heater input,
+        :func:`rczone.control.heating.heater_input`) averaged over each 10-min interval.
+        """
+        from rczone.control.heating import heater_input
+        from rczone.control.prediction import PREDICTION_DT, averaged_scores
+
+        k0 = int(np.searchsorted(t, 0.0))
+        step = round(PREDICTION_DT / STEP)
+        n = (len(t) - 1 - k0) // step
+
+        def avg(a: np.ndarray) -> np.ndarray:
+            return a[k0 : k0 + n * step].reshape(n, step).mean(axis=1)
+
+        cols = {"To": avg(values["To"][:-1]), heater_input(model): avg(values[f"P_{zone}"][1:])}
+        defaults = model.inputs.defaults
+        u = np.column_stack(
+            [cols.get(c, np.full(n, defaults.get(c, 0.0))) for c in model.network.input_names]
+        )
+        y = values[f"Ti_{zone}"][k0 : k0 + n * step : step]
+        return averaged_scores(u, np.zeros((n, 0)), y, model, noise_floor=noise_floor)
 
     def series(self, zone: str = ZONE) -> dict[str, np.ndarray]:
         """The scored part of the run so far: ``t``, true ``Ti``, the band, delivered and commanded power."""

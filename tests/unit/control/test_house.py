@@ -3,9 +3,12 @@
 import numpy as np
 import pytest
 
+from rczone.control.closedloop import closed_loop_test
 from rczone.control.house import HousePlant
+from rczone.control.registry import ControllerOptions, make_controller
 from rczone.emulators.registry import emulator_names, make_plant
 from rczone.errors import ParameterError
+from rczone.models import load_model
 
 
 def test_a_held_power_settles_at_the_steady_state_of_the_envelope():
@@ -45,3 +48,18 @@ def test_bad_options_are_one_error(options, match):
 def test_an_unknown_action_is_refused():
     with pytest.raises(ParameterError, match="P_house"):
         HousePlant(days=0.01).step({"m_house": np.float64(0.1)})
+
+
+def test_the_prediction_scores_tell_the_house_own_model_from_the_library_one():
+    # the plant's own model predicts it to the sensor's noise; the built-in values (10-15 % off) do not
+    own = HousePlant(days=1.0, seed=2)
+    truth = closed_loop_test(own, "thermostat", model=own.truth).scores
+    library = closed_loop_test(HousePlant(days=1.0, seed=2), "thermostat", model=load_model("TiTh+heater"))
+    assert truth["open_loop_rmse_K"] < 0.1 < 0.5 < library.scores["open_loop_rmse_K"]
+
+
+def test_the_controllers_get_the_plant_heater_limit():
+    plant = make_plant("house", days=0.1, heat_limit=1200.0)
+    mpc = make_controller("mpc", plant, ControllerOptions(load_model("TiTe+heater")))
+    assert dict(mpc.mpc.settings.heat_limits) == {"Ph": (0.0, 1200.0)}
+    assert make_controller("thermostat", plant).limits == (0.0, 1200.0)
