@@ -1,5 +1,5 @@
-"""``rczone control-test``: run a controller on a zone of the virtual building or of an EnergyPlus
-prototype (``--emulator energyplus``), and score it."""
+"""``rczone control-test``: run a controller on a zone of the virtual building, of an EnergyPlus
+prototype (``--emulator energyplus``) or of a heated house (``--emulator house``), and score it."""
 
 from __future__ import annotations
 
@@ -59,8 +59,9 @@ def control_test(
         str,
         typer.Option(
             "--emulator",
-            help="virtual (the built-in building), energyplus, or a registered or plug-in emulator"
-            " (entry-point group rczone.emulators; given --days, --seed and --price).",
+            help="virtual (the built-in building), energyplus, house (a room with an electric heater), or a"
+            " registered or plug-in emulator (entry-point group rczone.emulators; given --days, --seed and"
+            " --price).",
         ),
     ] = "virtual",
     building: Annotated[
@@ -75,6 +76,14 @@ def control_test(
         str | None, typer.Option("--zone", help="energyplus: the zone the controller runs.")
     ] = None,
     step: Annotated[int, typer.Option("--step", help="energyplus: the plant's step, minutes.")] = 15,
+    heat_limit: Annotated[
+        float | None,
+        typer.Option(
+            "--heat-limit",
+            help="house: the heater's largest power, W (default 3000); the MPC and the thermostat are"
+            " both held to it.",
+        ),
+    ] = None,
     margin: Annotated[
         float | None,
         typer.Option("--margin", help="energyplus mpc: how far inside the comfort band it aims, K (0.1)."),
@@ -123,6 +132,10 @@ def control_test(
     from rczone.emulators.registry import EMULATORS
 
     EMULATORS.factory(emulator)  # an unknown name (or a plug-in that fails to load) is one line
+    if heat_limit is not None and emulator in ("virtual", "energyplus"):
+        raise ParameterError(
+            f"--heat-limit is for a heated zone (--emulator house); the {emulator} building has VAV boxes"
+        )
     zm = model(model_spec)
     out = out_console(json_out)
     if emulator == "energyplus":
@@ -141,7 +154,13 @@ def control_test(
     if emulator != "virtual":  # a registered or plug-in emulator, with the options every plant has
         from rczone.emulators.registry import make_plant
 
-        plant = make_plant(emulator, days=days, seed=seed, price=price)
+        if compare is not None or study is not None or report_dir is not None or forecast is not None:
+            raise ParameterError(
+                "--compare, --study, --report and --forecast are for the virtual building and energyplus;"
+                f" on {emulator!r} run each controller alone"
+            )
+        limit = {} if heat_limit is None else {"heat_limit": heat_limit}
+        plant = make_plant(emulator, days=days, seed=seed, price=price, **limit)
         res = closed_loop_test(
             plant, controller, model=zm, disturbance=not no_disturbance, noise_floor=noise_floor
         )

@@ -82,11 +82,20 @@ class ClosedLoopResult:
             f"closed-loop test: {st['controller']} on the {st['scenario']} scenario, {st['days']} day(s), "
             f"seed {st['seed']}, model {st['model']}, {st.get('forecast', 'measured')} forecast",
             f"  comfort      {s['comfort_Kh']:.2f} K h outside the band (occupied hours)",
-            f"  energy       {s['energy_kWh']:.2f} kWh (reheat {s['reheat_kWh']:.2f}, cooling "
-            f"{s['cooling_kWh']:.2f}, fan {s['fan_kWh']:.2f})",
-            f"  peak flow    {s['peak_flow_kg_s']:.3f} kg/s; {s['constraint_violations']} step(s) outside"
-            " the zone's limits",
         ]
+        if "reheat_kWh" in s:
+            lines += [
+                f"  energy       {s['energy_kWh']:.2f} kWh (reheat {s['reheat_kWh']:.2f}, cooling "
+                f"{s['cooling_kWh']:.2f}, fan {s['fan_kWh']:.2f})",
+                f"  peak flow    {s['peak_flow_kg_s']:.3f} kg/s; {s['constraint_violations']} step(s) outside"
+                " the zone's limits",
+            ]
+        else:  # a heated zone (rczone.control.house)
+            lines += [
+                f"  energy       {s['energy_kWh']:.2f} kWh of heat (cost {s['cost']:.2f})",
+                f"  peak power   {s['peak_power_kW']:.2f} kW; {s['constraint_violations']} step(s) outside"
+                " the heater's limits",
+            ]
         if s.get("prediction_rmse_K") is not None:
             lines.append(
                 f"  prediction   {s['prediction_rmse_K']:.3f} K RMSE 10 min ahead (filter), "

@@ -108,13 +108,21 @@ def prediction_scores(
         too short to score, under two hours).
     """
     u, m, y = _averaged(values, t, zone, model)
+    return averaged_scores(u, m[:, None], y, model, noise_floor=noise_floor)
+
+
+def averaged_scores(
+    u: np.ndarray, m: np.ndarray, y: np.ndarray, model: ZoneModel, *, noise_floor: float = SENSOR_RESOLUTION_K
+) -> dict[str, float | None]:
+    """The three prediction errors from inputs ``u`` (n, p), flows ``m`` (n, nf) and the room
+    temperature ``y`` (n,), averaged over :data:`PREDICTION_DT` (see :func:`prediction_scores`)."""
     n = len(y)
     if n < SETTLE + K_STEPS + 1:
         return dict.fromkeys(("prediction_rmse_K", "prediction_1h_rmse_K", "open_loop_rmse_K"))
     cm = ControlModel(model)
     cm = ControlModel(model, noise=floored(cm.noise, noise_floor))
     obs = KalmanObserver(cm)
-    fr = obs.filter(PREDICTION_DT * np.arange(n), u, m[:, None], y[:, None], obs.prior(np.array([y[0]])))
+    fr = obs.filter(PREDICTION_DT * np.arange(n), u, m, y[:, None], obs.prior(np.array([y[0]])))
     c = cm.matrices
 
     def advance(x: np.ndarray, i: int) -> np.ndarray:

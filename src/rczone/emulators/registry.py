@@ -5,7 +5,9 @@ the emulator owns its options, as a method does. Built in: ``virtual`` (the 152-
 building, :class:`rczone.control.virtualplant.VirtualPlant`: ``season``, ``days``, ``seed``,
 ``price``, ``comfort_band``, ``forecast``) and ``energyplus`` (an ASHRAE prototype run by
 EnergyPlus, :class:`rczone.emulators.plant.EnergyPlusPlant`: ``building``, ``weather``, ``zones``,
-``start``, ``days``, ``step_minutes``, ``seed``; the optional extra ``rczone[energyplus]``).
+``start``, ``days``, ``step_minutes``, ``seed``; the optional extra ``rczone[energyplus]``) and
+``house`` (a room heated by an electric heater, :class:`rczone.control.house.HousePlant`:
+``days``, ``seed``, ``price``, ``heat_limit``).
 :func:`register_emulator` adds one in Python; a package adds one with an entry point of the group
 ``rczone.emulators`` (:mod:`rczone.control.plugins`).
 """
@@ -43,6 +45,7 @@ def _load(target: str) -> Callable[..., Plant]:
 _BUILTINS = {
     "virtual": _lazy("rczone.control.virtualplant:VirtualPlant"),
     "energyplus": _lazy("rczone.emulators.plant:EnergyPlusPlant"),
+    "house": _lazy("rczone.control.house:HousePlant"),
 }
 
 
