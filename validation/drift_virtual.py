@@ -112,6 +112,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first-seed", type=int, default=200)
     ap.add_argument("--out", type=Path, default=Path("validation-output"))
+    ap.add_argument(
+        "--cusum-h", type=float, help="the CUSUM's decision interval instead of rczone's (a trade-off study)"
+    )
     ap.add_argument("--doc", type=Path, help="write the table into this Markdown file, between the markers")
     ap.add_argument(
         "--table-only", action="store_true", help="the table of <out>/drift_virtual.json, no runs"
@@ -125,6 +128,10 @@ def main(argv: list[str] | None = None) -> int:
         if args.doc:
             write_doc(args.doc, table)
         return 0
+    if args.cusum_h is not None:
+        import rczone.calibration.drift as drift
+
+        drift.CUSUM_H = args.cusum_h
     args.out.mkdir(parents=True, exist_ok=True)
     model = true_model(args.out)
     results: dict = {name: [] for name, _, _ in CASES}
