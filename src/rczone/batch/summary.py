@@ -76,7 +76,7 @@ def _drifted(ok: pd.DataFrame) -> list[dict]:
     """The calibrations whose own record shows drift (:func:`rczone.calibration.drift.record_drift`)."""
     if "drift" not in ok or not len(ok):
         return []
-    hit = ok[ok["drift"].fillna(False).astype(bool)]
+    hit = ok[ok["drift"].map(lambda v: v is True or v == 1.0)]  # None/NaN: not tested
     return [
         {"zone": r.zone, "method": r.method, "since_s": json_number(r.drift_since_s), "tests": r.drift_tests}
         for r in hit.itertuples()
