@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -134,6 +135,7 @@ def fit_kstep(
     hold: str = "zoh",
     rng: np.random.Generator | None = None,
     max_evals: int = 200,
+    progress: Any = None,
 ) -> KStepFit:
     """Fit ``network`` to ``data`` by the k-step criterion over ``horizons`` (see the module notes).
 
@@ -151,6 +153,10 @@ def fit_kstep(
         For the likelihood fit's global search.
     max_evals : int
         Most criterion evaluations of the local search.
+    progress : object, optional
+        Told the stage (``progress("...")``, when callable) and ``progress.advance(done, max_evals)``
+        after each evaluation of the criterion (the likelihood fit reports its own search); None:
+        nothing.
 
     Returns
     -------
@@ -176,8 +182,14 @@ def fit_kstep(
     j0 = kstep_cost(network, base, data, hs, hold=hold).value
     count = [0]
 
+    if callable(progress):
+        progress(f"k-step criterion at horizons {', '.join(map(str, hs))} from the ML fit")
+    advance = getattr(progress, "advance", None)
+
     def f(eta: np.ndarray) -> tuple[float, np.ndarray]:
         count[0] += 1
+        if advance is not None:
+            advance(min(count[0], max_evals), max_evals)
         theta = np.exp(eta)
         try:
             c = kstep_cost(network, {**base, **dict(zip(names, theta))}, data, hs, wrt=names, hold=hold)

@@ -137,3 +137,30 @@ def test_a_kstep_fit_lowers_its_criterion_and_finds_the_truth_on_data_of_its_own
     assert np.all(np.abs(at.gradient * np.array([2e-3, 1e-2])) < 1e-3 * res.objective)  # a stationary point
     assert set(res.to_dict()) >= {"horizons", "values", "std_error", "objective_K2", "noise_scale"}
     assert "k-step fit" in res.summary() and list(res.to_frame().name) == list(res.std_error)
+
+
+def test_the_k_step_search_reports_its_stage_and_evaluations(tmp_path):
+    """Issue 37: the k-step search, after the likelihood fit's own progress, says what it does."""
+    from rczone.estimation.fit import fit
+    from rczone.estimation.kstep_fit import fit_kstep
+
+    class Recorder:
+        def __init__(self):
+            self.stages, self.steps = [], []
+
+        def __call__(self, message):
+            self.stages.append(message)
+
+        def advance(self, done, total=None):
+            self.steps.append((done, total))
+
+    (tmp_path / "zone.toml").write_text(MODEL)
+    model = read_model_file(tmp_path / "zone.toml")
+    data = dataset(model, virtual_zone(5, days=1.0))
+    ml = fit(model.network, data, method="ml", n_starts=1)
+    rec = Recorder()
+    res = fit_kstep(model.network, data, horizons=(1, 12), ml=ml, max_evals=4, progress=rec)
+    assert rec.stages == ["k-step criterion at horizons 1, 12 from the ML fit"]
+    done = [d for d, _ in rec.steps]
+    assert done == sorted(done) and done[0] == 1 and {t for _, t in rec.steps} == {4}
+    assert len(rec.steps) == res.n_evals

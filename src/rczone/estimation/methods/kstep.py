@@ -62,6 +62,7 @@ def run(problem: FitProblem, options: KStepOptions, rng: np.random.Generator):
         ml=ml,
         hold=problem.hold,
         max_evals=problem.max_evals or 200,
+        progress=problem.progress,
     )
     theta = np.array([res.values[n] for n in problem.spec.names])
     out = point_result(
