@@ -18,14 +18,16 @@ on), 60 steps (1 h) and 360 steps (6 h, the MPC's whole horizon).
 Both models then drive the reference MPC in one :func:`rczone.control.comparison.compare` per
 season: the same seeds, plant, limits, forecasts and observer settings; the only difference is the
 model (its R, C and noise levels, hence also its observer's gains). The k-step entry is paired
-against the ML entry seed by seed; the oracle (the MPC with the plant's true model, state and
-weather) runs beside them as the limit. The two fits are also scored on the closed-loop night A
-(data neither fit saw): k-step RMSE at 10 min, 1 h and 6 h, the first hour skipped.
+against the ML entry seed by seed; the oracle (the MPC with the 2-state model of the zone's true
+construction, its true state, the perfect forecast and the true gains) runs beside them as the
+limit. The two fits are also scored on the closed-loop night A (data neither fit saw): k-step RMSE
+at 10 min, 1 h and 6 h, the first hour skipped.
 
-Prints two Markdown tables and pastes them between ``<!-- table:kstep-closed-loop -->`` and
+Prints two Markdown tables and pastes them between the ``<!-- table:kstep-closed-loop -->`` and
 ``<!-- table:kstep-closed-loop-fits -->`` markers of ``--page`` (with the command, the date and the
-load), and writes ``<out>/closed_loop_kstep.json``. Each one-day MPC run takes some 10-20 s of
-CPU; the defaults make 24 runs and two fits.
+load) after the fits and again after each season, so that a run stopped early leaves what it
+finished; writes ``<out>/closed_loop_kstep.json`` likewise. The fits take some 2 minutes of CPU,
+each one-day MPC run some 10-40 s; the defaults make 24 runs.
 """
 
 from __future__ import annotations
@@ -160,19 +162,24 @@ def stamp(argv: list[str], cpu_s: float) -> str:
     return f"`{cmd}` (run {day}; {cpu_s / 60:.0f} min of CPU, load averages {load[0]:.1f} / {load[2]:.1f} (1 / 15 min) on {os.cpu_count()} cores at the end)"
 
 
-def run(seeds, seasons, days: float, horizons, oracle: bool) -> dict:
-    """The fits, their criterion and held-out RMSE, and one comparison per season."""
+def run(seeds, seasons, days: float, horizons, oracle: bool, save) -> dict:
+    """The fits, their criterion and held-out RMSE, and one comparison per season.
+
+    ``save`` is called with what is done so far after the fits and after every season.
+    """
     models = fits(horizons)
     rmse = {label: held_out_rmse(zm) for label, zm in models.items()}
     crit = {label: criterion(zm, horizons) for label, zm in models.items()}
+    out = {"models": models, "rmse": rmse, "criterion": crit, "results": {}}
+    save(out)
     entries = [Entry(ML, "mpc", models[ML]), Entry(KSTEP, "mpc", models[KSTEP])]
     entries += [Entry(ORACLE, "oracle")] if oracle else []
-    results = {}
     for season in seasons:
         t0 = time.process_time()
-        results[season] = compare(entries, seeds, scenario=Scenario(season, days=days))
-        print(f"{season}: {time.process_time() - t0:.0f} s CPU\n{results[season].summary()}", flush=True)
-    return {"models": models, "rmse": rmse, "criterion": crit, "results": results}
+        out["results"][season] = cmp = compare(entries, seeds, scenario=Scenario(season, days=days))
+        print(f"{season}: {time.process_time() - t0:.0f} s CPU\n{cmp.summary()}", flush=True)
+        save(out)
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -189,25 +196,28 @@ def main(argv: list[str] | None = None) -> int:
     seeds = [int(s) for s in a.seeds.split(",")]
     horizons = tuple(int(h) for h in a.horizons.split(","))
     t0 = time.process_time()
-    out = run(seeds, a.seasons.split(","), a.days, horizons, not a.no_oracle)
-    models, rmse, crit, results = out["models"], out["rmse"], out["criterion"], out["results"]
-    tables = {
-        "kstep-closed-loop": f"{stamp(argv, time.process_time() - t0)}\n\n{kpi_table(results)}",
-        "kstep-closed-loop-fits": fits_table(models, rmse, crit),
-    }
-    for name, text in tables.items():
-        print(f"\n{block(name, text)}")
-    write_json_atomic(
-        a.out / "closed_loop_kstep.json",
-        {
-            "horizons": list(horizons),
-            "fits": {lab: {"theta": dict(zm.theta), "noise": dict(zm.noise), "criterion_C_K2": crit[lab], "rmse_A_K": rmse[lab]} for lab, zm in models.items()},
-            "paired": {s: {k: paired(c, k) for k in TABLE_KPIS} for s, c in results.items()},
-            "comparisons": {s: c.to_dict() for s, c in results.items()},
-        },
-    )  # fmt: skip
-    if str(a.page) != "none":
-        write_text_atomic(a.page, paste(a.page.read_text(), tables))
+
+    def save(out: dict) -> None:
+        models, rmse, crit, results = out["models"], out["rmse"], out["criterion"], out["results"]
+        tables = {
+            "kstep-closed-loop": f"{stamp(argv, time.process_time() - t0)}\n\n{kpi_table(results)}",
+            "kstep-closed-loop-fits": fits_table(models, rmse, crit),
+        }
+        for name, text in tables.items():
+            print(f"\n{block(name, text)}", flush=True)
+        write_json_atomic(
+            a.out / "closed_loop_kstep.json",
+            {
+                "horizons": list(horizons),
+                "fits": {lab: {"theta": dict(zm.theta), "noise": dict(zm.noise), "criterion_C_K2": crit[lab], "rmse_A_K": rmse[lab]} for lab, zm in models.items()},
+                "paired": {s: {k: paired(c, k) for k in TABLE_KPIS} for s, c in results.items()},
+                "comparisons": {s: c.to_dict() for s, c in results.items()},
+            },
+        )  # fmt: skip
+        if str(a.page) != "none":
+            write_text_atomic(a.page, paste(a.page.read_text(), tables))
+
+    run(seeds, a.seasons.split(","), a.days, horizons, not a.no_oracle, save)
     return 0
 
 
