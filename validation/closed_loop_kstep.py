@@ -24,7 +24,8 @@ limit. The two fits are also scored on the closed-loop night A (data neither fit
 at 10 min, 1 h and 6 h, the first hour skipped.
 
 Prints two Markdown tables and pastes them between the ``<!-- table:kstep-closed-loop -->`` and
-``<!-- table:kstep-closed-loop-fits -->`` markers of ``--page`` (with the command, the date and the
+``<!-- table:kstep-closed-loop-fits -->`` markers of ``--page`` (``kstep-closed-loop-tight`` with ``--band tight``, the occupied band
+narrowed to 0.8 K as ``control-test --band tight``; with the command, the date and the
 load) after the fits and again after each season, so that a run stopped early leaves what it
 finished; writes ``<out>/closed_loop_kstep.json`` likewise. The fits take some 2 minutes of CPU,
 each one-day MPC run some 10-40 s; the defaults make 48 runs.
@@ -162,7 +163,7 @@ def stamp(argv: list[str], cpu_s: float) -> str:
     return f"`{cmd}` (run {day}; {cpu_s / 60:.0f} min of CPU, load averages {load[0]:.1f} / {load[2]:.1f} (1 / 15 min) on {os.cpu_count()} cores at the end)"
 
 
-def run(seeds, seasons, days: float, horizons, oracle: bool, save) -> dict:
+def run(seeds, seasons, days: float, horizons, oracle: bool, save, band: str = "normal") -> dict:
     """The fits, their criterion and held-out RMSE, and one comparison per season.
 
     ``save`` is called with what is done so far after the fits and after every season.
@@ -176,7 +177,9 @@ def run(seeds, seasons, days: float, horizons, oracle: bool, save) -> dict:
     entries += [Entry(ORACLE, "oracle")] if oracle else []
     for season in seasons:
         t0 = time.process_time()
-        out["results"][season] = cmp = compare(entries, seeds, scenario=Scenario(season, days=days))
+        out["results"][season] = cmp = compare(
+            entries, seeds, scenario=Scenario(season, days=days, comfort_band=band)
+        )
         print(f"{season}: {time.process_time() - t0:.0f} s CPU\n{cmp.summary()}", flush=True)
         save(out)
     return out
@@ -187,6 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default=",".join(map(str, SEEDS)))
     ap.add_argument("--seasons", default="summer,winter")
+    ap.add_argument("--band", choices=("normal", "tight"), default="normal", help="tight: 0.8 K occupied")
     ap.add_argument("--days", type=float, default=1.0)
     ap.add_argument("--horizons", default=",".join(map(str, HORIZONS)))
     ap.add_argument("--no-oracle", action="store_true", help="leave the oracle out")
@@ -196,11 +200,12 @@ def main(argv: list[str] | None = None) -> int:
     seeds = [int(s) for s in a.seeds.split(",")]
     horizons = tuple(int(h) for h in a.horizons.split(","))
     t0 = time.process_time()
+    table_name = "kstep-closed-loop" + ("-tight" if a.band == "tight" else "")
 
     def save(out: dict) -> None:
         models, rmse, crit, results = out["models"], out["rmse"], out["criterion"], out["results"]
         tables = {
-            "kstep-closed-loop": f"{stamp(argv, time.process_time() - t0)}\n\n{kpi_table(results)}",
+            table_name: f"{stamp(argv, time.process_time() - t0)}\n\n{kpi_table(results)}",
             "kstep-closed-loop-fits": fits_table(models, rmse, crit),
         }
         for name, text in tables.items():
@@ -215,11 +220,11 @@ def main(argv: list[str] | None = None) -> int:
             },
         )  # fmt: skip
         if str(a.page) != "none":  # the page's comfort table stays until a season is done
-            keep = {} if results else {"kstep-closed-loop"}
+            keep = {} if results else {table_name}
             new = {k: v for k, v in tables.items() if k not in keep}
             write_text_atomic(a.page, paste(a.page.read_text(), new))
 
-    run(seeds, a.seasons.split(","), a.days, horizons, not a.no_oracle, save)
+    run(seeds, a.seasons.split(","), a.days, horizons, not a.no_oracle, save, a.band)
     return 0
 
 

@@ -38,7 +38,7 @@ def test_main_pastes_both_tables_between_the_markers(tmp_path, monkeypatch):
         "criterion": {script.ML: 2.0, script.KSTEP: 1.5},
         "results": {"summer": _comparison(script), "winter": _comparison(script, oracle=False)},
     }
-    monkeypatch.setattr(script, "run", lambda *a: a[-1](fake))
+    monkeypatch.setattr(script, "run", lambda seeds, seasons, days, horizons, oracle, save, band: save(fake))
     page = tmp_path / "page.md"
     blocks = load_script("control_doc")
     page.write_text(
