@@ -132,6 +132,11 @@ def control_test(
     from rczone.emulators.registry import EMULATORS
 
     EMULATORS.factory(emulator)  # an unknown name (or a plug-in that fails to load) is one line
+    _refuse_unread(
+        emulator,
+        {"--scenario": scenario, "--band": band, "--building": building, "--weather": weather}
+        | {"--start": start, "--zone": zone, "--step": step, "--margin": margin},
+    )
     if heat_limit is not None and emulator in ("virtual", "energyplus"):
         raise ParameterError(
             f"--heat-limit is for a heated zone (--emulator house); the {emulator} building has VAV boxes"
@@ -213,6 +218,32 @@ def control_test(
 
         closed_loop_report(res).write(report_dir)
         out.print(f"report written to [bold]{esc(report_dir / 'report.html')}[/]")
+
+
+#: Options one emulator reads, with their defaults: given another value elsewhere, they are refused
+#: rather than silently ignored.
+_READ_BY = {
+    "virtual": {"--scenario": "summer", "--band": "normal"},
+    "energyplus": {
+        "--building": None,
+        "--weather": "usa_il_chicago",
+        "--start": "01-17",
+        "--zone": None,
+        "--step": 15,
+        "--margin": None,
+    },
+}
+
+
+def _refuse_unread(emulator: str, given: dict[str, object]) -> None:
+    """One line for an option the chosen emulator would ignore (set away from its default)."""
+    for owner, options in _READ_BY.items():
+        if owner != emulator:
+            for name, default in options.items():
+                if given[name] != default:
+                    raise ParameterError(
+                        f"{name} is read by --emulator {owner} only; the {emulator} emulator would ignore it"
+                    )
 
 
 def _energyplus_plant(building: str | None, zone: str | None, days: float, forecast: str, options: dict):

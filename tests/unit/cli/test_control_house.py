@@ -75,6 +75,11 @@ def test_the_mpc_keeps_the_band_at_least_as_well_as_the_thermostat_over_two_seed
         (["--controller", "mpc", "--model", "second-order"], "heater input"),
         (["--emulator", "virtual", "--heat-limit", "100"], "--heat-limit"),
         (["--compare", "thermostat,mpc"], "run each controller alone"),
+        # an option another emulator reads is refused, not silently ignored
+        (["--band", "tight"], "--band is read by --emulator virtual only"),
+        (["--scenario", "winter"], "--scenario is read by --emulator virtual only"),
+        (["--building", "office_small"], "--building is read by --emulator energyplus only"),
+        (["--emulator", "virtual", "--margin", "0.2"], "--margin is read by --emulator energyplus only"),
     ],
 )
 def test_house_mistakes_are_one_line_and_exit_2(tmp_path, capsys, extra, match):
