@@ -52,13 +52,16 @@ from rczone.kernels.arrays import (
     Assembled,
     AssembledDerivatives,
     Discretization,
+    Dynamics,
     FilterOptions,
     FilterStart,
+    Moments2,
     Observation,
     Series,
 )
 from rczone.kernels.discretize import rc2_interval_derivatives, rc_interval_derivatives
 from rczone.kernels.problem import LS, MAP, assembled, bound_kernel, with_prior
+from rczone.kernels.rc2 import correct_rc2, predict_rc2
 from rczone.kernels.reverse import Adjoints, contract, nll_reverse, zero_adjoints
 
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -121,6 +124,7 @@ def nll_rc2_adjoint(
     es = np.empty((n_t, 4))  # e, s, g0, g1
     x_0, x_1 = x0[0], x0[1]
     p00, p01, p11 = P0[0, 0], 0.5 * (P0[0, 1] + P0[1, 0]), P0[1, 1]
+    dyn = Dynamics(Phi, G0, G1, Qd)
     nll = 0.0
     n_obs = 0
     for k in range(n_t):
@@ -133,11 +137,8 @@ def nll_rc2_adjoint(
             if not s > 0.0:
                 return math.nan, -1
             inv = 1.0 / s
-            x_0 += g0 * e * inv
-            x_1 += g1 * e * inv
-            p00 -= g0 * g0 * inv
-            p01 -= g0 * g1 * inv
-            p11 -= g1 * g1 * inv
+            m = correct_rc2(Moments2(x_0, x_1, p00, p01, p11), g0, g1, e, inv)
+            x_0, x_1, p00, p01, p11 = m.x0, m.x1, m.p00, m.p01, m.p11
             nll += 0.5 * (math.log(s) + e * e * inv)
             n_obs += 1
             es[k, 0], es[k, 1], es[k, 2], es[k, 3] = e, s, g0, g1
@@ -148,24 +149,8 @@ def nll_rc2_adjoint(
         pf[k, 0], pf[k, 1], pf[k, 2] = p00, p01, p11
         if k == n_t - 1:
             break
-        w = which[k]
-        n0 = Phi[w, 0, 0] * x_0 + Phi[w, 0, 1] * x_1
-        n1 = Phi[w, 1, 0] * x_0 + Phi[w, 1, 1] * x_1
-        for j in range(p):
-            n0 += G0[w, 0, j] * u[k, j]
-            n1 += G0[w, 1, j] * u[k, j]
-            if foh:
-                n0 += G1[w, 0, j] * u[k + 1, j]
-                n1 += G1[w, 1, j] * u[k + 1, j]
-        x_0, x_1 = n0, n1
-        f00, f01, f10, f11 = Phi[w, 0, 0], Phi[w, 0, 1], Phi[w, 1, 0], Phi[w, 1, 1]
-        a0 = f00 * p00 + f01 * p01
-        a1 = f00 * p01 + f01 * p11
-        b0 = f10 * p00 + f11 * p01
-        b1 = f10 * p01 + f11 * p11
-        p00 = Qd[w, 0, 0] + a0 * f00 + a1 * f01
-        p01 = 0.5 * (Qd[w, 0, 1] + Qd[w, 1, 0]) + a0 * f10 + a1 * f11
-        p11 = Qd[w, 1, 1] + b0 * f10 + b1 * f11
+        m = predict_rc2(dyn, which[k], u, k, foh, Moments2(x_0, x_1, p00, p01, p11))
+        x_0, x_1, p00, p01, p11 = m.x0, m.x1, m.p00, m.p01, m.p11
     # backward: (a, A) adjoints of the predicted state and covariance of sample k + 1
     a_0 = a_1 = 0.0
     A00 = A01 = A10 = A11 = 0.0

@@ -97,6 +97,17 @@ class StateMoments(NamedTuple):
     P: np.ndarray  #: (n, n) or (N, n, n)
 
 
+class Moments2(NamedTuple):
+    """Mean and covariance of a 2-state filter as scalars: what the unrolled 2-state kernels carry
+    from one step to the next (:func:`rczone.kernels.rc2.predict_rc2`, :func:`~rczone.kernels.rc2.correct_rc2`)."""
+
+    x0: float
+    x1: float
+    p00: float
+    p01: float  #: the covariance's off-diagonal (kept symmetric)
+    p11: float
+
+
 class FilterStart(NamedTuple):
     """The state's mean and covariance at the first sample, and their derivatives."""
 

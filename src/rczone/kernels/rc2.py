@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
-from rczone.kernels.arrays import Dynamics, FilterStart, FilterTrace, Observation, Rc2Model, Series
+from rczone.kernels.arrays import Dynamics, FilterStart, FilterTrace, Moments2, Observation, Rc2Model, Series
 from rczone.kernels.discretize import rc2_discretize
 
 
@@ -72,6 +72,46 @@ def flow_column(B0: np.ndarray, M: np.ndarray, m: np.ndarray, k: int, j: int) ->
         b0 += m[k, f] * M[f, 0, j]
         b1 += m[k, f] * M[f, 1, j]
     return b0, b1
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def correct_rc2(m: Moments2, g0: float, g1: float, e: float, inv: float) -> Moments2:
+    """The scalar measurement update of a 2-state filter: ``x += g e/s``, ``P -= g g'/s`` (``g = Pc``,
+    ``inv = 1/s``)."""
+    return Moments2(
+        m.x0 + g0 * e * inv,
+        m.x1 + g1 * e * inv,
+        m.p00 - g0 * g0 * inv,
+        m.p01 - g0 * g1 * inv,
+        m.p11 - g1 * g1 * inv,
+    )
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def predict_rc2(dyn: Dynamics, w: int, u: np.ndarray, k: int, foh: bool, m: Moments2) -> Moments2:
+    """The time update of a 2-state filter over interval ``w``: ``x = Phi x + G0 u_k (+ G1 u_k+1)``,
+    ``P = Phi P Phi' + Qd``."""
+    Phi, G0, G1, Qd = dyn
+    n0 = Phi[w, 0, 0] * m.x0 + Phi[w, 0, 1] * m.x1
+    n1 = Phi[w, 1, 0] * m.x0 + Phi[w, 1, 1] * m.x1
+    for j in range(u.shape[1]):
+        n0 += G0[w, 0, j] * u[k, j]
+        n1 += G0[w, 1, j] * u[k, j]
+        if foh:
+            n0 += G1[w, 0, j] * u[k + 1, j]
+            n1 += G1[w, 1, j] * u[k + 1, j]
+    f00, f01, f10, f11 = Phi[w, 0, 0], Phi[w, 0, 1], Phi[w, 1, 0], Phi[w, 1, 1]
+    a0 = f00 * m.p00 + f01 * m.p01
+    a1 = f00 * m.p01 + f01 * m.p11
+    b0 = f10 * m.p00 + f11 * m.p01
+    b1 = f10 * m.p01 + f11 * m.p11
+    return Moments2(
+        n0,
+        n1,
+        Qd[w, 0, 0] + a0 * f00 + a1 * f01,
+        0.5 * (Qd[w, 0, 1] + Qd[w, 1, 0]) + a0 * f10 + a1 * f11,
+        Qd[w, 1, 1] + b0 * f10 + b1 * f11,
+    )
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -451,7 +491,6 @@ def filter_rc2(
     ----------
     .. [1] H. Madsen, *Time Series Analysis*, Chapman & Hall/CRC, 2007, section 10.3 (the Kalman filter).
     """
-    Phi, G0, G1, Qd = dyn
     u, y, which = series
     c0, c1, r = obs.C[0, 0], obs.C[0, 1], obs.r[0]
     n_t = y.shape[0]
@@ -475,11 +514,8 @@ def filter_rc2(
             if not s > 0.0:
                 return math.nan, -1
             inv = 1.0 / s
-            x_0 += g0 * e * inv
-            x_1 += g1 * e * inv
-            p00 -= g0 * g0 * inv
-            p01 -= g0 * g1 * inv
-            p11 -= g1 * g1 * inv
+            m = correct_rc2(Moments2(x_0, x_1, p00, p01, p11), g0, g1, e, inv)
+            x_0, x_1, p00, p01, p11 = m.x0, m.x1, m.p00, m.p01, m.p11
             nll += 0.5 * (math.log(s) + e * e * inv)
             n_obs += 1
             trace.e[k, 0] = e
@@ -487,22 +523,6 @@ def filter_rc2(
         trace.Pf[k, 0, 0], trace.Pf[k, 0, 1], trace.Pf[k, 1, 0], trace.Pf[k, 1, 1] = p00, p01, p01, p11
         if k == n_t - 1:
             break
-        w = which[k]
-        n0 = Phi[w, 0, 0] * x_0 + Phi[w, 0, 1] * x_1
-        n1 = Phi[w, 1, 0] * x_0 + Phi[w, 1, 1] * x_1
-        for j in range(p):
-            n0 += G0[w, 0, j] * u[k, j]
-            n1 += G0[w, 1, j] * u[k, j]
-            if foh:
-                n0 += G1[w, 0, j] * u[k + 1, j]
-                n1 += G1[w, 1, j] * u[k + 1, j]
-        x_0, x_1 = n0, n1
-        f00, f01, f10, f11 = Phi[w, 0, 0], Phi[w, 0, 1], Phi[w, 1, 0], Phi[w, 1, 1]
-        a0 = f00 * p00 + f01 * p01
-        a1 = f00 * p01 + f01 * p11
-        b0 = f10 * p00 + f11 * p01
-        b1 = f10 * p01 + f11 * p11
-        p00 = Qd[w, 0, 0] + a0 * f00 + a1 * f01
-        p01 = 0.5 * (Qd[w, 0, 1] + Qd[w, 1, 0]) + a0 * f10 + a1 * f11
-        p11 = Qd[w, 1, 1] + b0 * f10 + b1 * f11
+        m = predict_rc2(dyn, which[k], u, k, foh, Moments2(x_0, x_1, p00, p01, p11))
+        x_0, x_1, p00, p01, p11 = m.x0, m.x1, m.p00, m.p01, m.p11
     return nll, n_obs
