@@ -45,7 +45,7 @@ import numpy as np
 
 from rczone import validation
 from rczone.control.model import ControlModel
-from rczone.control.plant import forecast_steps
+from rczone.control.plant import forecast_steps, forecast_times
 from rczone.control.signals import PRICES, forecast_price, price_signal
 from rczone.errors import ParameterError, did_you_mean
 from rczone.virtual.emulator import DAY
@@ -171,12 +171,7 @@ class HousePlant:
         return self.measure()
 
     def _times(self, horizon: float, interval: float | None) -> tuple[np.ndarray, float]:
-        iv = self.dt if interval is None else float(interval)
-        if not (math.isfinite(horizon) and horizon >= 0 and math.isfinite(iv) and iv > 0):
-            raise ParameterError(
-                f"a forecast needs horizon >= 0 and interval > 0 s, got {horizon!r}, {interval!r}"
-            )
-        return self.time + iv * np.arange(round(horizon / iv) + 1), iv
+        return forecast_times(self.time, self.dt, horizon, interval)
 
     def forecast(self, horizon: float, *, interval: float | None = None) -> dict[str, np.ndarray]:
         """Forecasts over ``horizon`` s at ``interval`` s (see the module notes)."""

@@ -45,6 +45,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from rczone.errors import ParameterError
+
 
 @runtime_checkable
 class Plant(Protocol):
@@ -184,6 +186,24 @@ class Controller(Protocol):
             ``m_<zone>`` and ``Ts_<zone>`` per zone of the plant.
         """
         ...
+
+
+def forecast_times(
+    now: float, step: float, horizon: float, interval: float | None
+) -> tuple[np.ndarray, float]:
+    """The times of a forecast from ``now`` over ``horizon`` s, and its interval (default ``step``).
+
+    Raises
+    ------
+    ParameterError
+        For a negative or non-finite horizon, or an interval that is not a positive number.
+    """
+    iv = step if interval is None else float(interval)
+    if not (np.isfinite(horizon) and horizon >= 0 and np.isfinite(iv) and iv > 0):
+        raise ParameterError(
+            f"a forecast needs horizon >= 0 and interval > 0 s, got {horizon!r}, {interval!r}"
+        )
+    return now + iv * np.arange(round(horizon / iv) + 1), iv
 
 
 def forecast_steps(horizon: float, interval: float) -> int:

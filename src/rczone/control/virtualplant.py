@@ -47,7 +47,7 @@ import numpy as np
 from rczone import validation
 from rczone.control.constraints import ZoneConstraints
 from rczone.control.energy import zone_power
-from rczone.control.plant import forecast_steps
+from rczone.control.plant import forecast_steps, forecast_times
 from rczone.control.signals import (
     BANDS,
     DR_HOURS,
@@ -189,12 +189,7 @@ class VirtualPlant:
         return self.measure()
 
     def _times(self, horizon: float, interval: float | None) -> tuple[np.ndarray, float]:
-        iv = self.dt if interval is None else float(interval)
-        if not (math.isfinite(horizon) and horizon >= 0 and math.isfinite(iv) and iv > 0):
-            raise ParameterError(
-                f"a forecast needs horizon >= 0 and interval > 0 s, got {horizon!r}, {interval!r}"
-            )
-        return self.time + iv * np.arange(round(horizon / iv) + 1), iv
+        return forecast_times(self.time, self.dt, horizon, interval)
 
     def _truth(self, series: np.ndarray, times: np.ndarray) -> np.ndarray:
         """A true series of the run at ``times`` (held past the run's last value)."""

@@ -61,7 +61,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from rczone.control.plant import forecast_steps
+from rczone.control.plant import forecast_steps, forecast_times
 from rczone.control.signals import PRICES, forecast_price, price_signal
 from rczone.emulators import hvacmeters
 from rczone.emulators.catalog import outdoor_temperatures
@@ -365,12 +365,7 @@ class EnergyPlusPlant:
     def forecast(self, horizon: float, *, interval: float | None = None) -> Mapping[str, np.ndarray]:
         """Outdoor temperature (with the scenario's error), price, band and limits from now."""
         now = self._started()["time"]
-        step = self.dt if interval is None else float(interval)
-        if not (np.isfinite(horizon) and horizon >= 0 and np.isfinite(step) and step > 0):
-            raise ParameterError(
-                f"a forecast needs horizon >= 0 and interval > 0 s, got {horizon!r}, {interval!r}"
-            )
-        t = now + step * np.arange(round(horizon / step) + 1)
+        t, step = forecast_times(now, self.dt, horizon, interval)
         occ, lo, hi = self._band(t)
         to = np.interp(t + self._t0, *self._weather) + forecast_error(
             self._error, t - now, self._forecast_rng
