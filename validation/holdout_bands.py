@@ -351,7 +351,7 @@ def member_row(zm: ZoneModel, frame: pd.DataFrame, split: float, verdict: dict |
 
 def members(shared: Path, selected: ZoneModel) -> dict:
     """:func:`member_row` of the selected model and of every :data:`MEMBERS` fit on the calibration part."""
-    from rczone.calibration.evidence import with_holdout
+    from rczone.calibration.calibration import with_holdout
     from rczone.calibration.horizons import holdout_scores
 
     frame, split = bm_frame(shared, selected)

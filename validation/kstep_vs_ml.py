@@ -26,10 +26,10 @@ import numpy as np
 from rczone.calibration.conformal import ALPHA, interval_score
 from rczone.estimation import Dataset, fit
 from rczone.estimation.forecast import k_step_bands
-from rczone.estimation.innovations import innovation_analysis
 from rczone.estimation.kstep_fit import fit_kstep
 from rczone.files.atomic import write_json_atomic
 from rczone.models import load_model
+from rczone.postfit.innovations import innovation_analysis
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_SHARED = HERE.parent.parent / "shared"

@@ -24,7 +24,7 @@ Reported per data set:
   (the disturbance's magnitude -> 0): statistic, degrees of freedom, the ``chi2(df)`` p-value
   (the one that decides) and the chi-bar-squared one;
 * the Ljung-Box p-value of each model's standardized one-step innovations on the calibration part
-  (:func:`rczone.estimation.innovations.innovation_analysis`; closer to white is larger);
+  (:func:`rczone.postfit.innovations.innovation_analysis`; closer to white is larger);
 * the held-out 6-h prediction error: the filter runs over the whole record with the calibration
   estimates, and each held-out sample is predicted from the filtered state 6 h earlier with the
   measured inputs (:func:`rczone.estimation.forecast.k_step_band`), RMSE over the held-out part.
@@ -49,11 +49,11 @@ from scipy.special import chdtrc
 from rczone.estimation import Dataset, fit
 from rczone.estimation.fit import default_free
 from rczone.estimation.forecast import k_step_band
-from rczone.estimation.innovations import innovation_analysis
 from rczone.files.atomic import write_json_atomic
 from rczone.models import load_model
 from rczone.network import LatentForce, Parameter, RCNetwork
 from rczone.network.stochastic import is_noise_name
+from rczone.postfit.innovations import innovation_analysis
 from rczone.selection.compare import chi_bar_sf
 from rczone.selection.nesting import nesting
 

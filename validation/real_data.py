@@ -28,9 +28,9 @@ from rczone.data import load_zone_data
 from rczone.data.quality import RczoneWarning
 from rczone.diagnostics import diagnose
 from rczone.estimation import Dataset
-from rczone.estimation.openloop import open_loop_error
 from rczone.files.atomic import write_json_atomic
 from rczone.network import HeatInput, Node, Parameter, RCNetwork, Resistor, SupplyAir
+from rczone.postfit.openloop import open_loop_error
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -117,7 +117,7 @@ def fit_and_validate(net: RCNetwork, frame: pd.DataFrame, free: list[str], name:
 
     Each fit is ``rczone.fit(..., holdout=HOLDOUT)`` (``rczone fit --holdout 0.25``), so its verdict
     is the one rczone gives: the fit's own flags and the held-out checks
-    (:mod:`rczone.calibration.evidence`).
+    (:mod:`rczone.postfit.evidence`).
     """
     import rczone
     from rczone.models import load_model

@@ -10,8 +10,9 @@ belongs to (``rczone.estimation.costs`` -> ``estimation``, ``rczone.control`` ->
   ``errors``, ``network`` and ``kernels``;
 * ``results`` (the result protocol) and ``files`` (reading untrusted files, writing atomically)
   import nothing of rczone but ``errors``;
-* ``estimation`` reaches no ``report``, ``cli`` or ``calibration``, not even through another
-  unit; ``diagnostics`` reaches no ``report``; ``workflow`` (what the CLI and the API share)
+* ``estimation`` reaches no ``report``, ``cli``, ``postfit`` or ``calibration``, not even through
+  another unit; ``postfit`` (the analyses of a fitted model) reaches no ``calibration``,
+  ``diagnostics``, ``selection``, ``workflow``, ``report`` or ``cli`` (the calibration imports it); ``diagnostics`` reaches no ``report``; ``workflow`` (what the CLI and the API share)
   and ``study`` (the paper's study) reach no ``report`` or ``cli``;
 * the units import each other without cycles;
 * importing ``rczone.control`` does not load matplotlib (checked in a fresh interpreter).
@@ -40,7 +41,8 @@ ALLOWED = {
 }
 #: unit -> units it must not reach, directly or through others
 FORBIDDEN_REACH = {
-    "estimation": {"report", "cli", "calibration"},
+    "estimation": {"report", "cli", "calibration", "postfit"},
+    "postfit": {"calibration", "diagnostics", "selection", "workflow", "report", "cli"},
     "diagnostics": {"report"},
     "workflow": {"report", "cli"},
     "study": {"report", "cli"},

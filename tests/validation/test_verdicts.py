@@ -11,7 +11,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from rczone.calibration.evidence import FAILED, PASSED, EvidenceCheck, HeldOutEvidence
+from rczone.postfit.evidence import FAILED, PASSED, EvidenceCheck, HeldOutEvidence
 from rczone.results.verdict import verdict_of
 
 from .scripts import load_script

@@ -149,8 +149,7 @@ def calibrate_band(
     BandScale or None
         None when the data are too short for any horizon.
     """
-    from rczone.estimation.forecast import k_step_bands
-    from rczone.estimation.openloop import open_loop_band
+    from rczone.estimation.forecast import k_step_bands, open_loop_band
 
     N = data.n_samples
     steps = [k for k in CALIBRATION_STEPS if k <= N // 4]

@@ -7,6 +7,7 @@ live in a new :class:`~rczone.models.zone.ZoneModel`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -19,23 +20,8 @@ from rczone.calibration.bands import calibrate_band
 from rczone.calibration.dataset import ModelLike, PreparedData, as_model, prepare
 from rczone.data.excitation import input_excitation
 from rczone.estimation import Dataset, FitResult, fit
-from rczone.estimation.innovations import (
-    ResidualAnalysis,
-    innovation_analysis,
-    ljung_box_lags,
-    open_loop_analysis,
-)
+from rczone.estimation.initial import INITIAL_STATE_PRIOR_K, estimate_initial_state
 from rczone.estimation.methods import method_of
-from rczone.estimation.openloop import (
-    INITIAL_STATE_PRIOR_K,
-    OpenLoopError,
-    ResidualTest,
-    estimate_initial_state,
-    ljung_box,
-    open_loop_error,
-    per_output_errors,
-)
-from rczone.estimation.robust import robust_errors, robust_lines
 from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.models.plausibility import Plausibility, operating_flow, plausibility
@@ -46,6 +32,15 @@ from rczone.network.stochastic import (
     kind_of,
     measurement_noise_names,
 )
+from rczone.postfit.evidence import HorizonScores, held_out_evidence
+from rczone.postfit.innovations import (
+    ResidualAnalysis,
+    innovation_analysis,
+    ljung_box_lags,
+    open_loop_analysis,
+)
+from rczone.postfit.openloop import OpenLoopError, ResidualTest, ljung_box, open_loop_error, per_output_errors
+from rczone.postfit.robust import robust_errors, robust_lines
 from rczone.results import Result
 from rczone.results.accessors import FitAccessors
 from rczone.results.verdict import EXIT_UNTRUSTED, Verdict, dropped_samples, verdict_of
@@ -80,7 +75,7 @@ class Calibration(FitAccessors, Result):
     open_loop : OpenLoopError
         Open-loop simulation of the fitted model on the calibration data. The unmeasured nodes
         start where the data say: at the initial state an LS fit estimates with the parameters, and
-        for ML and MAP at :func:`~rczone.estimation.openloop.estimate_initial_state` (the
+        for ML and MAP at :func:`~rczone.estimation.initial.estimate_initial_state` (the
         filter itself needs no estimate).
     residuals : ResidualTest
         Whiteness of the open-loop error of the first output (not expected to be white; see the
@@ -105,11 +100,11 @@ class Calibration(FitAccessors, Result):
         The data's signals outside their plausible range (``Dataset.warnings``: degF read as
         degC, ...); each flags the fit.
     robust : RobustErrors or None
-        Sandwich standard errors of an ML fit (:mod:`rczone.estimation.robust`); the verdict
+        Sandwich standard errors of an ML fit (:mod:`rczone.postfit.robust`); the verdict
         reads them when the innovations are not white.
     evidence : HeldOutEvidence or None
-        The held-out checks of ``--holdout`` (:mod:`rczone.calibration.evidence`), set by
-        :func:`rczone.calibration.evidence.with_holdout`; they enter the verdict.
+        The held-out checks of ``--holdout`` (:mod:`rczone.postfit.evidence`), set by
+        :func:`rczone.calibration.calibration.with_holdout`; they enter the verdict.
     excitation : Excitation or None
         Whether the inputs were excited apart (:mod:`rczone.data.excitation`); collinear inputs
         are named in the verdict's notes.
@@ -313,8 +308,6 @@ class Calibration(FitAccessors, Result):
         if self.holdout is not None:
             lines += self.holdout.summary_lines()
         if self.evidence is not None:
-            from rczone.calibration.evidence import verdict_line
-
             lines.append(verdict_line(self))
         return lines
 
@@ -546,3 +539,56 @@ def estimated_start(zm: ZoneModel, values: Mapping[str, float], data: Dataset, h
         for s in net.state_names
     }
     return estimate_initial_state(net, values, data, noise, prior)
+
+
+def with_holdout(cal: Calibration, scores: HorizonScores) -> Calibration:
+    """``cal`` with the held-out evidence of ``scores`` in its verdict (and its fitted model's provenance).
+
+    Parameters
+    ----------
+    cal : Calibration
+        The fit on the calibration part.
+    scores : HorizonScores
+        Its scores on the held-out part.
+
+    Returns
+    -------
+    Calibration
+        A new calibration; :attr:`~rczone.calibration.Calibration.verdict` weighs the evidence.
+    """
+    checked = dataclasses.replace(cal, evidence=held_out_evidence(scores, cal.innovations))
+    return dataclasses.replace(checked, model=stamped(checked.model, checked.verdict))
+
+
+def verdict_fit(cal: Calibration) -> FitResult:
+    """The fit whose standard errors the verdict reads: the robust ones when the innovations are not white.
+
+    Fits to other data are compared by their standard errors
+    (:func:`rczone.postfit.profiles.compare_fits`); with a misspecified model the Hessian's are
+    too small and identical houses "disagree" (issue 38).
+
+    Parameters
+    ----------
+    cal : Calibration
+
+    Returns
+    -------
+    FitResult
+    """
+    if cal.robust is None or cal.innovations is None or cal.innovations.white:
+        return cal.result
+    params = {
+        n: e._replace(std_error=cal.robust.std_errors.get(n, e.std_error))
+        for n, e in cal.result.parameters.items()
+    }
+    return dataclasses.replace(cal.result, parameters=params)
+
+
+def verdict_line(cal: Calibration) -> str:
+    """The last line of ``rczone fit --holdout``: the verdict with the held-out evidence, naming what failed."""
+    v = cal.verdict
+    if v.trustworthy:
+        return "[green]verdict:[/] trustworthy on " + ", ".join(v.checked)
+    failed = list((v.held_out or {}).get("failed") or [])
+    what = f"; held out, failed: {', '.join(failed)}" if failed else ""
+    return f"[red]verdict: flagged[/] (exit code {cal.exit_code}), {len(v.reasons)} reason(s){what}"

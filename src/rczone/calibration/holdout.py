@@ -45,7 +45,8 @@ def _time(text: str, t: np.ndarray, timezone: str, option: str) -> float | None:
 def duration_seconds(text: str) -> float:
     """A positive duration with its unit (``1d``, ``6h``, ``30min``, ``2 days``) in seconds.
 
-    A lower-case ``d`` means days, as the options' help says (pandas deprecates that spelling).
+    A lower-case ``d`` means days and an upper-case ``H`` hours, as users write them (pandas
+    deprecates both spellings).
 
     Raises
     ------
@@ -56,7 +57,8 @@ def duration_seconds(text: str) -> float:
     if not any(c.isalpha() for c in text):
         raise ValueError(f"no unit in {text!r}")
     try:
-        seconds = pd.Timedelta(re.sub(r"(?<=[0-9\s])d$", "D", text)).total_seconds()
+        spelled = re.sub(r"(?<=[0-9\s])H$", "h", re.sub(r"(?<=[0-9\s])d$", "D", text))
+        seconds = pd.Timedelta(spelled).total_seconds()
     except (TypeError, OverflowError) as exc:
         raise ValueError(str(exc)) from None
     if not seconds > 0:

@@ -46,11 +46,9 @@ from rczone.errors import DataError, ParameterError
 from rczone.estimation.baselines import ARX, fit_arx, k_step_baselines, open_loop_baselines
 from rczone.estimation.forecast import parameter_sd
 from rczone.network.stochastic import is_noise_name
+from rczone.postfit.evidence import ARX_NAME, MODEL, PERSISTENCE
 from rczone.results import Result
 from rczone.results.protocol import json_number
-
-#: Names of the predictors in the table, the JSON and the report.
-MODEL, PERSISTENCE, ARX_NAME = "model", "persistence", "arx"
 
 #: The word for an open-loop horizon in ``--horizons``.
 OPEN = "open"

@@ -31,13 +31,8 @@ from rczone.calibration.dataset import (
 from rczone.errors import DataError
 from rczone.estimation.data import Dataset
 from rczone.estimation.forecast import parameter_sd
+from rczone.estimation.initial import InitialStateEstimate
 from rczone.estimation.methods import REGISTRY
-from rczone.estimation.openloop import (
-    InitialStateEstimate,
-    OpenLoopError,
-    open_loop_error,
-    per_output_errors,
-)
 from rczone.models import ZoneModel
 from rczone.network.stochastic import (
     INITIAL_SPREAD,
@@ -48,6 +43,7 @@ from rczone.network.stochastic import (
     kind_of,
     target_of,
 )
+from rczone.postfit.openloop import OpenLoopError, open_loop_error, per_output_errors
 from rczone.results import Result
 from rczone.results.accessors import PredictionFrames
 from rczone.simulation.simulate import HOLDS
@@ -601,7 +597,7 @@ def prediction(
         through it); without a warm-up, from the first sample only: the measured nodes at their
         measurement, the others at the steady state for its inputs. ``"steady"``: that, ignoring
         any warm-up. ``"estimated"``: their start fitted to the scored data themselves
-        (:func:`~rczone.estimation.openloop.estimate_initial_state`): it uses the samples it then
+        (:func:`~rczone.estimation.initial.estimate_initial_state`): it uses the samples it then
         scores, so it is a check of the model's dynamics, not a held-out score.
     label : str
         The data's name, for titles.

@@ -5,7 +5,7 @@ Two sources of uncertainty are separated, as they answer different questions:
 * **process and measurement noise** (the stochastic model of an ML fit): the Kalman filter's
   k-step prediction covariance ``C P_{j|j-k} C' + R``, where ``P_{j|j-k}`` propagates the filtered
   covariance ``k`` steps with the process noise. Open loop is the filter conditioned on the
-  first measurement only (:func:`rczone.estimation.openloop.open_loop_band`);
+  first measurement only (:func:`open_loop_band`);
 * **the estimates' uncertainty**: the covariance ``Sigma`` of the fitted parameters carried to the
   prediction by linearization, ``var_theta(y_j) = J_j Sigma J_j'`` with ``J_j = d y_hat_j / d theta``
   by central differences of the predictor (first-order delta method [1]_).
@@ -34,7 +34,6 @@ from rczone.errors import ParameterError
 from rczone.estimation.costs import filter_arrays
 from rczone.estimation.data import Dataset
 from rczone.estimation.kalman import input_drive, kalman_filter_arrays
-from rczone.estimation.openloop import open_loop_band
 from rczone.kernels.arrays import writable
 from rczone.kernels.forecast import Origins, Propagation, Readout, k_step_moments
 from rczone.network import RCNetwork
@@ -48,6 +47,33 @@ class Band(NamedTuple):
 
     y_hat: np.ndarray
     sd: np.ndarray
+
+
+def open_loop_band(
+    network: RCNetwork, values: Mapping[str, float], data: Dataset, hold: str = "zoh", *, known: int = 1
+) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop prediction and its standard deviation from the model's noise levels.
+
+    The Kalman filter of the stochastic model is run with every measurement after the first
+    ``known`` ones removed (default: all but the first; a warm-up's length to start from the
+    filter's estimate at its end): it conditions the state on them and then only predicts, so its
+    mean is the open-loop simulation and its innovation covariance ``C P C' + R`` is the variance
+    of the measurement around it (process noise accumulated since the start, plus measurement
+    noise). ``values`` must hold the noise levels (``sigma_v``, ``sigma_w_*``, ``sigma_x0_*``).
+
+    Returns
+    -------
+    y_hat : ndarray, shape (N, ny)
+    sd : ndarray, shape (N, ny)
+    """
+    y = np.full_like(data.y, np.nan)
+    y[:known] = data.y[:known]
+    masked = Dataset(data.t, data.u, data.m, y, data.input_names, data.flow_names, data.output_names)
+    arrays = filter_arrays(network, values, masked, hold)
+    out = kalman_filter_arrays(arrays)
+    y_hat = out.x_pred @ arrays.C.T + arrays.u @ arrays.D.T
+    sd = np.sqrt(np.einsum("kii->ki", out.S))
+    return y_hat, sd
 
 
 def _check_steps(k: object) -> int:

@@ -18,7 +18,7 @@ from rczone.models.reduction import F_PER_K
 from rczone.report.html import literal
 
 if TYPE_CHECKING:  # pragma: no cover
-    from rczone.estimation.innovations import ResidualAnalysis
+    from rczone.postfit.innovations import ResidualAnalysis
 
 COLORS = {"measured": "black", "full-scale": "#2b6cb0", "second-order": "#dd6b20", "first-order": "#38a169"}
 LABELS = {"full-scale": "full-scale (13 states)", "second-order": "2nd order", "first-order": "1st order"}
@@ -322,10 +322,10 @@ def profile_curves(profiles: dict[str, dict], estimates: dict[str, float], units
     """Profile likelihood of each parameter: the rise of the cost against the parameter's value.
 
     ``profiles`` maps a parameter to ``{"values", "rise", "interval"}`` (the JSON form of
-    :class:`rczone.diagnostics.postfit.ProfileCheck`); the dashed line is the 95 % threshold
+    :class:`rczone.postfit.profiles.ProfileCheck`); the dashed line is the 95 % threshold
     ``chi2(1, 0.95) / 2``, the shaded span the profile interval.
     """
-    from rczone.diagnostics.postfit import PROFILE_THRESHOLD
+    from rczone.postfit.profiles import PROFILE_THRESHOLD
 
     names = list(profiles)
     cols = min(3, max(1, len(names)))

@@ -112,7 +112,7 @@ def prediction_report(pred: Prediction, data_name: str, model_name: str) -> Repo
 
 def horizons_figure(scores: HorizonScores) -> Figure:
     """RMSE and 2-sigma coverage against the horizon: the model, persistence and ARX (open loop at the right)."""
-    from rczone.calibration.horizons import MODEL
+    from rczone.postfit.evidence import MODEL
 
     fig = Figure(figsize=(8.5, 5.6))
     ax_rmse, ax_cov = fig.subplots(2, 1, sharex=True)

@@ -105,7 +105,7 @@ def robust_findings(result, robust, white: bool | None) -> tuple[list[str], list
     result : FitResult
         The fit.
     robust : RobustErrors or None
-        Its sandwich standard errors (:mod:`rczone.estimation.robust`).
+        Its sandwich standard errors (:mod:`rczone.postfit.robust`).
     white : bool or None
         Whether the innovations are white (None: no innovations). Only ``False`` makes the verdict
         read the robust errors: for a model that is right the two agree.
@@ -177,7 +177,7 @@ def verdict_of(
     white : bool, optional
         Whether the fit's innovations are white.
     evidence : HeldOutEvidence, optional
-        The held-out checks (:mod:`rczone.calibration.evidence`): coverage per horizon, the
+        The held-out checks (:mod:`rczone.postfit.evidence`): coverage per horizon, the
         baselines, the innovations; each failed one is a reason.
     excitation : Excitation, optional
         Whether the inputs were excited apart (:mod:`rczone.data.excitation`): each group of

@@ -10,7 +10,7 @@ stretch where every input of every candidate is known. For each fit:
   what the model misses there, which shows in the innovations and the likelihood
   (``noise="measured"``: only the measured states', the default of ``rczone fit``);
 * ``AIC = 2 k - 2 log L`` and ``BIC = k log n - 2 log L`` [2]_ [3]_;
-* the whiteness of its standardized innovations (:mod:`rczone.estimation.innovations`);
+* the whiteness of its standardized innovations (:mod:`rczone.postfit.innovations`);
 * for every pair where one model is nested in the other (detected by
   :func:`rczone.selection.nesting.nesting`, never assumed), the likelihood-ratio test
   ``2 (log L_rich - log L_simple)`` against ``chi2(d)`` (and the chi-bar-squared p-value of the
@@ -335,12 +335,12 @@ class Selection(Result):
         return [*selection_lines(self), *held, *verdict_lines(self)]
 
     def held_out_evidence(self):
-        """The held-out checks of the selected model (:func:`rczone.calibration.evidence.held_out_evidence`); None without."""
+        """The held-out checks of the selected model (:func:`rczone.postfit.evidence.held_out_evidence`); None without."""
         if self.holdout is None:
             return None
         if self.best.calibration.evidence is not None:
             return self.best.calibration.evidence
-        from rczone.calibration.evidence import held_out_evidence
+        from rczone.postfit.evidence import held_out_evidence
 
         return held_out_evidence(self.holdout, self.best.calibration.innovations)
 
@@ -406,7 +406,7 @@ class Selection(Result):
 def with_held_out(sel: Selection, scores) -> Selection:
     """``sel`` with the selected model's held-out scores, and their checks in its verdict.
 
-    The held-out checks (:mod:`rczone.calibration.evidence`: band coverage per horizon, the
+    The held-out checks (:mod:`rczone.postfit.evidence`: band coverage per horizon, the
     baselines, the innovations) enter the selected fit's verdict as they enter ``rczone fit
     --holdout``'s, so a selection whose model fails them is flagged (:attr:`Selection.exit_code`
     3) and says which check failed.
@@ -423,7 +423,7 @@ def with_held_out(sel: Selection, scores) -> Selection:
     Selection
         A new selection; the other candidates are unchanged (only the selected one is scored).
     """
-    from rczone.calibration.evidence import with_holdout
+    from rczone.calibration.calibration import with_holdout
 
     best = dataclasses.replace(sel.best, calibration=with_holdout(sel.best.calibration, scores))
     candidates = {n: best if n == sel.selected else c for n, c in sel.candidates.items()}

@@ -147,7 +147,7 @@ def verdict_lines(sel) -> list[str]:
     best = sel.best.calibration
     lines = [f"[yellow]warning:[/] {esc(sel.selected)}: {esc(f)}" for f in best.verdict.reasons]
     if best.evidence is not None:
-        from rczone.calibration.evidence import verdict_line
+        from rczone.calibration.calibration import verdict_line
 
         lines.append(verdict_line(best))
     elif not best.verdict.trustworthy:

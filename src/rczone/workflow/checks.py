@@ -15,8 +15,7 @@ from collections.abc import Callable, Mapping
 import pandas as pd
 
 from rczone.calibration import Calibration, PreparedData, calibrate, predict, prepare
-from rczone.calibration.calibration import stamped
-from rczone.calibration.evidence import verdict_fit, with_holdout
+from rczone.calibration.calibration import stamped, verdict_fit, with_holdout
 from rczone.estimation.settings import FitSettings
 from rczone.models import ZoneModel
 from rczone.workflow.holdout import before, score_held_out
@@ -179,7 +178,7 @@ class PostFitChecks:
         that a calibration with pending checks can call it on itself.
         """
         from rczone.diagnostics import diagnose
-        from rczone.diagnostics.postfit import compare_fits, far_from_construction, profile_checks
+        from rczone.postfit.profiles import compare_fits, far_from_construction, profile_checks
 
         settings, progress = self.settings, self.progress
         r, zm = cal.result, cal.model

@@ -18,6 +18,7 @@ from rczone.calibration.holdout import duration_seconds, warmup_end
         (" 3d ", 3 * 86400.0),
         ("2 days", 2 * 86400.0),
         ("6h", 21600.0),
+        ("6H", 21600.0),
         ("30min", 1800.0),
     ],
 )

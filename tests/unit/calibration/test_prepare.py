@@ -10,7 +10,7 @@ import pytest
 from rczone.calibration import calibrate, prepare
 from rczone.calibration.dataset import dataset
 from rczone.diagnostics import diagnose
-from rczone.diagnostics.postfit import profile_checks
+from rczone.postfit.profiles import profile_checks
 from tests.unit.selection.synthetic import prbs_zone
 
 MODEL = "TiTe+heater"

@@ -15,12 +15,11 @@ import pytest
 import rczone.estimation.kalman as kalman
 from rczone.calibration.bands import calibrate_band
 from rczone.estimation.costs import filter_arrays
-from rczone.estimation.forecast import k_step_bands
+from rczone.estimation.forecast import k_step_bands, open_loop_band
 from rczone.estimation.kalman import kalman_filter_arrays
-from rczone.estimation.openloop import open_loop_band
 from tests.oracles import kalman_filter_reference
 
-from .nets import NET2, data2
+from ..estimation.nets import NET2, data2
 
 NOISE2 = {"sigma_v": 0.05, "sigma_w_Ti": 3e-3, "sigma_w_Tw": 1e-3, "sigma_x0_Ti": 0.2, "sigma_x0_Tw": 0.5}
 FIELDS = ("innovations", "S", "x_pred", "x_filt", "P_pred", "P_filt")

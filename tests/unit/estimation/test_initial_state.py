@@ -16,7 +16,7 @@ from scipy.linalg import expm
 
 from rczone.calibration import dataset, prediction
 from rczone.cli.main import main
-from rczone.estimation.openloop import estimate_initial_state
+from rczone.estimation.initial import estimate_initial_state
 from rczone.models import read_model_file
 
 MODEL = """

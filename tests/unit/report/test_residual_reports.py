@@ -7,7 +7,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from rczone.calibration import calibrate
-from rczone.diagnostics.postfit import profile_checks
+from rczone.postfit.profiles import profile_checks
 from rczone.report import figures as figs
 from rczone.report.fit import fit_report, parameter_rows
 from tests.unit.selection.synthetic import TRUE_MODEL, prbs_zone
@@ -23,7 +23,7 @@ def test_ml_report_shows_innovations_profiles_and_units(zone, tmp_path):
     cal = calibrate(TRUE_MODEL, zone, method="ml", n_starts=1)
     prof = {
         k: v.to_dict()
-        for k, v in profile_checks(cal.model, zone, cal.result, names=["Ci"], n_points=5).items()
+        for k, v in profile_checks(cal.model, cal.data, cal.result, names=["Ci"], n_points=5).items()
     }
     checks = {
         "profiles": prof,

@@ -25,14 +25,15 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
-import pandas as pd
 from scipy.special import chdtri
 
 from rczone.errors import ParameterError
 from rczone.estimation import FitResult
 from rczone.estimation.costs import MAP_CORRELATION_TIME, PRIOR_SPREAD, Objective, auto_initial_state
+from rczone.estimation.data import Dataset
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.uncertainty import profile
@@ -99,6 +100,30 @@ class Disagreement:
         return {k: v for k, v in vars(self).items() if k != "name"}
 
 
+class PreparedLike(Protocol):
+    """Prepared data (:class:`rczone.calibration.PreparedData`): what a profile reads of it."""
+
+    dataset: Dataset
+
+
+def data_set(data: Dataset | PreparedLike) -> Dataset:
+    """The data set of ``data`` (a :class:`Dataset` as it is, or prepared data's)."""
+    if isinstance(data, Dataset):
+        return data
+    found = getattr(data, "dataset", None)
+    if isinstance(found, Dataset):
+        return found
+    raise ParameterError(
+        f"profile_checks needs the data set the fit used, got a {type(data).__name__}; pass the"
+        " calibration's data (cal.data) or rczone.calibration.prepare(model, frame)"
+    )
+
+
+def network_of(model: RCNetwork | ZoneModel) -> RCNetwork:
+    """The network of a model (a network as it is)."""
+    return model.network if isinstance(model, ZoneModel) else model
+
+
 def correlation_time(res: FitResult) -> float:
     """The output error's correlation time the fit assumed, s (a MAP fit's option, else the default)."""
     return float(res.options.get("correlation_time_s", MAP_CORRELATION_TIME))
@@ -110,12 +135,7 @@ def _inside(value: float, lo: float, hi: float) -> float:
     return float(min(max(value, lo + eps), hi - eps))
 
 
-def _objective(model, frame, res: FitResult, constants) -> tuple[Objective, float]:
-    from rczone.calibration import as_model, prepare
-
-    zm = as_model(model)
-    network = zm.network
-    data = prepare(zm, frame, constants).dataset
+def _objective(network: RCNetwork, data: Dataset, res: FitResult) -> tuple[Objective, float]:
     ss0 = network.state_space()
     x0a = auto_initial_state(ss0, data.u[0], data.m[0], data.y[0])
     x0_auto = {initial_state_name(s): float(v) for s, v in zip(ss0.state_names, x0a)}
@@ -146,21 +166,21 @@ def _objective(model, frame, res: FitResult, constants) -> tuple[Objective, floa
 
 def profile_checks(
     network: RCNetwork | ZoneModel,
-    frame: pd.DataFrame,
+    data: Dataset | PreparedLike,
     res: FitResult,
     names: Sequence[str] | None = None,
     factor: float = 10.0,
     n_points: int = 9,
-    constants: Mapping[str, float] | None = None,
 ) -> dict[str, ProfileCheck]:
     """Profile each free resistance and capacitance of a fit over ``[est / factor, est * factor]``.
 
     Parameters
     ----------
     network : RCNetwork or ZoneModel
-        The fitted structure (as passed to the fit; a model brings its input conventions).
-    frame : DataFrame or PreparedData
-        The calibration data (or the fit's, :attr:`Calibration.data`, read as they are).
+        The fitted structure.
+    data : Dataset or PreparedData
+        The calibration data set, as the fit used it (:attr:`Calibration.data
+        <rczone.calibration.Calibration.data>`, or :func:`rczone.calibration.prepare` of a frame).
     res : FitResult
     names : sequence of str, optional
         Parameters to profile; default every free resistance and capacitance.
@@ -168,8 +188,6 @@ def profile_checks(
         Half-width of the grid as a factor around the estimate.
     n_points : int
         Grid points (odd, so the estimate is one of them).
-    constants : mapping, optional
-        Constant inputs, as in the fit.
 
     Returns
     -------
@@ -177,7 +195,7 @@ def profile_checks(
     """
     if not factor > 1 or n_points < 3:
         raise ParameterError(f"profile needs factor > 1 and n_points >= 3, got {factor}, {n_points}")
-    obj, w = _objective(network, frame, res, constants)
+    obj, w = _objective(network_of(network), data_set(data), res)
     network = obj.network
     if names is None:
         names = [

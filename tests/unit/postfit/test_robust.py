@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rczone.estimation.robust import sample_loglik, sandwich
+from rczone.postfit.robust import sample_loglik, sandwich
 
 
 def test_the_sandwich_equals_statsmodels_robust_covariance_of_sarimax():
@@ -64,7 +64,7 @@ def test_the_per_sample_log_densities_sum_to_the_log_likelihood(problem):
 
 def test_the_scores_sum_to_the_gradient_of_the_log_likelihood(problem):
     from rczone.estimation.costs import ml_cost
-    from rczone.estimation.robust import scores
+    from rczone.postfit.robust import scores
 
     net, values, data = problem
 

@@ -9,7 +9,7 @@ from statsmodels.stats.diagnostic import acorr_ljungbox
 from statsmodels.tsa import stattools
 
 from rczone.errors import ParameterError
-from rczone.estimation.innovations import (
+from rczone.postfit.innovations import (
     acf,
     analyse_residuals,
     ccf,
@@ -18,9 +18,9 @@ from rczone.estimation.innovations import (
     ljung_box_lags,
     ljung_box_q,
 )
-from rczone.estimation.openloop import ljung_box
+from rczone.postfit.openloop import ljung_box
 
-from .nets import NET1
+from ..estimation.nets import NET1
 
 
 def ar1(n: int, phi: float, rng: np.random.Generator) -> np.ndarray:

@@ -25,7 +25,7 @@ the one :class:`~rczone.results.verdict.Verdict` (exit code 3):
   Bacher--Madsen house); an autocorrelation of 0.2 leaves 4 % of the next error's variance
   predictable from the past, a structure the model should have carried. Non-white innovations
   also make the Hessian's standard errors too small: the verdict then reads the robust
-  (sandwich) ones (:mod:`rczone.estimation.robust`).
+  (sandwich) ones (:mod:`rczone.postfit.robust`).
 
 References
 ----------
@@ -39,11 +39,44 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
-from rczone.calibration.horizons import MODEL, HorizonScores
-from rczone.estimation.innovations import acf, ljung_box_lags, ljung_box_q
+from rczone.postfit.innovations import acf, ljung_box_lags, ljung_box_q
+
+#: Names of the predictors in a score table (:class:`~rczone.calibration.horizons.HorizonScores`),
+#: its JSON and the report.
+MODEL, PERSISTENCE, ARX_NAME = "model", "persistence", "arx"
+
+
+class HorizonScores(Protocol):
+    """What the checks read of held-out scores (:class:`rczone.calibration.horizons.HorizonScores`).
+
+    Attributes
+    ----------
+    table : DataFrame
+        One row per horizon, predictor and output (``predictor``, ``horizon``, ``output``,
+        ``rmse_K``, ``coverage_2sigma``, ``stable``).
+    measured : ndarray, shape (N, ny)
+    predicted : dict
+        Predictor name to its predictions, shape (H, N, ny).
+    horizons : tuple
+        Steps ahead (None: open loop).
+    outputs : tuple of str
+    unstable : dict
+        Baselines whose predictor is unstable, with the largest modulus of their poles.
+    data_label : str
+    """
+
+    table: Any
+    measured: np.ndarray
+    predicted: dict
+    horizons: tuple
+    outputs: tuple[str, ...]
+    unstable: dict
+    data_label: str
+
 
 #: Least share of held-out measurements inside the model's 2-sigma band, at every horizon.
 COVERAGE_MIN = 0.80
@@ -274,62 +307,3 @@ def held_out_evidence(scores: HorizonScores, calibration_innovations=None) -> He
         innovation_check(scores, calibration_innovations),
     )
     return HeldOutEvidence(checks, scores.data_label)
-
-
-def with_holdout(cal, scores: HorizonScores):
-    """``cal`` with the held-out evidence of ``scores`` in its verdict (and its fitted model's provenance).
-
-    Parameters
-    ----------
-    cal : Calibration
-        The fit on the calibration part.
-    scores : HorizonScores
-        Its scores on the held-out part.
-
-    Returns
-    -------
-    Calibration
-        A new calibration; :attr:`~rczone.calibration.Calibration.verdict` weighs the evidence.
-    """
-    import dataclasses
-
-    from rczone.calibration.calibration import stamped
-
-    checked = dataclasses.replace(cal, evidence=held_out_evidence(scores, cal.innovations))
-    return dataclasses.replace(checked, model=stamped(checked.model, checked.verdict))
-
-
-def verdict_fit(cal):
-    """The fit whose standard errors the verdict reads: the robust ones when the innovations are not white.
-
-    Fits to other data are compared by their standard errors
-    (:func:`rczone.diagnostics.postfit.compare_fits`); with a misspecified model the Hessian's are
-    too small and identical houses "disagree" (issue 38).
-
-    Parameters
-    ----------
-    cal : Calibration
-
-    Returns
-    -------
-    FitResult
-    """
-    import dataclasses
-
-    if cal.robust is None or cal.innovations is None or cal.innovations.white:
-        return cal.result
-    params = {
-        n: e._replace(std_error=cal.robust.std_errors.get(n, e.std_error))
-        for n, e in cal.result.parameters.items()
-    }
-    return dataclasses.replace(cal.result, parameters=params)
-
-
-def verdict_line(cal) -> str:
-    """The last line of ``rczone fit --holdout``: the verdict with the held-out evidence, naming what failed."""
-    v = cal.verdict
-    if v.trustworthy:
-        return "[green]verdict:[/] trustworthy on " + ", ".join(v.checked)
-    failed = list((v.held_out or {}).get("failed") or [])
-    what = f"; held out, failed: {', '.join(failed)}" if failed else ""
-    return f"[red]verdict: flagged[/] (exit code {cal.exit_code}), {len(v.reasons)} reason(s){what}"

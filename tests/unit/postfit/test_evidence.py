@@ -13,7 +13,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from rczone.calibration.evidence import (
+from rczone.calibration.horizons import HorizonScores, horizon_label
+from rczone.postfit.evidence import (
     COVERAGE_MIN,
     FAILED,
     NOT_JUDGED,
@@ -23,7 +24,6 @@ from rczone.calibration.evidence import (
     held_out_evidence,
     innovation_check,
 )
-from rczone.calibration.horizons import HorizonScores, horizon_label
 from rczone.results.verdict import verdict_of
 
 DT = 300.0

@@ -6,13 +6,13 @@ import pytest
 from rczone.errors import ParameterError
 from rczone.estimation import Dataset
 from rczone.estimation.forecast import k_step_band
-from rczone.estimation.openloop import (
+from rczone.postfit.openloop import (
     ljung_box,
     open_loop_error,
     per_output_errors,
 )
 
-from .nets import NET2, data2
+from ..estimation.nets import NET2, data2
 
 NOISE = {"sigma_v": 0.05, "sigma_w_Ti": 1e-3, "sigma_w_Tw": 1e-4, "sigma_x0_Ti": 0.1, "sigma_x0_Tw": 0.5}
 
@@ -71,9 +71,9 @@ def test_a_non_finite_prediction_is_an_error_not_a_perfect_fit(monkeypatch) -> N
     import pytest
 
     from rczone.errors import InputShapeError
-    from rczone.estimation import openloop as validation
+    from rczone.postfit import openloop as validation
 
-    from .nets import NET1, data1
+    from ..estimation.nets import NET1, data1
 
     data = data1()
 

@@ -7,9 +7,9 @@ import pytest
 
 from rczone.calibration import calibrate
 from rczone.cli.main import main
-from rczone.diagnostics.postfit import PROFILE_THRESHOLD, compare_fits, far_from_construction, profile_checks
 from rczone.errors import ParameterError
 from rczone.models import get_model
+from rczone.postfit.profiles import PROFILE_THRESHOLD, compare_fits, far_from_construction, profile_checks
 from tests.unit.diagnostics.synthetic import night
 
 TRUE = {"Rw": 0.012, "Cr": 6e5}
@@ -27,8 +27,8 @@ def forced_fit(net):
 
 
 def test_profiles_of_a_forced_night_are_curved_and_cover_the_truth(net, forced_fit):
-    frame, cal = forced_fit
-    checks = profile_checks(net, frame, cal.result, n_points=7)
+    _, cal = forced_fit
+    checks = profile_checks(net, cal.data, cal.result, n_points=7)
     assert set(checks) == {"Cr", "Rw"}
     for name, c in checks.items():
         assert not c.flat
@@ -41,7 +41,7 @@ def test_a_parameter_the_data_cannot_see_has_a_flat_profile(net):
     # a night at constant Ts equal to the surroundings: the wall resistance hardly matters
     frame = night("closed-loop", seed=1, hours=3, theta=TRUE)
     cal = calibrate(net, frame, method="ls")
-    checks = profile_checks(net, frame, cal.result, names=["Rw"], n_points=5)
+    checks = profile_checks(net, cal.data, cal.result, names=["Rw"], n_points=5)
     assert checks["Rw"].flat
 
 
@@ -70,9 +70,19 @@ def test_far_from_construction_reports_the_ratio(forced_fit):
     ("kwargs", "match"), [({"factor": 1.0}, "factor > 1"), ({"n_points": 2}, "n_points")]
 )
 def test_bad_profile_arguments(net, forced_fit, kwargs, match):
-    frame, cal = forced_fit
+    _, cal = forced_fit
     with pytest.raises(ParameterError, match=match):
-        profile_checks(net, frame, cal.result, **kwargs)
+        profile_checks(net, cal.data, cal.result, **kwargs)
+
+
+def test_a_profile_reads_the_fits_data_set_not_a_frame(net, forced_fit):
+    """A frame is refused in one line naming what to pass; the data set alone is accepted."""
+    frame, cal = forced_fit
+    with pytest.raises(ParameterError, match=r"cal\.data.*prepare"):
+        profile_checks(net, frame, cal.result)
+    by_set = profile_checks(net, cal.data.dataset, cal.result, names=["Rw"], n_points=3)
+    by_prepared = profile_checks(net, cal.data, cal.result, names=["Rw"], n_points=3)
+    assert by_set["Rw"].rise.tolist() == by_prepared["Rw"].rise.tolist()
 
 
 @pytest.mark.slow  # > 4 s: out of make test (2026-12-02 durations), run by pytest -m slow
@@ -114,7 +124,7 @@ def test_profiles_work_for_any_model_and_every_output():
     frame = heated(both, "prbs", hours=24)
     frame.loc[frame.index[::3], "Te"] = float("nan")  # an output with missing samples
     cal = calibrate(family("TiTe+heater", ("Ti", "Te")), frame, method="ls")
-    checks = profile_checks(cal.model, frame, cal.result, names=["Ci", "Rea"], factor=1.25, n_points=11)
+    checks = profile_checks(cal.model, cal.data, cal.result, names=["Ci", "Rea"], factor=1.25, n_points=11)
     for name, c in checks.items():
         est = cal.result.estimates[name]
         assert not c.flat and c.interval[0] < est < c.interval[1], (name, c.interval)
