@@ -192,6 +192,7 @@ def _compiled_rc2(problem: FilterProblem) -> tuple[float, int, FilterTrace]:
         np.empty((N, 2, 2)),
         np.empty((N, 1, 1)),
         np.empty((N, 2, 2)),
+        np.empty((0, 0, 2)),
     )
     nll, n_obs = filter_rc2(
         Dynamics(*(f(a) for a in (problem.Phi, problem.G0, problem.G1, problem.Qd))),

@@ -44,7 +44,9 @@ import numpy as np
 from rczone.errors import ParameterError
 from rczone.estimation.data import Dataset
 from rczone.estimation.engines import assemble
+from rczone.kernels.arrays import Dynamics, DynamicsDerivatives, FilterOptions, FilterTrace, Series, writable
 from rczone.kernels.discretize import interval_derivatives
+from rczone.kernels.kalman import kalman_filter
 from rczone.network import RCNetwork
 
 
@@ -90,51 +92,31 @@ def check_horizons(horizons: Sequence[int]) -> tuple[int, ...]:
     return tuple(hs)
 
 
-def _filtered(asm, mats, dmats, data: Dataset):
+def _filtered(asm, mats: Dynamics, dmats: DynamicsDerivatives, data: Dataset, foh: bool):
     """Filtered means and their derivatives at every sample, shapes (N, n) and (N, q, n).
 
-    The forward sensitivities of the Kalman filter: each observed output updates the state as a
-    scalar measurement (as the compiled filter does), then the state and covariance are
-    propagated with their derivatives.
+    The compiled filter (:func:`rczone.kernels.kalman.kalman_filter`) with its forward
+    sensitivities keeps them (``trace.xf``, ``trace.dxf``); its steady-state shortcut is off, so
+    the gains are those of the exact recursion at every sample.
     """
     obs, prior = asm.observation, asm.prior
-    C, D, r, dC, dD, dr = obs.C, obs.D, obs.r, obs.dC, obs.dD, obs.dr
-    u, y, which = data.u, data.y, data.intervals[1]
-    N, n = y.shape[0], C.shape[1]
-    q = prior.dx0.shape[0]
-    x, P, dx, dP = prior.x0.copy(), prior.P0.copy(), prior.dx0.copy(), prior.dP0.copy()
-    xf, dxf = np.empty((N, n)), np.empty((N, q, n))
-    for k in range(N):
-        for i in np.flatnonzero(np.isfinite(y[k])):
-            c, dc = C[i], dC[i]
-            e = y[k, i] - c @ x - D[i] @ u[k]
-            de = -(dc @ x + dx @ c + dD[i] @ u[k])
-            pc = P @ c
-            dpc = dP @ c + dc @ P  # P symmetric: dc @ P = (P dc')'
-            s = c @ pc + r[i]
-            ds = dpc @ c + dc @ pc + dr[i]
-            gain = pc / s
-            dgain = dpc / s - np.outer(ds, pc) / s**2
-            x = x + gain * e
-            dx = dx + dgain * e + de[:, None] * gain
-            P = P - np.outer(pc, pc) / s
-            dP = (
-                dP
-                - (dpc[:, :, None] * pc[None, None, :] + pc[None, :, None] * dpc[:, None, :]) / s
-                + ds[:, None, None] * np.outer(pc, pc) / s**2
-            )
-        xf[k], dxf[k] = x, dx
-        if k + 1 < N:
-            w = which[k]
-            F, dF = mats.Phi[w], dmats.dPhi[w]
-            drive = mats.G0[w] @ u[k] + mats.G1[w] @ u[k + 1]
-            ddrive = dmats.dG0[w] @ u[k] + dmats.dG1[w] @ u[k + 1]
-            dx = dx @ F.T + dF @ x + ddrive
-            x = F @ x + drive
-            FP = F @ P
-            dP = dF @ P @ F.T + F @ dP @ F.T + FP @ dF.transpose(0, 2, 1) + dmats.dQd[w]
-            P = FP @ F.T + mats.Qd[w]
-    return xf, dxf
+    N, n, ny, q = data.n_samples, prior.x0.shape[0], obs.C.shape[0], prior.dx0.shape[0]
+    trace = FilterTrace(
+        np.full((0, ny), np.nan),
+        np.zeros((0, ny, q)),
+        np.empty((0, n)),
+        np.empty((N, n)),
+        np.empty((0, n, n)),
+        np.empty((0, ny, ny)),
+        np.empty((0, n, n)),
+        np.empty((N, q, n)),
+    )
+    f = writable  # one specialization whatever the arrays' origin
+    series = Series(f(data.u), f(data.y), f(data.intervals[1], np.int64))
+    _, n_obs, _, _ = kalman_filter(mats, dmats, obs, prior, series, FilterOptions(foh, False, 0.0), trace)
+    if n_obs < 0:
+        raise np.linalg.LinAlgError("an innovation variance is not positive: the noise model is invalid")
+    return trace.xf, trace.dxf
 
 
 def kstep_cost(
@@ -168,7 +150,7 @@ def kstep_cost(
     data.check_against(network)
     asm = assemble(network, values, data, hold, "ml", wrt)
     mats, dmats = interval_derivatives(asm.mod, asm.der, asm.how)
-    xf, dxf = _filtered(asm, mats, dmats, data)
+    xf, dxf = _filtered(asm, mats, dmats, data, hold == "foh")
     obs = asm.observation
     u, y, which = data.u, data.y, data.intervals[1]
     N, q = y.shape[0], len(tuple(wrt))

@@ -143,6 +143,9 @@ class FilterTrace(NamedTuple):
     Pp: np.ndarray  #: (N, n, n) predicted covariances
     S: np.ndarray  #: (N, ny, ny) innovation covariances ``C P C' + R``
     Pf: np.ndarray  #: (N, n, n) filtered covariances (what the smoother's backward pass needs)
+    dxf: (
+        np.ndarray
+    )  #: (N, q, n) derivatives of the filtered states (not in open loop; the k-step criterion's)
 
 
 class FilterValue(NamedTuple):

@@ -108,7 +108,7 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> Filt
 
     ``errors``: the innovations or output errors (NaN where missing) and their derivatives;
     ``states``: the innovations, predicted and filtered states, predicted and filtered
-    covariances, ``S``.
+    covariances, ``S``, and the filtered states' derivatives along the ``q`` directions.
     """
     ne = N if errors or states else 0
     nd = N if errors else 0
@@ -121,6 +121,7 @@ def outputs(N: int, n: int, ny: int, q: int, errors: bool, states: bool) -> Filt
         np.empty((ns, n, n)),
         np.empty((ns, ny, ny)),
         np.empty((ns, n, n)),
+        np.empty((ns, q, n)),
     )
 
 
@@ -566,8 +567,8 @@ def kalman_filter(
         Each array is filled when its first axis has N entries (:func:`outputs` makes them):
         innovations ``y - C x_pred - D u`` (the output errors in open loop), their derivatives
         (open loop only), predicted and filtered states, predicted covariances, innovation
-        covariances, innovation covariances, filtered covariances (not in open loop). Entries of
-        missing outputs are left as they are.
+        covariances, innovation covariances, filtered covariances and the filtered states'
+        derivatives (the last two not in open loop). Entries of missing outputs are left as they are.
     basis : ModalBasis, optional
         Run in the modal coordinates of an RC model (values only: ``q = 0``, only the
         innovations in ``trace``): ``dyn`` holds each interval's matrices in its own modal
@@ -671,6 +672,7 @@ def kalman_filter(
     keep_e = trace.e.shape[0] == N
     keep_de = trace.de.shape[0] == N
     keep_Pf = trace.Pf.shape[0] == N and not open_loop
+    keep_dxf = trace.dxf.shape[0] == N and not open_loop
     nll = 0.0
     n_obs = 0
     for k in range(N):
@@ -746,6 +748,10 @@ def kalman_filter(
         if keep_xf:
             for i in range(n):
                 trace.xf[k, i] = x[i]
+        if keep_dxf:
+            for d in range(q):
+                for i in range(n):
+                    trace.dxf[k, d, i] = dx[d, i]
         if keep_Pf:
             # the filtered covariance, also while the steady state holds P at its prediction
             for i in range(n):

@@ -70,14 +70,26 @@ def test_the_gradient_equals_central_differences(problem):
     assert np.allclose(cost.contributions.sum(axis=0), cost.gradient, rtol=1e-12)
 
 
-def test_the_sensitivity_filter_has_the_compiled_filters_means(problem):
-    network, values, data = problem
+def _filtered_at(network, values, data, wrt=WRT):
     from rczone.estimation.engines import assemble
     from rczone.kernels.discretize import interval_derivatives
 
-    asm = assemble(network, values, data, "zoh", "ml", WRT)
-    xf, _ = _filtered(asm, *interval_derivatives(asm.mod, asm.der, asm.how), data)
+    asm = assemble(network, values, data, "zoh", "ml", wrt)
+    return _filtered(asm, *interval_derivatives(asm.mod, asm.der, asm.how), data, False)
+
+
+def test_the_sensitivity_filter_has_the_filters_means_and_their_derivatives(problem):
+    """The filtered means equal the filter's without sensitivities; their derivatives, central differences."""
+    network, values, data = problem
+    xf, dxf = _filtered_at(network, values, data)
     np.testing.assert_allclose(xf, run_filter(network, values, data).x_filt, rtol=1e-9, atol=1e-9)
+    for i, name in enumerate(WRT):
+        h = 1e-5 * values[name]
+        up, _ = _filtered_at(network, {**values, name: values[name] + h}, data, ())
+        down, _ = _filtered_at(network, {**values, name: values[name] - h}, data, ())
+        fd = (up - down) / (2 * h)
+        scale = np.abs(fd).max()
+        assert np.abs(dxf[:, i, :] - fd).max() <= 1e-5 * scale, name
 
 
 def test_the_noise_scale_is_the_only_freedom_the_criterion_leaves(problem):
