@@ -8,6 +8,8 @@ one clear line instead of a traceback).
 from __future__ import annotations
 
 import difflib
+import os
+import sys
 from collections.abc import Iterable
 
 
@@ -79,3 +81,23 @@ def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
         return "did you mean " + " or ".join(f"'{printable(c)}'" for c in close) + "?"
     shown = ", ".join(printable(c) for c in pool[:20]) + (" ..." if len(pool) > 20 else "")
     return f"known names: {shown}" if pool else "none are declared"
+
+
+#: The package's folder: frames of files under it are rczone's own.
+_PACKAGE = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel`` of :func:`warnings.warn` that points at the user's call, past rczone's frames.
+
+    Called by the function that warns: ``warnings.warn(msg, RczoneWarning, stacklevel=user_stacklevel())``.
+    The same warning is raised through the API's entry points at different depths (a frame, a
+    file, a batch: all prepare the data set in one place); a fixed level points into rczone from
+    most of them. (Python 3.12's ``skip_file_prefixes`` does this; rczone supports 3.11.)
+    """
+    frame = sys._getframe(1)  # the function that warns: stacklevel 1
+    level = 1
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_PACKAGE):
+        frame = frame.f_back
+        level += 1
+    return level

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 
 from rczone.data.quality import RczoneWarning
-from rczone.errors import DataError
+from rczone.errors import DataError, user_stacklevel
 from rczone.estimation import Dataset
 from rczone.models import ZoneModel, load_model
 from rczone.models.zone import ModelInputs
@@ -171,7 +171,7 @@ def dataset(
     t, u, m, y = zm.signals(frame_from(frame), constants)
     implausible = zm.implausible_signals(u, m, y)  # every path's data pass here: frame, file, batch
     for line in implausible:
-        warnings.warn(line, RczoneWarning, stacklevel=2)
+        warnings.warn(line, RczoneWarning, stacklevel=user_stacklevel())
     if stretch == "longest":
         sl = complete_stretch(u, m, y)
         if sl.stop - sl.start < 2:

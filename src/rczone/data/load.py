@@ -56,7 +56,7 @@ from rczone.data.resample import hold_previous, interpolate_linear, uniform_grid
 from rczone.data.timestamps import parse_times, rows_text, to_local
 from rczone.data.units import SI_UNITS, check_plausible, to_si
 from rczone.data.zonedata import ZoneData
-from rczone.errors import DataError, did_you_mean
+from rczone.errors import DataError, did_you_mean, user_stacklevel
 
 CSV_SUFFIXES = (".csv", ".csv.gz", ".txt", ".tsv")
 LONG_STEP = 3 * 3600.0
@@ -430,7 +430,7 @@ def _gap_limit(explicit: float | None, t: np.ndarray, x: np.ndarray) -> float:
 
 def _warn(message: str, collected: list[str]) -> None:
     collected.append(message)
-    warnings.warn(message, RczoneWarning, stacklevel=4)
+    warnings.warn(message, RczoneWarning, stacklevel=user_stacklevel())
 
 
 def _hours(seconds: float) -> str:

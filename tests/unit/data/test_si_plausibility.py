@@ -103,3 +103,18 @@ def test_a_batch_zone_from_a_frame_is_flagged(fahrenheit):
         data = prepare(MODEL, fahrenheit)
     cal = calibrate(MODEL, data, method="ls", n_starts=1, analyses=False)
     assert not cal.verdict.trustworthy and cal.data_warnings == data.dataset.warnings
+
+
+@pytest.mark.parametrize("entry", ["fit", "predict", "prepare"])
+def test_the_warning_points_at_the_users_call_not_into_rczone(fahrenheit, entry):
+    """However deep the entry point prepares the data set, the warning names the caller's line."""
+    call = {
+        "fit": lambda: rczone.fit(MODEL, fahrenheit, method="ls", n_starts=1, checks=False, profiles=False),
+        "predict": lambda: rczone.predict(MODEL, fahrenheit),
+        "prepare": lambda: prepare(MODEL, fahrenheit),
+    }[entry]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        call()
+    ours = [w for w in caught if issubclass(w.category, RczoneWarning)]
+    assert ours and {w.filename for w in ours} == {__file__}
