@@ -389,7 +389,7 @@ def members_markdown(rows: dict) -> str:
     titles = " | ".join(label(None if k == "open" else int(k), 300.0) for k in keys)
     lines = [f"| 2σ coverage | {titles} | at a bound | verdict |", "|---" * (len(keys) + 3) + "|"]
     for name, r in rows.items():
-        cells = " | ".join(f"{r['model']['coverage'][k]:.0%}" for k in keys)
+        cells = " | ".join(f"{100 * r['model']['coverage'][k]:.0f} %" for k in keys)
         bound = ", ".join(f.partition(" ")[0] for f in r["at_bound"]) or "none"
         verdict = verdict_cell(r["verdict"]) if r.get("verdict") else "not recorded"
         lines.append(f"| {_short(name)} | {cells} | {bound} | {verdict} |")

@@ -75,7 +75,8 @@ def scores(network, values, data: Dataset, first: int, steps: list[int]) -> dict
 
 
 def _label(seconds: float) -> str:
-    """A horizon as the page writes it (``5 min``, ``1 h``)."""
+    """A horizon as the page writes it (``5 min``, ``1 h``), to the second (the sampling is not exact)."""
+    seconds = round(seconds)
     return f"{seconds / 3600:g} h" if seconds >= 3600 else f"{seconds / 60:g} min"
 
 
@@ -142,7 +143,7 @@ def markdown(results: dict) -> str:
                 *once,
                 _label(int(k) * r["dt_s"]),
                 *(f"{x[key]:.3f}" for key in ("rmse_K", "interval_score_K") for x in (a, b)),
-                *(f"{x['coverage_2sigma']:.0%}" for x in (a, b)),
+                *(f"{100 * x['coverage_2sigma']:.0f} %" for x in (a, b)),
                 *verdicts,
             ]
             lines.append("|" + "|".join(f" {c} " if c else " " for c in cells) + "|")
