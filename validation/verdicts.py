@@ -83,30 +83,3 @@ def verdict_cell(verdict: Any) -> str:
 def flags_cell(flags: Iterable[str], trustworthy: bool) -> str:
     """:func:`verdict_cell` from a candidate's JSON (``rczone select --json``: ``trustworthy`` and ``flags``)."""
     return verdict_cell({"trustworthy": trustworthy, "reasons": list(flags)})
-
-
-def fit_verdict(network, result, data, white: bool | None):
-    """The verdict ``rczone fit`` gives an estimation-level ML fit on ``data`` (no held-out part).
-
-    The fit's own flags, the data's warnings, and, when the innovations are not white, the robust
-    (sandwich) standard errors, as :class:`rczone.calibration.Calibration` weighs them.
-
-    Parameters
-    ----------
-    network : RCNetwork
-    result : FitResult
-        An ML fit (:func:`rczone.estimation.fit`).
-    data : Dataset
-        The data it was fitted to.
-    white : bool or None
-        Whether its innovations are white (:func:`rczone.estimation.innovations.innovation_analysis`).
-
-    Returns
-    -------
-    Verdict
-    """
-    from rczone.estimation.robust import robust_errors
-    from rczone.results.verdict import verdict_of
-
-    robust = robust_errors(network, result, data)
-    return verdict_of(result, data=data.warnings, robust=robust, white=white)
