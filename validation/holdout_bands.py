@@ -350,21 +350,30 @@ def member_row(zm: ZoneModel, frame: pd.DataFrame, split: float, verdict: dict |
 
 
 def members(shared: Path, selected: ZoneModel) -> dict:
-    """:func:`member_row` of the selected model and of every :data:`MEMBERS` fit on the calibration part."""
-    from rczone.calibration.calibration import with_holdout
-    from rczone.calibration.horizons import holdout_scores
+    """:func:`member_row` of the selected model and of every :data:`MEMBERS` fit on the calibration part.
+
+    Each member is ``rczone fit DATA --columns MAP --model NAME --noise NOISE --holdout SPLIT``
+    (:func:`rczone.fit`), so its verdict is the one that command gives: the fit's own flags, the
+    robust standard errors and the held-out checks.
+    """
+    import rczone
 
     frame, split = bm_frame(shared, selected)
     verdict = SELECTED.get("verdict")
     out = {f"{selected.network.name} (selected, noise all)": member_row(selected, frame, split, verdict)}
     for name, noise in MEMBERS:
-        zm = load_model(name)
-        frame, split = bm_frame(shared, zm)
-        cal = calibrate(zm, frame[frame["time"].to_numpy(float) < split], noise=noise)
-        # the verdict of `rczone fit --holdout` on this split: the fit's flags and the held-out checks
-        held = with_holdout(cal, holdout_scores(cal.model, frame, split, None, label="Bacher-Madsen"))
-        out[f"{name} (noise {noise})"] = member_row(cal.model, frame, split, held.verdict.to_dict())
-        print(f"{name} (noise {noise}): done", flush=True)
+        fitted = rczone.fit(
+            name,
+            shared / BM_DATA,
+            columns=BM_MAP,
+            noise=noise,
+            holdout=BM_SPLIT,
+            checks=False,
+            label="Bacher-Madsen",
+        )
+        frame, split = bm_frame(shared, fitted.model)
+        out[f"{name} (noise {noise})"] = member_row(fitted.model, frame, split, fitted.verdict.to_dict())
+        print(f"{name} (noise {noise}): done, {verdict_cell(fitted.verdict)}", flush=True)
     return out
 
 
@@ -380,7 +389,7 @@ def members_markdown(rows: dict) -> str:
     titles = " | ".join(label(None if k == "open" else int(k), 300.0) for k in keys)
     lines = [f"| 2σ coverage | {titles} | at a bound | verdict |", "|---" * (len(keys) + 3) + "|"]
     for name, r in rows.items():
-        cells = " | ".join(f"{r['model']['coverage'][k]:.0%}" for k in keys)
+        cells = " | ".join(f"{100 * r['model']['coverage'][k]:.0f} %" for k in keys)
         bound = ", ".join(f.partition(" ")[0] for f in r["at_bound"]) or "none"
         verdict = verdict_cell(r["verdict"]) if r.get("verdict") else "not recorded"
         lines.append(f"| {_short(name)} | {cells} | {bound} | {verdict} |")

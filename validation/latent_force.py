@@ -24,7 +24,9 @@ Reported per data set:
   (the disturbance's magnitude -> 0): statistic, degrees of freedom, the ``chi2(df)`` p-value
   (the one that decides) and the chi-bar-squared one;
 * the Ljung-Box p-value of each model's standardized one-step innovations on the calibration part
-  (:func:`rczone.postfit.innovations.innovation_analysis`; closer to white is larger);
+  (:attr:`rczone.Calibration.innovations`; closer to white is larger);
+* the verdict ``rczone fit`` gives each fit on the calibration part (every fit is
+  :func:`rczone.fit`, the model with the disturbance started from the estimates of the one without);
 * the held-out 6-h prediction error: the filter runs over the whole record with the calibration
   estimates, and each held-out sample is predicted from the filtered state 6 h earlier with the
   measured inputs (:func:`rczone.estimation.forecast.k_step_band`), RMSE over the held-out part.
@@ -46,14 +48,12 @@ import numpy as np
 import pandas as pd
 from scipy.special import chdtrc
 
-from rczone.estimation import Dataset, fit
-from rczone.estimation.fit import default_free
+from rczone.estimation import Dataset
 from rczone.estimation.forecast import k_step_band
 from rczone.files.atomic import write_json_atomic
 from rczone.models import load_model
 from rczone.network import LatentForce, Parameter, RCNetwork
 from rczone.network.stochastic import is_noise_name
-from rczone.postfit.innovations import innovation_analysis
 from rczone.selection.compare import chi_bar_sf
 from rczone.selection.nesting import nesting
 
@@ -61,7 +61,7 @@ HERE = Path(__file__).resolve().parent
 DEFAULT_SHARED = HERE.parent.parent / "shared"
 sys.path.insert(0, str(HERE))
 from real_data import bacher_madsen_frame, leec_frame, leec_network  # noqa: E402
-from verdicts import fit_verdict, verdict_cell  # noqa: E402
+from verdicts import verdict_cell  # noqa: E402
 
 #: Prediction horizon of the held-out check, s.
 HORIZON_S = 6 * 3600.0
@@ -130,18 +130,29 @@ def with_disturbance(
 
 def _one(
     net: RCNetwork,
-    cal: Dataset,
+    cal: pd.DataFrame,
     full: Dataset,
     split: int,
     start: dict | None = None,
     noise: str = "all",
     hold: str = "zoh",
 ) -> tuple[dict, object, tuple[str, ...]]:
+    """``rczone fit`` of ``net`` on the calibration part ``cal`` from the values ``start``, and its scores.
+
+    The fit (:func:`rczone.fit`) carries the verdict ``rczone fit`` gives it on these data and the
+    whiteness of its innovations; the 6-h error is scored on the samples of ``full`` from ``split``.
+    """
+    import rczone
+
     t0 = time.process_time()
-    free = default_free(net, "ml", noise=noise)
-    res = fit(net, cal, free, method="ml", start=start, hold=hold)
+    zm = load_model(net)
+    if start:
+        theta = {k: v for k, v in start.items() if k in net.parameters}
+        zm = zm.with_values(theta, {k: v for k, v in start.items() if k not in theta})
+    fitted = rczone.fit(zm, cal, noise=noise, hold=hold, checks=False)
+    res, white = fitted.result, fitted.innovations
+    free = tuple(fitted.model.provenance["free"])
     values = {**res.fixed, **res.estimates}
-    white = innovation_analysis(net, values, cal, hold)
     dt = float(np.median(np.diff(full.t)))
     y_hat, _ = k_step_band(net, values, full, max(1, round(HORIZON_S / dt)), hold)
     err = (full.y - y_hat)[split:, 0]  # the room air (the first output)
@@ -151,7 +162,7 @@ def _one(
         "converged": res.converged,
         "flags": list(res.flags),
         "at_bound": [e.name for e in res.parameters.values() if e.at_bound],
-        "verdict": fit_verdict(net, res, cal, white.white).to_dict(),
+        "verdict": fitted.verdict.to_dict(),
         "ljung_box_p": white.ljung_box_p,
         "rmse_6h_K": float(np.sqrt(np.nanmean(err**2))),
         "estimates": {k: float(v) for k, v in res.estimates.items()},
@@ -195,8 +206,8 @@ def compare(
     """
     split = int(calibration_fraction * len(frame))
     full = Dataset.from_frame(frame, plain, time="time")
-    cal = Dataset.from_frame(frame.iloc[:split], plain, time="time")
-    dt = float(np.median(np.diff(cal.t)))
+    cal = frame.iloc[:split]
+    dt = float(np.median(np.diff(full.t[:split])))
     base = {}
     for placement in NOISES if noise == "auto" else (noise,):
         a, res_a, free_a = _one(plain, cal, full, split, noise=placement, hold=hold)

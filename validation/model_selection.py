@@ -2,7 +2,7 @@
 
 Usage::
 
-    python validation/model_selection.py [--shared ../shared] [--out validation-output]
+    python validation/model_selection.py [--shared ../shared] [--out validation-output] [--classic]
 
 Reads ``data/bacher_madsen_prbs/inputPRBS1.csv`` from the shared folder (its licence does not
 allow shipping it; nothing is copied into the project) through the column map
@@ -12,8 +12,10 @@ allow shipping it; nothing is copied into the project) through the column map
 
 on it: the whole Bacher & Madsen family (``Tm``, ``Te``, ``Th``, the sensor node ``Tsn``, the
 solar splits ``Ae`` and ``As``, ``Ria``) with a heater and solar gains, grown from ``Ti`` one part
-at a time by likelihood-ratio tests, and prints its path beside the one the paper reports. Prints 'skipped: data not found' and exits 0 when the data are absent.
-Writes ``<out>/model_selection.json``, ``<out>/model_selection/report.html`` and prints the tables
+at a time by likelihood-ratio tests, and prints its path beside the one the paper reports
+(``--classic``: through the five candidates of :data:`CLASSIC` only, passed as ``--model``). Prints 'skipped: data not found' and exits 0 when the data are absent.
+Writes ``<out>/model_selection.json``, ``<out>/model_selection/report.html`` (``--classic``:
+``model_selection_classic``) and prints the tables
 as Markdown (the form in docs/validation.md), each candidate with the verdict rczone gives its fit.
 """
 
@@ -39,6 +41,10 @@ COLUMN_MAP = HERE / "maps" / "bacher_madsen.toml"
 #: Ti -> TiTh -> TiTeTh and ends at the selected TiTmTeThAeRia (their log-likelihoods are not
 #: available here; see the data's PROVENANCE.md).
 PUBLISHED = {"start": ("Ti", "TiTh", "TiTeTh"), "selected": "TiTmTeThAeRia"}
+
+#: ``--classic``: the five candidates of ``rczone select`` by a criterion (the family before issue
+#: 22), each with the heater and solar gains into the interior.
+CLASSIC = ("Ti", "TiTe", "TiTh", "TiTeTh", "TiTm")
 
 
 def base(name: str) -> str:
@@ -90,22 +96,30 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--shared", type=Path, default=DEFAULT_SHARED)
     ap.add_argument("--out", type=Path, default=Path("validation-output"))
+    ap.add_argument(
+        "--classic",
+        action="store_true",
+        help=f"grow through the five classic candidates only ({', '.join(CLASSIC)}), not the whole family",
+    )
     args = ap.parse_args(argv)
     if not (args.shared / DATA).is_file():
         print(f"skipped: data not found under {args.shared / DATA.parent}")
         return 0
-    out_json = args.out / "model_selection.json"
+    stem = "model_selection_classic" if args.classic else "model_selection"
+    out_json = args.out / f"{stem}.json"
+    models = [a for b in CLASSIC for a in ("--model", f"{b}+heater+solar")] if args.classic else []
     rc = rczone(
         [
             "select",
             str(args.shared / DATA),
             "--columns",
             str(COLUMN_MAP),
+            *models,
             "--forward",
             "--json",
             str(out_json),
             "--report",
-            str(args.out / "model_selection"),
+            str(args.out / stem),
         ]
     )
     if rc not in (0, 3):

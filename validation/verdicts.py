@@ -4,7 +4,7 @@ Every table of docs/validation.md that lists fits carries the verdict rczone its
 them (issue 38): ``trustworthy``, or ``flagged:`` and the checks that failed, each named in a few
 words (the full sentences are in the fit's JSON, ``verdict.reasons``). The names are read off the
 reasons :func:`rczone.results.verdict.verdict_of` writes: a fit's own flags
-(:mod:`rczone.estimation.minimize`), the held-out checks (:mod:`rczone.postfit.evidence`), the
+(:mod:`rczone.estimation.minimize`), the held-out checks (:mod:`rczone.calibration.evidence`), the
 robust standard errors, flat profiles, fits to other data that disagree, implausible or dropped
 data. A reason of another form is kept, cut to its first words, never dropped.
 """
@@ -83,30 +83,3 @@ def verdict_cell(verdict: Any) -> str:
 def flags_cell(flags: Iterable[str], trustworthy: bool) -> str:
     """:func:`verdict_cell` from a candidate's JSON (``rczone select --json``: ``trustworthy`` and ``flags``)."""
     return verdict_cell({"trustworthy": trustworthy, "reasons": list(flags)})
-
-
-def fit_verdict(network, result, data, white: bool | None):
-    """The verdict ``rczone fit`` gives an estimation-level ML fit on ``data`` (no held-out part).
-
-    The fit's own flags, the data's warnings, and, when the innovations are not white, the robust
-    (sandwich) standard errors, as :class:`rczone.calibration.Calibration` weighs them.
-
-    Parameters
-    ----------
-    network : RCNetwork
-    result : FitResult
-        An ML fit (:func:`rczone.estimation.fit`).
-    data : Dataset
-        The data it was fitted to.
-    white : bool or None
-        Whether its innovations are white (:func:`rczone.postfit.innovations.innovation_analysis`).
-
-    Returns
-    -------
-    Verdict
-    """
-    from rczone.postfit.robust import robust_errors
-    from rczone.results.verdict import verdict_of
-
-    robust = robust_errors(network, result, data)
-    return verdict_of(result, data=data.warnings, robust=robust, white=white)

@@ -21,7 +21,7 @@ from rczone.models import load_model
 from rczone.workflow.reader import read_model_frame
 from tests.shared_data import SHARED, require
 
-from .scripts import load_script
+from .scripts import assert_on_page, load_script
 
 DATA = SHARED / "data" / "bacher_madsen_prbs" / "inputPRBS1.csv"
 MAP = """
@@ -190,3 +190,15 @@ def test_the_selected_models_two_sigma_coverage_is_at_most_98_percent(selected):
     _, _, by = selected
     for k in (1, 3, 12, 36, 72, 144, None):
         assert by[("model", k)]["coverage_2sigma"] <= 0.98
+
+
+@pytest.mark.slow
+def test_the_members_tables_on_the_page_are_a_fresh_runs(tmp_path):
+    """``validation/holdout_bands.py --only members``: coverage, RMSE and each fit's verdict as on the page."""
+    require(DATA, what="shared real data (Bacher & Madsen PRBS)")
+    mod = load_script("holdout_bands")
+    assert mod.main(["--shared", str(SHARED), "--out", str(tmp_path), "--only", "members"]) == 0
+    rows = json.loads((tmp_path / "holdout_bands.json").read_text())["members"]
+    # every member's verdict is rczone's, never left out (the selected one's from select --holdout)
+    assert all(r["verdict"] is not None for r in rows.values())
+    assert_on_page(mod.members_markdown(rows), after="### A better model instead of a wider band")

@@ -6,6 +6,7 @@ import pytest
 
 from tests.shared_data import SHARED, require
 
+from .scripts import assert_on_page
 from .scripts import load_script as load
 
 
@@ -39,3 +40,15 @@ def test_forward_selection_runs_on_the_prbs_experiment(tmp_path):
     path = [name.partition("+")[0] for name in res["forward"]["path"]]
     assert path[:3] == ["Ti", "TiTh", "TiTeTh"] and len(path) > 3, path
     assert (tmp_path / "model_selection" / "report.html").is_file()
+    # docs/validation.md's tables of the whole family are this run's, each candidate's verdict included
+    assert_on_page(load_script().markdown(res), after="### The whole family")
+
+
+@pytest.mark.slow
+def test_the_classic_five_on_the_page_are_a_fresh_runs(tmp_path):
+    """``--classic``: the five candidates of ``select`` by a criterion, the first tables of the section."""
+    require(SHARED / "data" / "bacher_madsen_prbs", what="shared real data")
+    assert load_script().main(["--shared", str(SHARED), "--out", str(tmp_path), "--classic"]) == 0
+    res = json.loads((tmp_path / "model_selection_classic.json").read_text())
+    assert set(res["models"]) == {f"{b}+heater+solar" for b in load_script().CLASSIC}
+    assert_on_page(load_script().markdown(res), after="## Model selection on the Bacher")
