@@ -4,7 +4,7 @@ Every table of docs/validation.md that lists fits carries the verdict rczone its
 them (issue 38): ``trustworthy``, or ``flagged:`` and the checks that failed, each named in a few
 words (the full sentences are in the fit's JSON, ``verdict.reasons``). The names are read off the
 reasons :func:`rczone.results.verdict.verdict_of` writes: a fit's own flags
-(:mod:`rczone.estimation.minimize`), the held-out checks (:mod:`rczone.calibration.evidence`), the
+(:mod:`rczone.estimation.minimize`), the held-out checks (:mod:`rczone.postfit.evidence`), the
 robust standard errors, flat profiles, fits to other data that disagree, implausible or dropped
 data. A reason of another form is kept, cut to its first words, never dropped.
 """
