@@ -168,3 +168,24 @@ def test_the_medium_office_loop_runs_a_perimeter_zone(tmp_path):
     # what no zone's fans and coils hold: about 0.45 kW all day (measured; not the zones' air side)
     assert 0 < res["unattributed_kWh"] < 0.05 * res["building_hvac_kWh"]
     assert res["constraint_violations"] == 0
+
+
+def test_two_zones_each_under_its_own_mpc(tmp_path):
+    """``--zones``: both zones' thermostats held what their MPCs asked, each zone scored."""
+    from rczone.emulators.control import energyplus_test
+    from rczone.models import load_model
+
+    zones = [ZONE, "Perimeter_ZN_3"]
+    plant = EnergyPlusPlant(
+        "office_small", "usa_il_chicago", zones=zones, start="01-17", days=1, step_minutes=30, seed=2
+    )
+    res = energyplus_test(plant, "mpc", model={z: load_model("second-order") for z in zones})
+    s = res.scores
+    assert s["comfort_Kh"] == pytest.approx(sum(s[f"comfort_Kh_{z}"] for z in zones))
+    for z in zones:
+        ser = plant.series(z)
+        for side in ("heating", "cooling"):
+            np.testing.assert_allclose(ser[f"{side}_sp"][1:], ser[f"{side}_asked"][1:], atol=1e-6)
+        assert s[f"prediction_rmse_K_{z}"] > 0
+    assert s["constraint_violations"] == 0 and len(s["solve_time_s"]) == 2
+    assert set(res.setup["model"]) == set(zones)

@@ -75,6 +75,14 @@ def control_test(
     zone: Annotated[
         str | None, typer.Option("--zone", help="energyplus: the zone the controller runs.")
     ] = None,
+    zones: Annotated[
+        str | None,
+        typer.Option(
+            "--zones",
+            help="energyplus: several zones, each with its model, ZONE=MODEL,ZONE=MODEL (mpc: one"
+            " supervisory MPC per zone, neighbours as measured inputs); ZONE,ZONE for baseline.",
+        ),
+    ] = None,
     step: Annotated[int, typer.Option("--step", help="energyplus: the plant's step, minutes.")] = 15,
     heat_limit: Annotated[
         float | None,
@@ -135,7 +143,7 @@ def control_test(
     _refuse_unread(
         emulator,
         {"--scenario": scenario, "--band": band, "--building": building, "--weather": weather}
-        | {"--start": start, "--zone": zone, "--step": step, "--margin": margin},
+        | {"--start": start, "--zone": zone, "--zones": zones, "--step": step, "--margin": margin},
     )
     if heat_limit is not None and emulator in ("virtual", "energyplus"):
         raise ParameterError(
@@ -151,8 +159,9 @@ def control_test(
                 "--compare, --study and --report are for the virtual building; run each controller alone"
             )
         options = dict(weather=weather, start=start, step_minutes=step, seed=seed, price=price)
-        plant = _energyplus_plant(building, zone, days, forecast or "none", options)
-        res = energyplus_test(plant, controller, model=zm, margin_K=margin, noise_floor=noise_floor)
+        names, models = _zones_and_models(zone, zones, zm)
+        plant = _energyplus_plant(building, names, days, forecast or "none", options)
+        res = energyplus_test(plant, controller, model=models, margin_K=margin, noise_floor=noise_floor)
         out.print(esc(res.summary()))
         write_json(json_out, res.to_dict())
         return
@@ -229,6 +238,7 @@ _READ_BY = {
         "--weather": "usa_il_chicago",
         "--start": "01-17",
         "--zone": None,
+        "--zones": None,
         "--step": 15,
         "--margin": None,
     },
@@ -246,12 +256,36 @@ def _refuse_unread(emulator: str, given: dict[str, object]) -> None:
                     )
 
 
-def _energyplus_plant(building: str | None, zone: str | None, days: float, forecast: str, options: dict):
+def _zones_and_models(zone: str | None, zones: str | None, zm):
+    """The controlled zones and their models: ``--zone`` with ``--model``, or ``--zones ZONE=MODEL,...``."""
+    if zones is None:
+        return ([zone] if zone is not None else []), zm
+    if zone is not None:
+        raise ParameterError("give --zone or --zones, not both")
+    names, models = [], {}
+    for item in zones.split(","):
+        name, sep, spec = (part.strip() for part in item.partition("="))
+        if not name or (sep and not spec):
+            raise ParameterError(f"--zones takes ZONE=MODEL,ZONE=MODEL (or ZONE,ZONE); got {item.strip()!r}")
+        if name in names:
+            raise ParameterError(f"--zones names {name!r} twice")
+        names.append(name)
+        if spec:
+            models[name] = model(spec)
+    if models and len(models) != len(names):
+        bare = [n for n in names if n not in models]
+        raise ParameterError(f"--zones gives no model for {bare}: give each zone one, ZONE=MODEL")
+    return names, (models or None)
+
+
+def _energyplus_plant(building: str | None, zones: list[str], days: float, forecast: str, options: dict):
     """The EnergyPlus plant of ``--emulator energyplus`` (its own checks say what is wrong)."""
     from rczone.emulators.plant import EnergyPlusPlant
 
-    if building is None or zone is None:
-        raise ParameterError("--emulator energyplus needs --building and --zone (rczone emulate --list)")
+    if building is None or not zones:
+        raise ParameterError(
+            "--emulator energyplus needs --building and --zone (or --zones) (rczone emulate --list)"
+        )
     if days != int(days):
         raise ParameterError(f"--days must be whole days on EnergyPlus, got {days:g}")
-    return EnergyPlusPlant(building, zones=[zone], days=int(days), forecast=forecast, **options)
+    return EnergyPlusPlant(building, zones=zones, days=int(days), forecast=forecast, **options)

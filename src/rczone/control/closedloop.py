@@ -83,6 +83,9 @@ class ClosedLoopResult:
             f"seed {st['seed']}, model {st['model']}, {st.get('forecast', 'measured')} forecast",
             f"  comfort      {s['comfort_Kh']:.2f} K h outside the band (occupied hours)",
         ]
+        per_zone = {k[len("comfort_Kh_") :]: v for k, v in s.items() if k.startswith("comfort_Kh_")}
+        if len(per_zone) > 1:
+            lines.append("  per zone     " + ", ".join(f"{z} {v:.2f} K h" for z, v in per_zone.items()))
         if "reheat_kWh" in s:
             lines += [
                 f"  energy       {s['energy_kWh']:.2f} kWh (reheat {s['reheat_kWh']:.2f}, cooling "
@@ -98,7 +101,7 @@ class ClosedLoopResult:
             ]
         if s.get("prediction_rmse_K") is not None:
             lines.append(
-                f"  prediction   {s['prediction_rmse_K']:.3f} K RMSE 10 min ahead (filter), "
+                f"  prediction   {s['prediction_rmse_K']:.3f} K RMSE one plant step ahead (filter), "
                 f"{s['prediction_1h_rmse_K']:.3f} K 1 h ahead, {s['open_loop_rmse_K']:.3f} K open loop"
             )
         if "event_energy_kWh" in s:
@@ -147,7 +150,7 @@ def closed_loop_test(
     plant: Plant,
     controller: Controller | str,
     *,
-    model: ZoneModel | None = None,
+    model: ZoneModel | Mapping[str, ZoneModel] | None = None,
     settings: MPCSettings | None = None,
     disturbance: bool = True,
     noise_floor: float = SENSOR_RESOLUTION_K,
@@ -162,8 +165,9 @@ def closed_loop_test(
     controller : Controller or str
         A controller object, or a name of :mod:`rczone.control.registry` (made for ``plant``
         with ``model``, ``settings`` and ``disturbance``).
-    model : ZoneModel, optional
-        The controller's model; also the model whose prediction error is scored.
+    model : ZoneModel or mapping of zone to ZoneModel, optional
+        The controller's model; also the model whose prediction error is scored (a mapping: each
+        controlled zone's, scored per zone; a named controller takes one).
     settings : MPCSettings, optional
     disturbance : bool
         For a named MPC: its observer estimates an unmeasured heat input (offset-free).
@@ -177,28 +181,56 @@ def closed_loop_test(
     ClosedLoopResult
     """
     name = controller if isinstance(controller, str) else type(controller).__name__
-    if isinstance(controller, str):
-        controller = make_controller(controller, plant, ControllerOptions(model, settings, disturbance))
-    log = run_loop(plant, controller, progress)
     zone = plant.zones[0]
+    models = dict(model) if isinstance(model, Mapping) else ({} if model is None else {zone: model})
+    if isinstance(controller, str):
+        if len(models) > 1:
+            raise ParameterError(
+                f"the {controller!r} controller runs one zone; it was given {len(models)} models"
+            )
+        options = ControllerOptions(next(iter(models.values()), None), settings, disturbance)
+        controller = make_controller(controller, plant, options)
+    log = run_loop(plant, controller, progress)
     scores = dict(plant.kpis())
-    if model is not None:
-        # a plant that measures other inputs (EnergyPlus's) scores the model itself
-        score = getattr(plant, "prediction_scores", prediction_scores)
-        scores.update(score(log.values, log.t, model, zone=zone, noise_floor=noise_floor))
-    else:
-        scores["prediction_rmse_K"] = None
+    scores.update(_prediction_scores(plant, log, models, noise_floor))
     times = getattr(controller, "solve_times", None)
     scores["solve_time_s"] = {"mean": float(np.mean(times)), "max": float(np.max(times))} if times else None
+    labels = {z: m.label for z, m in models.items()}
     setup = {
         **dict(plant.describe()),
         "controller": name,
-        "model": model.label if model is not None else None,
+        "model": (next(iter(labels.values())) if len(labels) == 1 else labels) if labels else None,
         "disturbance_estimate": bool(disturbance) if hasattr(controller, "mpc") else None,
     }
     series = plant.series(zone) if hasattr(plant, "series") else _measured_series(log, zone)
     t = series.pop("t")
     return ClosedLoopResult(scores, setup, t, series)
+
+
+def _prediction_scores(
+    plant: Plant, log: MeasurementLog, models: Mapping[str, ZoneModel], noise_floor: float
+) -> dict[str, Any]:
+    """Each zone's model's prediction errors on the run's measurements.
+
+    One zone: ``prediction_rmse_K``, ``prediction_1h_rmse_K``, ``open_loop_rmse_K``. Several: the
+    same keys per zone (``..._<zone>``) and, unsuffixed, their root mean square over the zones
+    (None where a zone has none).
+    """
+    if not models:
+        return {"prediction_rmse_K": None}
+    # a plant that measures other inputs (EnergyPlus's) scores the model itself
+    score = getattr(plant, "prediction_scores", prediction_scores)
+    per = {z: score(log.values, log.t, m, zone=z, noise_floor=noise_floor) for z, m in models.items()}
+    if len(per) == 1:
+        return dict(next(iter(per.values())))
+    out: dict[str, Any] = {}
+    for z, s in per.items():
+        out.update({f"{k}_{z}": v for k, v in s.items()})
+    for k in next(iter(per.values())):
+        vals = [s.get(k) for s in per.values()]
+        ok = all(isinstance(v, (int, float)) and math.isfinite(v) for v in vals)
+        out[k] = float(math.sqrt(np.mean(np.square(vals)))) if ok else None
+    return out
 
 
 def _measured_series(log: MeasurementLog, zone: str) -> dict[str, np.ndarray]:

@@ -1,22 +1,25 @@
-"""Closed-loop tests on EnergyPlus: a controller by name, run on one zone of a prototype, scored.
+"""Closed-loop tests on EnergyPlus: a controller by name, run on zones of a prototype, scored.
 
 :func:`energyplus_test` makes an :class:`~rczone.emulators.plant.EnergyPlusPlant`, the controller
 (``baseline``: the building's own control, :class:`~rczone.emulators.supervisory.BuildingControl`;
 ``mpc``: :class:`~rczone.emulators.supervisory.SupervisoryMPC` with the given model, its heating
-and cooling capacity :data:`CAPACITY_W_PER_M2` times the zone's floor area unless set; any other
-name from :mod:`rczone.control.registry`, e.g. a plug-in), runs
+and cooling capacity :data:`CAPACITY_W_PER_M2` times the zone's floor area unless set, and for
+several zones one per zone with that zone's model,
+:class:`~rczone.emulators.supervisory.ZoneMPCs`; any other name from
+:mod:`rczone.control.registry`, e.g. a plug-in), runs
 :func:`~rczone.control.closedloop.closed_loop_test` and closes EnergyPlus whatever happens.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 from rczone.control.closedloop import ClosedLoopResult, closed_loop_test
 from rczone.control.prediction import SENSOR_RESOLUTION_K
 from rczone.control.registry import ControllerOptions, make_controller
 from rczone.emulators.plant import EnergyPlusPlant
-from rczone.emulators.supervisory import BuildingControl, SupervisoryMPC, SupervisorySettings
+from rczone.emulators.supervisory import BuildingControl, SupervisoryMPC, SupervisorySettings, ZoneMPCs
 from rczone.errors import ParameterError
 from rczone.models.zone import ZoneModel
 
@@ -24,29 +27,67 @@ from rczone.models.zone import ZoneModel
 CAPACITY_W_PER_M2 = 60.0
 
 
+def models_by_zone(model: ZoneModel | Mapping[str, ZoneModel] | None, zones: Sequence[str]):
+    """``{zone: model}`` for the plant's zones: one model for one zone, or a mapping naming every zone."""
+    if model is None:
+        return None
+    if isinstance(model, ZoneModel):
+        if len(zones) != 1:
+            raise ParameterError(
+                f"{len(zones)} zones need a model each (--zones ZONE=MODEL,...), got one model for all"
+            )
+        return {zones[0]: model}
+    missing = [z for z in zones if z not in model]
+    extra = [z for z in model if z not in zones]
+    if missing or extra:
+        raise ParameterError(
+            f"the models must name the controlled zones {list(zones)}: "
+            + (f"no model for {missing}" if missing else f"models for zones not controlled: {extra}")
+        )
+    return {z: model[z] for z in zones}
+
+
+def _settings_for(plant: EnergyPlusPlant, zone: str, settings: SupervisorySettings | None, margin_K):
+    """The zone's MPC settings: ``settings`` or the defaults at its floor area's capacity; ``margin_K`` if given."""
+    if settings is None:
+        if zone not in plant.floor_area:
+            plant.measure()  # starts EnergyPlus: the zones' floor areas are read from its eio
+        cap = CAPACITY_W_PER_M2 * plant.floor_area[zone]
+        settings = replace(SupervisorySettings(), heating_capacity=cap, cooling_capacity=cap)
+    return settings if margin_K is None else replace(settings, margin_K=margin_K)
+
+
 def make_controller_for(
-    name: str, plant: EnergyPlusPlant, model: ZoneModel | None, settings: SupervisorySettings | None
-):  # settings None: the defaults with the capacity of the zone's floor area
+    name: str,
+    plant: EnergyPlusPlant,
+    model: ZoneModel | Mapping[str, ZoneModel] | None,
+    settings: SupervisorySettings | None,
+    margin_K: float | None = None,
+):  # settings None: the defaults with the capacity of each zone's floor area
     """The controller ``name`` for an EnergyPlus plant (see the module notes)."""
     if name == "baseline":
         return BuildingControl(plant.dt)
+    models = models_by_zone(model, plant.zones)
     if name == "mpc":
-        if model is None:
+        if models is None:
             raise ParameterError("the mpc controller needs a model (--model zone.json)")
-        zone = plant.zones[0]
-        if settings is None:
-            plant.measure()  # starts EnergyPlus: the zone's floor area is read from its eio
-            cap = CAPACITY_W_PER_M2 * plant.floor_area[zone]
-            settings = replace(SupervisorySettings(), heating_capacity=cap, cooling_capacity=cap)
-        return SupervisoryMPC(model, zone=zone, dt=plant.dt, settings=settings)
-    return make_controller(name, plant, ControllerOptions(model))
+        mpcs = [
+            SupervisoryMPC(
+                models[z], zone=z, dt=plant.dt, settings=_settings_for(plant, z, settings, margin_K)
+            )
+            for z in plant.zones
+        ]
+        return mpcs[0] if len(mpcs) == 1 else ZoneMPCs(mpcs)
+    if models is not None and len(models) > 1:
+        raise ParameterError(f"the {name!r} controller runs one zone; give one --zone")
+    return make_controller(name, plant, ControllerOptions(next(iter(models.values())) if models else None))
 
 
 def energyplus_test(
     plant: EnergyPlusPlant,
     controller: str,
     *,
-    model: ZoneModel | None = None,
+    model: ZoneModel | Mapping[str, ZoneModel] | None = None,
     settings: SupervisorySettings | None = None,
     margin_K: float | None = None,
     noise_floor: float = SENSOR_RESOLUTION_K,
@@ -58,11 +99,12 @@ def energyplus_test(
     plant : EnergyPlusPlant
     controller : str
         ``baseline``, ``mpc`` or a registered controller's name.
-    model : ZoneModel, optional
-        The MPC's model; also the model whose prediction error is scored.
+    model : ZoneModel or mapping of zone to ZoneModel, optional
+        The MPC's model (one per zone when the plant has several); also the model whose prediction
+        error is scored, per zone.
     settings : SupervisorySettings, optional
-        The MPC's; default :class:`SupervisorySettings` with the capacity of the zone's floor
-        area (:data:`CAPACITY_W_PER_M2`) and ``margin_K`` if given.
+        The MPC's (every zone's); default :class:`SupervisorySettings` with the capacity of each
+        zone's floor area (:data:`CAPACITY_W_PER_M2`).
     margin_K : float, optional
         How far inside the band the MPC aims, K.
     noise_floor : float
@@ -72,14 +114,10 @@ def energyplus_test(
     -------
     ClosedLoopResult
     """
+    models = models_by_zone(model, plant.zones)
     try:
-        if margin_K is not None and controller == "mpc":
-            plant.measure()  # starts EnergyPlus: the zone's floor area is read from its eio
-            cap = CAPACITY_W_PER_M2 * plant.floor_area[plant.zones[0]]
-            base = settings or SupervisorySettings(heating_capacity=cap, cooling_capacity=cap)
-            settings = replace(base, margin_K=margin_K)
-        ctl = make_controller_for(controller, plant, model, settings)
-        res = closed_loop_test(plant, ctl, model=model, noise_floor=noise_floor)
+        ctl = make_controller_for(controller, plant, models, settings, margin_K)
+        res = closed_loop_test(plant, ctl, model=models, noise_floor=noise_floor)
     finally:
         plant.close()
     setup = {**res.setup, "controller": controller}

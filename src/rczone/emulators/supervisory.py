@@ -250,6 +250,58 @@ class SupervisoryMPC:
         return {f"heating_{z}": heat, f"cooling_{z}": cool}
 
 
+class ZoneMPCs:
+    """Several zones' supervisory MPCs, decentralized: each zone plans with its own model.
+
+    A zone's neighbours enter its model as the measured temperature ``Tsd`` (the column map's
+    conductance-weighted mean of the neighbouring zones, held at its last measurement over the
+    horizon), so the plans are made independently, one linear program per zone and step; the
+    set points of all zones are given at once. This is the multi-zone arrangement of a supervisory
+    MPC written zone by zone (distributed MPC without coordination; Scattolini [1]_, section 3,
+    "decentralized"): it neglects what a neighbour will do, which a joint model of the floor
+    would plan for.
+
+    Parameters
+    ----------
+    controllers : sequence of SupervisoryMPC
+        One per zone, all with the plant's step.
+
+    References
+    ----------
+    .. [1] R. Scattolini, "Architectures for distributed and hierarchical model predictive
+       control - a review", Journal of Process Control 19(5) (2009) 723-731.
+    """
+
+    def __init__(self, controllers: list[SupervisoryMPC]) -> None:
+        if not controllers:
+            raise ParameterError("a multi-zone MPC needs at least one zone")
+        zones = [c.zone for c in controllers]
+        if len(set(zones)) != len(zones):
+            raise ParameterError(f"each zone has one MPC; given {zones}")
+        steps = {c.interval for c in controllers}
+        if len(steps) != 1:
+            raise ParameterError(f"the zones' MPCs must share the plant's step, got {sorted(steps)} s")
+        self.controllers = list(controllers)
+        self.interval = controllers[0].interval
+        self.horizon = max(c.horizon for c in controllers)
+        self.solve_times: list[float] = []
+
+    @property
+    def zones(self) -> list[str]:
+        """The zones, in the order given."""
+        return [c.zone for c in self.controllers]
+
+    def act(self, t: float, measurements: Mapping[str, float], forecast: Mapping[str, np.ndarray]) -> dict:
+        """Every zone's set points for the next step; the step's solve time is the sum of the zones'."""
+        out: dict = {}
+        spent = 0.0
+        for c in self.controllers:
+            out.update(c.act(t, measurements, forecast))
+            spent += c.solve_times[-1]
+        self.solve_times.append(spent)
+        return out
+
+
 class BuildingControl:
     """The baseline: the building's own control (its thermostat schedules), no action.
 
