@@ -1,0 +1,70 @@
+"""docs/energyplus.md's Q2 tables are the ones validation/energyplus_q2.py makes from its recorded fits."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from tests.validation.scripts import ROOT, load_script
+
+
+def test_the_docs_tables_are_the_scripts_tables_of_the_recorded_fits() -> None:
+    mod = load_script("energyplus_q2")
+    runs = json.loads((ROOT / "validation" / "energyplus_q2.json").read_text())
+    assert len({r["climate"] for r in runs}) >= 2 and len({r["season"] for r in runs}) >= 2
+    assert {r["training"] for r in runs} == {"calibration", "forced"}
+    assert mod.in_doc((ROOT / "docs" / "energyplus.md").read_text()) == mod.table(runs)
+
+
+def _fit(training: str, open_rmse: float, r1: float, r1_se: float | None, *, bound: bool = False) -> dict:
+    est = {
+        p: {"estimate": 1.0, "std_error": 0.1, "robust_std_error": 0.2, "at_bound": False}
+        for p in ("Cr", "Cw", "Rwin", "R2")
+    }
+    est["R1"] = {"estimate": r1, "std_error": r1_se, "robust_std_error": None, "at_bound": bound}
+    scores = {
+        h: {"model": open_rmse, "persistence": 1.0, "arx": None, "coverage": 0.9}
+        for h in ("15 min", "1 h", "6 h", "open")
+    }
+    return {
+        "climate": "c", "season": "winter", "training": training, "days": 3, "exit_code": 3,
+        "reasons": ["x"], "estimates": est, "heldout": scores, "heldout_failed": ["innovations"],
+    }  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("estimate", "se", "bound", "expected"),
+    [(1.0, 0.5, False, True), (1.0, 1.0, False, False), (1.0, None, False, False), (1.0, 0.1, True, False)],
+)
+def test_an_estimate_is_determined_off_its_bounds_with_a_standard_error_below_its_value(
+    estimate, se, bound, expected
+):
+    mod = load_script("energyplus_q2")
+    e = {"estimate": estimate, "std_error": se, "robust_std_error": None, "at_bound": bound}
+    assert mod.determined(e) is expected
+
+
+def test_the_robust_standard_error_is_read_before_the_hessians() -> None:
+    mod = load_script("energyplus_q2")
+    assert not mod.determined({"estimate": 1.0, "std_error": 0.1, "robust_std_error": 1.5, "at_bound": False})
+
+
+def test_the_comparison_line_follows_the_numbers() -> None:
+    mod = load_script("energyplus_q2")
+    normal, forced = _fit("calibration", 2.0, 1.0, 2.0), _fit("forced", 1.0, 3.0, 0.3)
+    line = mod.compare(normal, forced)
+    assert "the forced fit predicts better" in line
+    assert "determined 4 of 5 vs 5 of 5" in line
+    assert "R1 x3" in line and "Cr" not in line.split("factor 2:")[1]
+    assert "the normal fit predicts better" in mod.compare(_fit("calibration", 0.5, 1.0, 0.1), forced)
+    text = mod.table([normal, forced])
+    assert text.count("\n| c | winter |") == 4 and "unstable" in text and "(bound)" not in text
+    assert "1 (bound)" in mod.table([_fit("calibration", 1.0, 1.0, 0.1, bound=True)])
+
+
+def test_the_doc_markers_are_required_once() -> None:
+    mod = load_script("energyplus_q2")
+    with pytest.raises(ValueError, match="one line"):
+        mod.in_doc("no markers here")
+    assert mod.in_doc(f"a\n{mod.BEGIN}\n| t |\n{mod.END}\nb") == "| t |\n"
