@@ -82,13 +82,27 @@ def _emulate(folder: Path, weather: str, season: str, period: str) -> dict | Non
     return {"climate": weather, "season": season, "period": period, "days": days, **_since(t0)}
 
 
+def reference(building: dict) -> dict:
+    """What EnergyPlus's constructions say of the zone's R and C (``building.toml`` of the emulation).
+
+    ``Rwin`` is one over the zone's exterior ``U x A`` (walls and windows, with film coefficients;
+    without infiltration, which adds a conductance to outdoors), ``R1 + R2`` one over the ``U x A`` it
+    shares with the neighbours that make its ``Tsd``, ``Cr_air`` the heat capacity of its air
+    (1.2 kg/m3, 1005 J/(kg K); the furnishings EnergyPlus does not lump into the air are not in it).
+    """
+    zone = next(z for z in building["zones"] if z["name"] == ZONE)
+    shared = sum(a["ua"] for a in building["adjacency"] if ZONE in (a["a"], a["b"]))
+    return {
+        "floor_area_m2": zone["floor_area"],
+        "Rwin": 1 / zone["exterior_ua"],
+        "R1+R2": 1 / shared,
+        "Cr_air": 1.2 * 1005 * zone["volume"],
+    }
+
+
 def _fit(folder: Path, out: Path, starts: str) -> tuple[dict, Path, dict]:
     """``rczone fit`` of the zone on one trend: its JSON, the saved model and the times."""
-    area = next(
-        z["floor_area"]
-        for z in tomllib.loads((folder / "building.toml").read_text())["zones"]
-        if z["name"] == ZONE
-    )
+    area = reference(tomllib.loads((folder / "building.toml").read_text()))["floor_area_m2"]
     model, report = out / "model.json", out / "fit.json"
     args = ["fit", str(folder / "trend.csv"), "--columns", str(folder / f"{ZONE}.columns.toml")]
     args += ["--model", "second-order", "--starts", starts, "--floor-area", str(area), "--no-profiles"]
@@ -163,6 +177,8 @@ def run_case(out: Path, weather: str, season: str, starts: str) -> tuple[list[di
                 "heldout_failed": failed,
                 "fit_time": fit_time,
                 "score_time": score_time,
+                "ua_W_per_K": fit["plausibility"]["ua_W_per_K"],
+                "reference": reference(tomllib.loads((case / training / "building.toml").read_text())),
             }
         )
     return rows, [e for e in emulations if e is not None]
@@ -190,39 +206,51 @@ def _f(x: float | None) -> str:
     return "unstable" if x is None else f"{x:.2f}"
 
 
+def _prediction_row(r: dict) -> str:
+    h = r["heldout"]
+    verdict = (
+        "trustworthy (0)"
+        if r["exit_code"] == 0
+        else f"flagged ({r['exit_code']}), {len(r['reasons'])} reasons"
+    )
+    cells = [
+        " / ".join(_f(h[k].get(p)) for p in ("model", "persistence", "arx")) for k in ("1 h", "6 h", "open")
+    ]
+    cover = " / ".join(f"{100 * h[k]['coverage']:.0f} %" for k in ("1 h", "6 h", "open"))
+    failed = ", ".join(r["heldout_failed"]) or "none"
+    return f"{_who(r)} {verdict} | {failed} | {' | '.join(cells)} | {cover} |\n"
+
+
+def _estimate_rows(r: dict) -> str:
+    e, ref = r["estimates"], r["reference"]
+    ok = ", ".join(p for p in PARAMS if determined(e[p])) or "none"
+    row = f"{_who(r)} {' | '.join(_rc(e[p]) for p in PARAMS)} | {_sum_r(e):.3g} | {ok} |\n"
+    if r["training"] != "calibration":
+        return row
+    cells = [f"{ref['Cr_air']:.3g} (air)", "", f"{ref['Rwin']:.3g}", "", "", f"{ref['R1+R2']:.3g}", ""]
+    return f"| {r['climate']} | {r['season']} | EnergyPlus constructions | {' | '.join(cells)} |\n" + row
+
+
+def _who(r: dict) -> str:
+    return f"| {r['climate']} | {r['season']} | {r['training']} ({r['days']} d) |"
+
+
+def _sum_r(e: dict) -> float:
+    return e["R1"]["estimate"] + e["R2"]["estimate"]
+
+
 def table(results: list[dict]) -> str:
     """The markdown tables of the fits (held-out prediction, estimates) and a line per case."""
     pred = (
         "| climate | season | fitted on | fit verdict | held-out checks failed | RMSE K 1 h: model / persistence / ARX | "
         "6 h | open loop | 2σ coverage 1 h / 6 h / open |\n|---|---|---|---|---|---|---|---|---|\n"
     )
-    est = (
-        "| climate | season | fitted on | "
-        + " | ".join(PARAMS)
-        + " | determined |\n|---|---|---|"
-        + "---|" * 6
-        + "\n"
-    )
-    lines = []
+    est = "| climate | season | fitted on | Cr J/K | Cw J/K | Rwin K/W | R1 K/W | R2 K/W | R1 + R2 K/W | determined |\n"
+    est += "|---|---|---|---|---|---|---|---|---|---|\n"
     for r in results:
-        h = r["heldout"]
-        who = f"| {r['climate']} | {r['season']} | {r['training']} ({r['days']} d) |"
-        verdict = (
-            "trustworthy (0)"
-            if r["exit_code"] == 0
-            else f"flagged ({r['exit_code']}), {len(r['reasons'])} reasons"
-        )
-        cells = [
-            " / ".join(_f(h[k].get(p)) for p in ("model", "persistence", "arx"))
-            for k in ("1 h", "6 h", "open")
-        ]
-        cover = " / ".join(f"{100 * h[k]['coverage']:.0f} %" for k in ("1 h", "6 h", "open"))
-        pred += f"{who} {verdict} | {', '.join(r['heldout_failed']) or 'none'} | {' | '.join(cells)} | {cover} |\n"
-        e = r["estimates"]
-        ok = ", ".join(p for p in PARAMS if determined(e[p])) or "none"
-        est += f"{who} {' | '.join(_rc(e[p]) for p in PARAMS)} | {ok} |\n"
-    for normal, forced in _pairs(results):
-        lines.append(compare(normal, forced))
+        pred += _prediction_row(r)
+        est += _estimate_rows(r)
+    lines = [compare(normal, forced) for normal, forced in _pairs(results)]
     return pred + "\n" + est + "\n" + "\n".join(lines) + "\n"
 
 
@@ -244,11 +272,20 @@ def compare(normal: dict, forced: dict) -> str:
     apart = ", ".join(f"{p} x{v:.2g}" for p, v in ratio.items() if not 0.5 <= v <= 2) or "none"
     n_ok = sum(determined(normal["estimates"][p]) for p in PARAMS)
     f_ok = sum(determined(forced["estimates"][p]) for p in PARAMS)
+    ref = normal["reference"]
+    vs = "; ".join(
+        f"{name} x{get(normal['estimates']) / ref[key]:.2g} vs x{get(forced['estimates']) / ref[key]:.2g}"
+        for name, key, get in (
+            ("Rwin", "Rwin", lambda e: e["Rwin"]["estimate"]),
+            ("R1 + R2", "R1+R2", _sum_r),
+        )
+    )
     return (
         f"- {normal['climate']}, {normal['season']}: held-out open loop {o_n:.2f} K (normal-operation fit) vs "
         f"{o_f:.2f} K (forced-test fit), 6 h {s_n:.2f} vs {s_f:.2f} K: the {best} fit predicts better open loop; "
         f"R and C determined {n_ok} of {len(PARAMS)} vs {f_ok} of {len(PARAMS)}; "
-        f"forced / normal estimate beyond a factor 2: {apart}"
+        f"forced / normal estimate beyond a factor 2: {apart}; against EnergyPlus's constructions "
+        f"(normal vs forced fit): {vs}"
     )
 
 
@@ -271,7 +308,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("validation-output"))
     ap.add_argument("--climates", default=",".join(CLIMATES))
     ap.add_argument("--seasons", default=",".join(SEASONS))
-    ap.add_argument("--starts", default="2", help="rczone fit --starts")
+    ap.add_argument("--starts", default="auto", help="rczone fit --starts")
     ap.add_argument("--doc", type=Path, help="write the tables of <out>'s runs into this page and stop")
     a = ap.parse_args(argv)
     if a.doc:

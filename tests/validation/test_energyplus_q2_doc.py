@@ -27,7 +27,9 @@ def _fit(training: str, open_rmse: float, r1: float, r1_se: float | None, *, bou
         h: {"model": open_rmse, "persistence": 1.0, "arx": None, "coverage": 0.9}
         for h in ("15 min", "1 h", "6 h", "open")
     }
+    ref = {"floor_area_m2": 10.0, "Rwin": 0.5, "R1+R2": 2.0, "Cr_air": 1.0}
     return {
+        "reference": ref,
         "climate": "c", "season": "winter", "training": training, "days": 3, "exit_code": 3,
         "reasons": ["x"], "estimates": est, "heldout": scores, "heldout_failed": ["innovations"],
     }  # fmt: skip
@@ -59,8 +61,24 @@ def test_the_comparison_line_follows_the_numbers() -> None:
     assert "R1 x3" in line and "Cr" not in line.split("factor 2:")[1]
     assert "the normal fit predicts better" in mod.compare(_fit("calibration", 0.5, 1.0, 0.1), forced)
     text = mod.table([normal, forced])
-    assert text.count("\n| c | winter |") == 4 and "unstable" in text and "(bound)" not in text
+    assert text.count("\n| c | winter |") == 5 and "unstable" in text and "(bound)" not in text
+    assert "| c | winter | EnergyPlus constructions |" in text  # once per case, before its fits
+    assert "Rwin x2 vs x2; R1 + R2 x1 vs x2" in line  # Rwin 1 against 0.5; R1 + R2 1 + 1, 3 + 1 against 2
     assert "1 (bound)" in mod.table([_fit("calibration", 1.0, 1.0, 0.1, bound=True)])
+
+
+def test_the_reference_values_are_read_from_the_building_file() -> None:
+    mod = load_script("energyplus_q2")
+    zone = {"name": mod.ZONE, "floor_area": 20.0, "exterior_ua": 50.0, "volume": 60.0}
+    other = {"name": "B", "floor_area": 1.0, "exterior_ua": 1.0, "volume": 1.0}
+    pairs = [
+        {"a": "B", "b": mod.ZONE, "ua": 300.0},
+        {"a": mod.ZONE, "b": "C", "ua": 100.0},
+        {"a": "B", "b": "C", "ua": 7.0},
+    ]
+    ref = mod.reference({"zones": [other, zone], "adjacency": pairs})
+    assert ref["Rwin"] == pytest.approx(1 / 50) and ref["R1+R2"] == pytest.approx(1 / 400)
+    assert ref["Cr_air"] == pytest.approx(60 * 1.2 * 1005) and ref["floor_area_m2"] == 20.0
 
 
 def test_the_doc_markers_are_required_once() -> None:
