@@ -32,6 +32,7 @@ def _fit(training: str, open_rmse: float, r1: float, r1_se: float | None, *, bou
         "reference": ref,
         "climate": "c", "season": "winter", "training": training, "days": 3, "exit_code": 3,
         "reasons": ["x"], "estimates": est, "heldout": scores, "heldout_failed": ["innovations"],
+        "on_forced": {"6 h": 2 * open_rmse, "open": 3 * open_rmse},
     }  # fmt: skip
 
 
@@ -59,6 +60,8 @@ def test_the_comparison_line_follows_the_numbers() -> None:
     assert "the forced fit predicts better" in line
     assert "determined 4 of 5 vs 5 of 5" in line
     assert "R1 x3" in line and "Cr" not in line.split("factor 2:")[1]
+    assert "forced test's last 2 days: 6.00 K open loop (the forced fit on its own data: 3.00 K)" in line
+    assert "| 6.00 |" in mod.table([normal]) and "| 3.00 (own data) |" in mod.table([forced])
     assert "the normal fit predicts better" in mod.compare(_fit("calibration", 0.5, 1.0, 0.1), forced)
     text = mod.table([normal, forced])
     assert text.count("\n| c | winter |") == 5 and "unstable" in text and "(bound)" not in text
@@ -86,3 +89,17 @@ def test_the_doc_markers_are_required_once() -> None:
     with pytest.raises(ValueError, match="one line"):
         mod.in_doc("no markers here")
     assert mod.in_doc(f"a\n{mod.BEGIN}\n| t |\n{mod.END}\nb") == "| t |\n"
+
+
+def test_the_replicates_add_a_table_of_their_spread_and_leave_the_detailed_tables_to_the_first() -> None:
+    mod = load_script("energyplus_q2")
+    first = [_fit("calibration", 2.0, 1.0, 2.0), _fit("forced", 1.0, 3.0, 0.3)]
+    again = [
+        {**_fit("calibration", 3.0, 1.0, 0.1), "replicate": 1},
+        {**first[1], "replicate": 1, "exit_code": 0},
+    ]
+    assert "| replicates |" not in mod.table(first)
+    text = mod.table(first + again)
+    assert text.startswith(mod.table(first))  # the first replicate's tables, then the spread
+    assert "| c | winter | calibration | 2 | 0 | 2.00 to 3.00 | 2.00 to 3.00 | 4 to 5 | 2 | 1 |" in text
+    assert "| c | winter | forced | 2 | 1 | 1.00 | 1.00 | 5 | 2 | 2 |" in text
