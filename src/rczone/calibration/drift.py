@@ -13,9 +13,10 @@ calibrated on the same window as the conformal band (:mod:`rczone.calibration.co
   through its own distribution (Hawkins' self-starting transformation [4]_ [5]_). For normal block
   statistics these scores are exactly independent N(0, 1) whatever the process's mean and spread,
   so the CUSUM's in-control run length no longer depends on how well a short calibration window
-  estimated them: a reference held fixed from a few days of blocks errs by a tenth of a block
+  estimated them (the log mean squares are nearly normal, with a lighter upper tail: the variance
+  test errs on the quiet side): a reference held fixed from a few days of blocks errs by a tenth of a block
   standard deviation or so, for the whole prediction, which is what raised the false alarms of
-  the fixed-reference design (1 in 40 ten-day records; docs/validation.md). Page's CUSUM
+  the fixed-reference design (2 in 60 undrifted ten-day records; docs/validation.md). Page's CUSUM
   ``S+ = max(0, S+ + x - k)`` (and ``S-`` for the mean) raises an alarm when it exceeds ``h``;
   ``k`` is :data:`CUSUM_K` and ``h`` (:data:`CUSUM_H`) is set by the in-control average run length
   :data:`CUSUM_ARL0` through Siegmund's approximation [6]_ (:func:`decision_interval`), not tuned
@@ -63,7 +64,7 @@ import numpy as np
 
 #: Length of the blocks the innovations are averaged over, s.
 BLOCK_S = 3600.0
-#: Reference value of the CUSUM, in block standard deviations (half the shift it is tuned for).
+#: Reference value of the CUSUM, in standard deviations of the scores (half the shift it is tuned for).
 CUSUM_K = 0.5
 #: In-control average run length of each one-sided CUSUM, in blocks: with three one-sided tests
 #: over ten days of hourly blocks, a false alarm in about one ten-day record in 1400 (one per zone
@@ -168,7 +169,7 @@ class CusumTrace:
     t : ndarray, shape (B,)
         End of each scored block, s.
     mean_up, mean_down, variance_up : ndarray, shape (B,)
-        The statistics, in block standard deviations.
+        The statistics, in units of the blocks' self-starting scores (standard deviations).
     """
 
     t: np.ndarray

@@ -193,4 +193,7 @@ def test_predict_cli_says_the_model_drifted_and_from_when(model, tmp_path, capsy
     assert "DRIFTED since about" in printed
     res = json.loads(out.read_text())
     assert res["drift"]["drifted"] and 3.5 * DAY <= res["drift"]["since_s"] <= 5 * DAY
+    settings = res["drift"]["settings"]
+    assert settings["cusum_reference"] == "self-starting" and settings["cusum_arl0"] == CUSUM_ARL0
+    assert siegmund_arl(settings["cusum_h"], settings["cusum_k"]) == pytest.approx(CUSUM_ARL0)
     assert "CUSUM statistics" in (rep / "report.html").read_text()
