@@ -108,7 +108,19 @@ def decision_interval(arl0: float, k: float) -> float:
         Target in-control average run length, blocks (> 1).
     k : float
         Reference value, in standard deviations (> 0).
+
+    Raises
+    ------
+    ParameterError
+        When ``arl0`` is not above 1 or ``k`` not positive.
     """
+    from rczone.errors import ParameterError
+
+    if not (arl0 > 1.0 and k > 0.0 and math.isfinite(arl0) and math.isfinite(k)):
+        raise ParameterError(
+            f"decision_interval: arl0 = {arl0!r} and k = {k!r}; expected a finite arl0 > 1 block"
+            " and a finite k > 0 (e.g. arl0 = 1e6, k = 0.5)"
+        )
     lo, hi = 0.0, 1.0
     while siegmund_arl(hi, k) < arl0:
         hi *= 2.0

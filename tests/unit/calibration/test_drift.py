@@ -175,6 +175,15 @@ def test_siegmund_decision_interval_against_a_monte_carlo_run_length():
     assert length.mean() == pytest.approx(300.0, rel=0.08)  # its standard error is 1.6 %
 
 
+@pytest.mark.parametrize(("arl0", "k"), [(1.0, 0.5), (1e6, 0.0), (float("nan"), 0.5), (1e6, float("inf"))])
+def test_a_decision_interval_for_an_impossible_run_length_is_one_line(arl0, k):
+    from rczone.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="arl0 > 1") as info:
+        decision_interval(arl0, k)
+    assert "\n" not in str(info.value)
+
+
 def test_too_short_a_window_is_said_not_tested():
     t = np.arange(0.0, 2 * DAY, DT)
     z = np.random.default_rng(0).normal(size=(t.size, 1))
