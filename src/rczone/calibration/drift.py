@@ -14,9 +14,10 @@ calibrated on the same window as the conformal band (:mod:`rczone.calibration.co
   statistics these scores are exactly independent N(0, 1) whatever the process's mean and spread,
   so the CUSUM's in-control run length no longer depends on how well a short calibration window
   estimated them (the log mean squares are nearly normal, with a lighter upper tail: the variance
-  test errs on the quiet side): a reference held fixed from a few days of blocks errs by a tenth of a block
-  standard deviation or so, for the whole prediction, which is what raised the false alarms of
-  the fixed-reference design (2 in 60 undrifted ten-day records; docs/validation.md). Page's CUSUM
+  test errs on the quiet side). A reference held fixed from a few days of blocks errs by a tenth
+  of a block standard deviation or so, for the whole prediction, which is what raised the false
+  alarms of the fixed-reference design (2 in 60 undrifted ten-day records; docs/validation.md).
+  Page's CUSUM
   ``S+ = max(0, S+ + x - k)`` (and ``S-`` for the mean) raises an alarm when it exceeds ``h``;
   ``k`` is :data:`CUSUM_K` and ``h`` (:data:`CUSUM_H`) is set by the in-control average run length
   :data:`CUSUM_ARL0` through Siegmund's approximation [6]_ (:func:`decision_interval`), not tuned
