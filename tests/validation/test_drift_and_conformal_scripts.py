@@ -36,6 +36,17 @@ def test_write_doc_replaces_only_the_text_between_its_markers(tmp_path):
     assert doc.read_text() == f"before\n{m.START}\n| new | \\d |\n{m.END}\nafter \\1\n"
 
 
+def test_a_named_table_goes_between_its_own_markers_only(tmp_path):
+    m = load_script("drift_virtual")
+    fresh = m.markers("fresh")
+    assert fresh == ("<!-- drift-virtual-fresh:start -->", "<!-- drift-virtual-fresh:end -->")
+    assert m.markers(None) == (m.START, m.END)
+    doc = tmp_path / "v.md"
+    doc.write_text(f"{m.START}\nold\n{m.END}\n{fresh[0]}\nold\n{fresh[1]}\n")
+    m.write_doc(doc, "new", fresh)
+    assert doc.read_text() == f"{m.START}\nold\n{m.END}\n{fresh[0]}\nnew\n{fresh[1]}\n"
+
+
 def test_the_conformal_rule_is_coverage_in_85_99_and_a_score_no_worse():
     m = load_script("conformal_holdout")
 

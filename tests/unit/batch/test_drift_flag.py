@@ -31,11 +31,21 @@ def test_a_record_whose_zone_changes_on_day_4_is_flagged_within_a_day(model, zon
     assert check.since_s <= check.detected_s and "DRIFTED" in check.describe()
 
 
-@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("seed", [1, 2, 3])
 def test_an_unchanged_record_is_not_flagged(model, seed):  # noqa: F811
     check = record_drift(model, dataset(model, virtual_zone(seed, days=7.0)))
     assert not check.drifted and "Ti" in check.traces, check.describe()
     assert "only the CUSUM" in check.notes[-1]
+    assert check.to_dict()["settings"]["cusum_reference"] == "self-starting"
+
+
+def test_the_second_half_is_scored_from_its_first_block_against_the_first_half(model):  # noqa: F811
+    # the trace starts at the record's middle: every block of the second half is scored, the
+    # first one against the first half's blocks only
+    check = record_drift(model, dataset(model, virtual_zone(1, days=7.0)))
+    trace = check.traces["Ti"]
+    assert 3.5 * DAY < trace.t[0] <= 3.5 * DAY + 3600.0 and trace.t[-1] > 6.9 * DAY
+    assert np.isfinite(trace.mean_up).all() and (trace.mean_up >= 0).all()
 
 
 def test_a_short_record_or_a_model_without_noise_is_not_tested(model):  # noqa: F811
