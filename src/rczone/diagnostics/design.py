@@ -307,12 +307,19 @@ def from_si(values: np.ndarray, unit: str, quantity: str) -> np.ndarray:
 
 
 def _fisher_logdet(S: np.ndarray, nuis: np.ndarray, weight: float) -> tuple[float, np.ndarray]:
-    """log det of the marginal Fisher matrix and the free covariance."""
+    """log det of the marginal Fisher matrix and the free covariance; ``-inf`` unless it is positive definite.
+
+    By its Cholesky factor: a positive determinant alone (``slogdet``'s sign) also passes a matrix
+    with an even number of negative eigenvalues, which rounding can give a nearly singular
+    information, and its inverse then has negative variances.
+    """
     Fr = marginal_fisher(S, nuis, weight)
-    sign, ld = np.linalg.slogdet(Fr)
-    if sign <= 0:
+    try:
+        L = np.linalg.cholesky(Fr)
+    except np.linalg.LinAlgError:
         return -np.inf, np.full(Fr.shape, np.inf)
-    return float(ld), np.linalg.inv(Fr)
+    inv_L = np.linalg.inv(L)
+    return 2.0 * float(np.sum(np.log(np.diag(L)))), inv_L.T @ inv_L
 
 
 def actuatable(network: RCNetwork) -> tuple[str, ...]:

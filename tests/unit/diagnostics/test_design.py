@@ -268,3 +268,17 @@ def test_the_design_reports_whether_it_drives_its_inputs_apart(design):
         assert exc.correlation[0, 1] == pytest.approx(r, abs=1e-12)
         assert exc.collinear == (abs(r) >= 0.95)
     assert res.to_dict()["excitation"]["inputs"] == list(varying)
+
+
+def test_an_information_with_two_negative_eigenvalues_scores_no_design(monkeypatch):
+    """Its determinant is positive, but it is no information: -inf, and no negative variances."""
+    import rczone.diagnostics.design as design
+
+    indefinite = np.diag([4.0, -1.0, -2.0])  # det 8 > 0
+    monkeypatch.setattr(design, "marginal_fisher", lambda S, nuis, w: indefinite)
+    ld, cov = design._fisher_logdet(None, None, 1.0)
+    assert ld == -np.inf and np.all(cov == np.inf)
+    good = np.array([[4.0, 1.0, 0.0], [1.0, 3.0, 0.5], [0.0, 0.5, 2.0]])
+    monkeypatch.setattr(design, "marginal_fisher", lambda S, nuis, w: good)
+    ld, cov = design._fisher_logdet(None, None, 1.0)
+    assert ld == pytest.approx(np.log(np.linalg.det(good))) and np.allclose(cov, np.linalg.inv(good))
