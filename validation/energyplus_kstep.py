@@ -3,7 +3,7 @@
 Usage::
 
     python validation/energyplus_kstep.py [--out validation-output] [--seasons winter,summer]
-        [--seeds 3] [--days 2] [--margin 0.1] [--horizons 1,4,48] [--no-baseline]
+        [--seeds 3] [--days 2] [--margins 0.1] [--horizons 1,4,48] [--no-baseline]
 
 The set-up of ``validation/energyplus_closed_loop.py`` (medium office, ``Perimeter_mid_ZN_1``, the
 paper's second-order model, a 3-day forced test, then 2 days under a time-of-use price with
@@ -16,13 +16,14 @@ whole horizon).
 
 Both models drive ``rczone control-test --emulator energyplus --controller mpc`` over seeds 0, 1,
 ... with the same seed (sensor noise and forecast error) and margin: the runs differ only in the
-model. Per season the k-step run is paired with the ML run of the same seed; the table (:func:`table`)
+model. Per season and margin the k-step run is paired with the ML run of the same seed; the table (:func:`table`)
 gives the mean of each, the paired difference k-step − ML (mean ± standard error) and the verdict of
 :func:`rczone.control.comparison.verdict` (a difference beyond two standard errors and 1 % of the ML
 mean, as docs/control.md defines it), with the building's own control (``baseline``, one run: it
 reads neither rczone's sensors nor its forecasts) beside. Every run is appended to
-``<out>/energyplus_kstep.json`` as it finishes, with its wall and CPU time and the load; the table is
-written to ``<out>/energyplus_kstep.md``. The runs of docs/energyplus.md are
+``<out>/energyplus_kstep.json`` as it finishes, with its wall and CPU time and the load, beside the
+two fits' estimates and errors (:func:`fit_summary`); the tables are written to
+``<out>/energyplus_kstep.md``. The runs of docs/energyplus.md are
 ``validation/energyplus_kstep.json``; a test keeps the page's table equal to :func:`table` of them.
 """
 
@@ -53,6 +54,9 @@ ML, KSTEP = "ml", "kstep"
 #: (row key, label, per zone-day): the KPIs of the table, lower is better for each.
 KPIS = (("cost", "HVAC cost", False), ("comfort_Kh", "comfort K h per zone-day", True))
 KPIS += (("energy_kWh", "HVAC kWh", False), ("prediction_rmse_K", "1-step RMSE K", False))
+KPIS += (("prediction_1h_rmse_K", "1-h RMSE K", False), ("open_loop_rmse_K", "open-loop RMSE K", False))
+#: Prediction errors of the run's model, kept beside the KPIs of ``energyplus_closed_loop._run``.
+PREDICTION = ("prediction_1h_rmse_K", "open_loop_rmse_K")
 
 
 def _cpu() -> float:
@@ -89,13 +93,49 @@ def run(out: Path, season: str, fit: str, seed: int, days: int, model: Path, mar
     folder.mkdir(parents=True, exist_ok=True)
     wall, cpu = time.perf_counter(), _cpu()
     row = ecl._run(folder, season, "baseline" if fit is None else "mpc", seed, days, model, margin)
-    row |= {"fit": fit, "wall_s": time.perf_counter() - wall, "cpu_s": _cpu() - cpu}
+    row["fit"] = fit
+    row |= {**_prediction(out, row), "wall_s": time.perf_counter() - wall, "cpu_s": _cpu() - cpu}
     return row | {"load_1min": os.getloadavg()[0], "date": datetime.now(UTC).strftime("%Y-%m-%d")}
 
 
-def paired(results: list[dict], season: str, kpi: str, per_day: bool) -> dict | None:
-    """Per seed the k-step run's ``kpi`` minus the ML run's; mean, standard error, verdict."""
-    runs = {(r["fit"], r["seed"]): r for r in results if r["season"] == season and r["fit"]}
+def fit_summary(path: Path) -> dict:
+    """The estimates, one-step and open-loop RMSE on the trend, criterion and exit code of ``rczone fit --json``."""
+    d = json.loads(path.read_text())
+    est = {k: v["estimate"] for k, v in d["parameters"].items() if not k.startswith("sigma")}
+    at_bound = sorted(k for k, v in d["parameters"].items() if v.get("at_bound"))
+    keep = {
+        "one_step_rmse_K": d["rmse_K"],
+        "open_loop_rmse_K": d["open_loop_rmse_K"],
+        "exit_code": d["exit_code"],
+    }
+    return {
+        "estimates": est,
+        "at_bound": at_bound,
+        "objective": d["objective"],
+        "objective_value": d["objective_value"],
+        **keep,
+    }
+
+
+def _prediction(out: Path, row: dict) -> dict:
+    """The 1-h and open-loop prediction RMSE of a run, from the file ``energyplus_closed_loop._run`` wrote."""
+    margin = 0.0 if row["margin"] is None else row["margin"]
+    path = (
+        out
+        / f"kstep_runs_{row['fit'] or 'baseline'}"
+        / f"run_{row['season']}_{row['controller']}_{row['seed']}_{margin:g}.json"
+    )
+    r = json.loads(path.read_text())
+    return {k: r[k] for k in PREDICTION}
+
+
+def paired(results: list[dict], season: str, margin: float, kpi: str, per_day: bool) -> dict | None:
+    """Per seed the k-step run's ``kpi`` minus the ML run's at ``margin``; mean, standard error, verdict."""
+    runs = {
+        (r["fit"], r["seed"]): r
+        for r in results
+        if r["season"] == season and r["fit"] and r["margin"] == margin
+    }
     seeds = sorted(s for f, s in runs if f == KSTEP and (ML, s) in runs)
     if not seeds:
         return None
@@ -118,31 +158,26 @@ def paired(results: list[dict], season: str, kpi: str, per_day: bool) -> dict | 
 
 
 def table(results: list[dict]) -> str:
-    """Markdown: per season and KPI the baseline, both MPCs' means, the paired difference and its verdict."""
+    """Markdown: per season, margin and KPI the baseline, both MPCs' means, the paired difference, its verdict."""
     lines = [
-        "| season | KPI | baseline | MPC, ML fit | MPC, k-step fit | k-step − ML (mean ± s.e.) | verdict | seeds |",
-        "|---|---|---|---|---|---|---|---|",
+        "| season | margin K | KPI | baseline | MPC, ML fit | MPC, k-step fit | k-step − ML (mean ± s.e.) | verdict | seeds |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for season in ecl.SEASONS:
         base = [r for r in results if r["season"] == season and r["fit"] is None]
-        for kpi, label, per_day in KPIS:
-            p = paired(results, season, kpi, per_day)
+        margins = sorted({r["margin"] for r in results if r["season"] == season and r["fit"]}, reverse=True)
+        for margin, (kpi, label, per_day) in ((m, k) for m in margins for k in KPIS):
+            p = paired(results, season, margin, kpi, per_day)
             if p is None:
                 continue
             b = (
                 ""
-                if not base or kpi == "prediction_rmse_K"
+                if not base or "rmse" in kpi
                 else f"{base[0][kpi] / (base[0]['days'] if per_day else 1):.3f}"
             )
-            cells = [
-                season,
-                label,
-                b,
-                f"{p['ml']:.3f}",
-                f"{p['kstep']:.3f}",
-                f"{p['mean']:+.3f} ± {p['se']:.3f}",
-            ]
-            lines.append("| " + " | ".join([*cells, p["verdict"], str(len(p["seeds"]))]) + " |")
+            cells = [season, f"{margin:g}", label, b, f"{p['ml']:.3f}", f"{p['kstep']:.3f}"]
+            cells += [f"{p['mean']:+.3f} ± {p['se']:.3f}", p["verdict"], str(len(p["seeds"]))]
+            lines.append("| " + " | ".join(cells) + " |")
     mpc = [r for r in results if r["fit"]]
     if not mpc:
         return "\n".join(lines) + "\n"
@@ -157,33 +192,72 @@ def table(results: list[dict]) -> str:
     return "\n".join(lines) + "\n\n" + note + "\n"
 
 
+def fits_table(fits: dict) -> str:
+    """Markdown: per season the two fits' estimates, their errors on the forced-test trend and exit codes."""
+    names = ("Cr", "Cw", "Rwin", "R1", "R2")
+    lines = [
+        "| season | fit | " + " | ".join(names) + " | at a bound | 1-step RMSE K | open-loop RMSE K | exit |",
+        "|---|---|" + "---|" * (len(names) + 4),
+    ]
+    for season in (s for s in ecl.SEASONS if s in fits):
+        for fit in (ML, KSTEP):
+            f = fits[season][fit]
+            cells = [
+                season,
+                fit,
+                *(f"{f['estimates'][n]:.3g}" for n in names),
+                ", ".join(f["at_bound"]) or "-",
+            ]
+            cells += [f"{f['one_step_rmse_K']:.3f}", f"{f['open_loop_rmse_K']:.3f}", str(f["exit_code"])]
+            lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _save(out: Path, store: dict) -> None:
+    (out / "energyplus_kstep.json").write_text(json.dumps(store, indent=1))
+    (out / "energyplus_kstep.md").write_text(table(store["runs"]) + "\n" + fits_table(store["fits"]))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=Path("validation-output"))
     ap.add_argument("--seasons", default="winter,summer")
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--days", type=int, default=2)
-    ap.add_argument("--margin", type=float, default=0.1, help="how far inside the band the MPC aims, K")
+    ap.add_argument(
+        "--margins", default="0.1", help="how far inside the band the MPC aims, K (comma-separated)"
+    )
     ap.add_argument("--horizons", default=",".join(map(str, HORIZONS)))
     ap.add_argument("--no-baseline", action="store_true", help="leave the building's own control out")
     a = ap.parse_args(argv)
     horizons = tuple(int(h) for h in a.horizons.split(","))
     a.out.mkdir(parents=True, exist_ok=True)
-    store = a.out / "energyplus_kstep.json"
-    results = json.loads(store.read_text()) if store.exists() else []
-    done = {(r["season"], r["fit"], r["seed"], r["days"]) for r in results}
+    path = a.out / "energyplus_kstep.json"
+    store = (
+        json.loads(path.read_text())
+        if path.exists()
+        else {"horizons": list(horizons), "fits": {}, "runs": []}
+    )
+    store["runs"] = [
+        r if all(k in r for k in PREDICTION) else r | _prediction(a.out, r) for r in store["runs"]
+    ]
+    done = {(r["season"], r["fit"], r["seed"], r["days"], r["margin"]) for r in store["runs"]}
     for season in a.seasons.split(","):
         t0, c0 = time.perf_counter(), _cpu()
         models = {KSTEP: kstep_model(a.out, season, horizons), ML: a.out / f"zone_{season}.json"}
         print(f"{season}: fits in {time.perf_counter() - t0:.0f} s wall, {_cpu() - c0:.0f} s CPU", flush=True)
-        plan = [(fit, s) for s in range(a.seeds) for fit in (ML, KSTEP)]
-        for fit, seed in plan + ([] if a.no_baseline else [(None, 0)]):
-            if (season, fit, seed, a.days) in done:
+        fits = {ML: a.out / f"fit_{season}.json", KSTEP: a.out / f"fit_{season}_kstep.json"}
+        store["fits"][season] = {fit: fit_summary(p) for fit, p in fits.items()}
+        plan = [
+            (fit, s, float(m)) for m in a.margins.split(",") for s in range(a.seeds) for fit in (ML, KSTEP)
+        ]
+        for fit, seed, margin in plan + ([] if a.no_baseline else [(None, 0, None)]):
+            if (season, fit, seed, a.days, margin) in done:
                 continue
-            results.append(run(a.out, season, fit, seed, a.days, models[fit or ML], a.margin))
-            store.write_text(json.dumps(results, indent=1))
-            (a.out / "energyplus_kstep.md").write_text(table(results))
-            print(json.dumps(results[-1]), flush=True)
+            store["runs"].append(run(a.out, season, fit, seed, a.days, models[fit or ML], margin or 0.0))
+            _save(a.out, store)
+            print(json.dumps(store["runs"][-1]), flush=True)
+        _save(a.out, store)
     return 0
 
 
