@@ -22,7 +22,8 @@ gives the mean of each, the paired difference k-step − ML (mean ± standard er
 mean, as docs/control.md defines it), with the building's own control (``baseline``, one run: it
 reads neither rczone's sensors nor its forecasts) beside. Every run is appended to
 ``<out>/energyplus_kstep.json`` as it finishes, with its wall and CPU time and the load, beside the
-two fits' estimates and errors (:func:`fit_summary`); the tables are written to
+two fits' estimates and errors (:func:`fit_summary`) and their k-step criterion on the trend
+(:func:`criterion`); the tables are written to
 ``<out>/energyplus_kstep.md``. The runs of docs/energyplus.md are
 ``validation/energyplus_kstep.json``; a test keeps the page's table equal to :func:`table` of them.
 """
@@ -41,8 +42,12 @@ from pathlib import Path
 
 import numpy as np
 
+from rczone.calibration.dataset import prepare
 from rczone.cli.main import main as rczone
 from rczone.control.comparison import verdict
+from rczone.estimation.kstep import kstep_cost
+from rczone.models.zone import ZoneModel
+from rczone.workflow.datasource import data_source
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -115,6 +120,14 @@ def fit_summary(path: Path) -> dict:
         "objective_value": d["objective_value"],
         **keep,
     }
+
+
+def criterion(out: Path, season: str, model: Path, horizons: tuple[int, ...]) -> float:
+    """The k-step criterion (K²) of the saved ``model`` on the season's forced-test trend at ``horizons``."""
+    zm, folder = ZoneModel.load(model), out / f"forced_{season}"
+    frame = data_source(folder / "trend.csv", folder / f"{ecl.ZONE}.columns.toml").frame(zm)
+    values = {**zm.theta, **zm.noise, **zm.provenance.get("initial_state", {})}
+    return float(kstep_cost(zm.network, values, prepare(zm, frame).dataset, horizons).value)
 
 
 def _prediction(out: Path, row: dict) -> dict:
@@ -196,8 +209,9 @@ def fits_table(fits: dict) -> str:
     """Markdown: per season the two fits' estimates, their errors on the forced-test trend and exit codes."""
     names = ("Cr", "Cw", "Rwin", "R1", "R2")
     lines = [
-        "| season | fit | " + " | ".join(names) + " | at a bound | 1-step RMSE K | open-loop RMSE K | exit |",
-        "|---|---|" + "---|" * (len(names) + 4),
+        "| season | fit | " + " | ".join(names) + " | at a bound | 1-step RMSE K | open-loop RMSE K | "
+        "k-step criterion K² | exit |",
+        "|---|---|" + "---|" * (len(names) + 5),
     ]
     for season in (s for s in ecl.SEASONS if s in fits):
         for fit in (ML, KSTEP):
@@ -208,7 +222,12 @@ def fits_table(fits: dict) -> str:
                 *(f"{f['estimates'][n]:.3g}" for n in names),
                 ", ".join(f["at_bound"]) or "-",
             ]
-            cells += [f"{f['one_step_rmse_K']:.3f}", f"{f['open_loop_rmse_K']:.3f}", str(f["exit_code"])]
+            cells += [
+                f"{f['one_step_rmse_K']:.3f}",
+                f"{f['open_loop_rmse_K']:.3f}",
+                f"{f['criterion_K2']:.1f}",
+            ]
+            cells.append(str(f["exit_code"]))
             lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
@@ -247,7 +266,10 @@ def main(argv: list[str] | None = None) -> int:
         models = {KSTEP: kstep_model(a.out, season, horizons), ML: a.out / f"zone_{season}.json"}
         print(f"{season}: fits in {time.perf_counter() - t0:.0f} s wall, {_cpu() - c0:.0f} s CPU", flush=True)
         fits = {ML: a.out / f"fit_{season}.json", KSTEP: a.out / f"fit_{season}_kstep.json"}
-        store["fits"][season] = {fit: fit_summary(p) for fit, p in fits.items()}
+        store["fits"][season] = {
+            fit: fit_summary(p) | {"criterion_K2": criterion(a.out, season, models[fit], horizons)}
+            for fit, p in fits.items()
+        }
         plan = [
             (fit, s, float(m)) for m in a.margins.split(",") for s in range(a.seeds) for fit in (ML, KSTEP)
         ]

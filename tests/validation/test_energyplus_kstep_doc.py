@@ -60,3 +60,12 @@ def test_the_pairs_are_by_seed_and_the_verdict_follows_the_numbers() -> None:
     other = [{**r, "margin": 0.0, "cost": r["cost"] + 50} for r in ml[:1] + cheaper[:2]]
     assert mod.paired(ml + cheaper + other, "winter", 0.1, "cost", False)["mean"] == p["mean"]
     assert mod.paired(ml + cheaper + other, "winter", 0.0, "cost", False)["seeds"] == [0]
+
+
+def test_the_recorded_kstep_fits_lowered_their_criterion() -> None:
+    """The criterion recomputed from each saved k-step model is its fit's objective (to 1 %), and below the ML fit's."""
+    fits = json.loads((ROOT / "validation" / "energyplus_kstep.json").read_text())["fits"]
+    for season in fits.values():
+        kstep, ml = season["kstep"], season["ml"]
+        assert abs(kstep["criterion_K2"] / kstep["objective_value"] - 1) < 1e-2  # summer: 0.09 %
+        assert kstep["criterion_K2"] < ml["criterion_K2"]
