@@ -403,17 +403,17 @@ def two_zone_gradient_cases() -> list[Case]:
     spec = make_spec(net, list(default_free(net, "ml")))
     obj = Objective(net, data, spec, "ml")
     eta = spec.to_eta(spec.start)
-    spectral = engines.interval_derivatives
+    kernel = engines.derivatives_kernel
 
     def expm_route():
         # the same engine with the matrix-exponential (Fréchet) derivatives of every interval
-        engines.interval_derivatives = lambda mod, der, how: spectral(
-            mod, der, how._replace(scale=np.empty(0))
+        engines.derivatives_kernel = lambda rc: (
+            lambda mod, der, how: kernel(False)(mod, der, how._replace(scale=np.empty(0)))
         )
         try:
             return obj.value_and_gradient(eta)
         finally:
-            engines.interval_derivatives = spectral
+            engines.derivatives_kernel = kernel
 
     return [
         Case(
