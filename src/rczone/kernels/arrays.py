@@ -437,8 +437,14 @@ def writable(a: np.ndarray, dtype: type = np.float64) -> np.ndarray:
     What every caller hands a kernel. numba compiles one specialization per argument type, and
     read-only is part of the type: a data set's frozen arrays, ``np.diag`` of a matrix (a
     read-only view when it is contiguous, a writable copy when not) or a model's arrays would
-    otherwise compile a kernel again for the next model structure or data source.
+    otherwise compile a kernel again for the next model structure or data source. An array that
+    already is one is returned as it is without ``np.require``'s checks (about 1 us against 0.2 us:
+    a 2-state simulation makes four such calls, 5 % of its time).
     """
+    if type(a) is np.ndarray and a.dtype == dtype:
+        flags = a.flags
+        if flags.c_contiguous and flags.writeable:
+            return a
     return np.require(a, dtype, "CW")
 
 
