@@ -195,6 +195,17 @@ def test_json_then_a_failing_report_leaves_no_report_folder(tmp_path, capsys, mo
 # ---- Ctrl-C ------------------------------------------------------------------------------------------
 
 
+def as_a_terminal_starts_it() -> None:
+    """Default SIGINT and SIGTERM in the command, as a terminal starts a foreground job.
+
+    A test run started as a background job of a non-interactive shell (``make test &``, a CI
+    runner's wrapper) inherits SIGINT ignored (POSIX), and so would the command: Ctrl-C would then
+    do nothing, by the shell's choice, not rczone's.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _interrupt(args: list[str], wait_for: str, tmp_path: Path, delay: float = 0.5) -> tuple[int, str]:
     err = tmp_path / "err.txt"
     with open(err, "w") as fh:
@@ -203,6 +214,7 @@ def _interrupt(args: list[str], wait_for: str, tmp_path: Path, delay: float = 0.
             stdout=subprocess.DEVNULL,
             stderr=fh,
             start_new_session=True,
+            preexec_fn=as_a_terminal_starts_it,
         )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and wait_for not in err.read_text() and proc.poll() is None:

@@ -23,6 +23,7 @@ import rczone
 from rczone.cli.compile_notice import NOTICE
 from rczone.cli.main import main
 from rczone.errors import RczoneError
+from tests.unit.cli.test_hostile_successes import as_a_terminal_starts_it
 
 POSIX = pytest.mark.skipif(os.name == "nt", reason="links, signals and processes as on POSIX")
 
@@ -457,7 +458,13 @@ sys.exit(0)
 
 @POSIX
 def test_sigterm_ends_a_command_as_ctrl_c_does():
-    done = subprocess.run([sys.executable, "-c", TERMINATED], env=_env(), timeout=120, capture_output=True)
+    done = subprocess.run(
+        [sys.executable, "-c", TERMINATED],
+        env=_env(),
+        timeout=120,
+        capture_output=True,
+        preexec_fn=as_a_terminal_starts_it,
+    )
     assert done.returncode == 130, done.stderr
 
 
