@@ -77,6 +77,8 @@ def noting_ctrl_c() -> Iterator[Callable[[], bool]]:
 
     _seen.clear()
     _depth[0] = 1
+    hook = sys.unraisablehook
+    sys.unraisablehook = _quiet_ctrl_c(hook)
     signal.signal(signal.SIGINT, on_ctrl_c)
     term = signal.getsignal(signal.SIGTERM)
     if term == signal.SIG_DFL:  # SIGTERM (kill, a job scheduler) ends a command as Ctrl-C does
@@ -90,10 +92,27 @@ def noting_ctrl_c() -> Iterator[Callable[[], bool]]:
         signal.signal(signal.SIGINT, signal.default_int_handler)
         if term == signal.SIG_DFL:
             signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        sys.unraisablehook = hook
         _depth[0] = 0
         for timer in timers:  # the command ended: nothing is left to end (nor a caller's process)
             timer.cancel()
             timer.join(timeout=5)
+
+
+def _quiet_ctrl_c(hook: Callable) -> Callable:
+    """``hook`` for every unraisable exception but a Ctrl-C: that one is noted, not printed.
+
+    A Ctrl-C that lands in a finalizer or a ctypes callback (llvmlite's object cache, while numba
+    compiles) cannot be raised there; Python prints it as "Exception ignored ..." with a traceback.
+    It is already noted (the command ends 130, "aborted"), so the traceback is noise.
+    """
+
+    def quiet(unraisable) -> None:
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            return
+        hook(unraisable)
+
+    return quiet
 
 
 class _Watchdog:

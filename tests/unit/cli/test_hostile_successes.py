@@ -442,3 +442,25 @@ def test_the_watchdog_leaves_the_wake_up_descriptor_as_it_found_it():
         assert after == before
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+@pytest.mark.skipif(os.name == "nt", reason="POSIX signals")
+def test_a_ctrl_c_python_cannot_raise_is_not_printed_as_a_traceback(python_ctrl_c, monkeypatch):
+    """A Ctrl-C in a finalizer (or llvmlite's ctypes callback while numba compiles) is noted, not
+    printed as "Exception ignored ... Traceback"; any other unraisable error still reaches the hook."""
+    from rczone.cli.interrupt import noting_ctrl_c
+
+    class Raises:
+        def __init__(self, exc):
+            self.exc = exc
+
+        def __del__(self):
+            raise self.exc
+
+    seen = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: seen.append(type(u.exc_value).__name__))
+    recorder = sys.unraisablehook
+    with noting_ctrl_c():
+        Raises(KeyboardInterrupt())
+        Raises(ValueError("a real fault"))
+    assert seen == ["ValueError"] and sys.unraisablehook is recorder
