@@ -37,7 +37,7 @@ from rczone.estimation.data import Dataset
 from rczone.estimation.methods import method_of
 from rczone.estimation.parameters import make_spec
 from rczone.estimation.uncertainty import profile
-from rczone.models import ZoneModel
+from rczone.models import ZoneModel, load_model
 from rczone.network import RCNetwork
 from rczone.network.stochastic import initial_state_name, is_reserved
 
@@ -119,11 +119,6 @@ def data_set(data: Dataset | PreparedLike) -> Dataset:
     )
 
 
-def network_of(model: RCNetwork | ZoneModel) -> RCNetwork:
-    """The network of a model (a network as it is)."""
-    return model.network if isinstance(model, ZoneModel) else model
-
-
 def correlation_time(res: FitResult) -> float:
     """The output error's correlation time the fit assumed, s (a MAP fit's option, else the default)."""
     return float(res.options.get("correlation_time_s", MAP_CORRELATION_TIME))
@@ -195,7 +190,7 @@ def profile_checks(
     """
     if not factor > 1 or n_points < 3:
         raise ParameterError(f"profile needs factor > 1 and n_points >= 3, got {factor}, {n_points}")
-    obj, w = _objective(network_of(network), data_set(data), res)
+    obj, w = _objective(load_model(network).network, data_set(data), res)
     network = obj.network
     if names is None:
         names = [
