@@ -272,10 +272,9 @@ def _zones_and_models(zone: str | None, zones: str | None, zm):
         names.append(name)
         if spec:
             models[name] = model(spec)
-    if models and len(models) != len(names):
-        bare = [n for n in names if n not in models]
-        raise ParameterError(f"--zones gives no model for {bare}: give each zone one, ZONE=MODEL")
-    return names, (models or None)
+    from rczone.emulators.control import models_by_zone
+
+    return names, (models_by_zone(models, names) if models else None)  # a model for every zone
 
 
 def _energyplus_plant(building: str | None, zones: list[str], days: float, forecast: str, options: dict):
