@@ -122,13 +122,12 @@ def decision_interval(arl0: float, k: float) -> float:
             f"decision_interval: arl0 = {arl0!r} and k = {k!r}; expected a finite arl0 > 1 block"
             " and a finite k > 0 (e.g. arl0 = 1e6, k = 0.5)"
         )
-    lo, hi = 0.0, 1.0
-    while siegmund_arl(hi, k) < arl0:
+    from scipy.optimize import brentq
+
+    hi = 1.0
+    while siegmund_arl(hi, k) < arl0:  # the run length grows with h: bracket the root
         hi *= 2.0
-    for _ in range(80):  # bisection: the run length grows with h
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if siegmund_arl(mid, k) < arl0 else (lo, mid)
-    return 0.5 * (lo + hi)
+    return float(brentq(lambda h: siegmund_arl(h, k) - arl0, 0.0, hi, xtol=1e-12))
 
 
 #: Decision interval of the CUSUM, in standard deviations: the one of :data:`CUSUM_ARL0` (about 12).
