@@ -6,6 +6,7 @@ name nothing, two Unicode forms of one name, partial outputs on exit 2, and Ctrl
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -216,23 +217,27 @@ def _interrupt(args: list[str], wait_for: str, tmp_path: Path, delay: float = 0.
             start_new_session=True,
             preexec_fn=as_a_terminal_starts_it,
         )
-    deadline = time.monotonic() + 120
-    while time.monotonic() < deadline and wait_for not in err.read_text() and proc.poll() is None:
-        time.sleep(0.1)
-    time.sleep(delay)
-    os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
-    code = proc.wait(timeout=120)
-    # nothing of the command outlives it (a worker pool's processes included)
-    deadline = time.monotonic() + 10
-    while time.monotonic() < deadline:
-        try:
-            os.killpg(proc.pid, 0)
-        except ProcessLookupError:
-            break
-        time.sleep(0.1)
-    else:
-        os.killpg(proc.pid, signal.SIGKILL)
-        raise AssertionError("processes of the interrupted command are still running")
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and wait_for not in err.read_text() and proc.poll() is None:
+            time.sleep(0.1)
+        time.sleep(delay)
+        os.killpg(proc.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+        code = proc.wait(timeout=120)
+        # nothing of the command outlives it (a worker pool's processes included)
+        deadline = time.monotonic() + 10
+        while time.monotonic() < deadline:
+            try:
+                os.killpg(proc.pid, 0)
+            except ProcessLookupError:
+                break
+            time.sleep(0.1)
+        else:
+            raise AssertionError("processes of the interrupted command are still running")
+    finally:
+        # whatever failed above (a timeout included), the command's group does not outlive the test
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
     return code, err.read_text()
 
 
