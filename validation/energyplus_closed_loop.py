@@ -37,17 +37,22 @@ FORCED_DAYS = 3
 STEP_MIN = 15
 
 
+def forced_trend(folder: Path, season: str, *, weather: str = WEATHER) -> Path:
+    """The season's forced test of :data:`ZONE` in ``folder`` (run in EnergyPlus once, reused): its trend."""
+    if not (folder / "trend.csv").exists():
+        args = ["emulate", "--building", BUILDING, "--weather", weather, "--start", SEASONS[season][0]]
+        args += ["--days", str(FORCED_DAYS), "--step", str(STEP_MIN), "--test", "forced", "--zones", ZONE]
+        if rczone([*args, "--seed", "1", "-o", str(folder)]) != 0:
+            raise SystemExit(f"the forced test of {weather}, {season} failed")
+    return folder / "trend.csv"
+
+
 def _model(out: Path, season: str) -> Path:
     """The zone model fitted from the season's forced test (made once, reused)."""
     model = out / f"zone_{season}.json"
     if model.exists():
         return model
-    folder = out / f"forced_{season}"
-    if not (folder / "trend.csv").exists():
-        args = ["emulate", "--building", BUILDING, "--weather", WEATHER, "--start", SEASONS[season][0]]
-        args += ["--days", str(FORCED_DAYS), "--step", str(STEP_MIN), "--test", "forced", "--zones", ZONE]
-        if rczone([*args, "--seed", "1", "-o", str(folder)]) != 0:
-            raise SystemExit(f"the forced test of {season} failed")
+    folder = forced_trend(out / f"forced_{season}", season).parent
     args = ["fit", str(folder / "trend.csv"), "--columns", str(folder / f"{ZONE}.columns.toml")]
     args += ["--model", "second-order", "--starts", "1", "--no-profiles", "--save-model", str(model)]
     if rczone([*args, "--json", str(out / f"fit_{season}.json")]) not in (0, 3):
@@ -55,9 +60,20 @@ def _model(out: Path, season: str) -> Path:
     return model
 
 
-def _run(out: Path, season: str, controller: str, seed: int, days: int, model: Path, margin: float) -> dict:
+def _run(
+    out: Path,
+    season: str,
+    controller: str,
+    seed: int,
+    days: int,
+    model: Path,
+    margin: float,
+    *,
+    weather: str = WEATHER,
+) -> dict:
+    """One ``rczone control-test`` of :data:`ZONE` from the season's closed-loop start: the row of its KPIs."""
     path = out / f"run_{season}_{controller}_{seed}_{margin:g}.json"
-    args = ["control-test", "--emulator", "energyplus", "--building", BUILDING, "--weather", WEATHER]
+    args = ["control-test", "--emulator", "energyplus", "--building", BUILDING, "--weather", weather]
     args += ["--zone", ZONE, "--start", SEASONS[season][1], "--days", str(days), "--step", str(STEP_MIN)]
     args += ["--price", "tou", "--forecast", "medium", "--seed", str(seed), "--controller", controller]
     args += ["--margin", str(margin)] if controller == "mpc" else []

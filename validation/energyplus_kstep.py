@@ -92,12 +92,23 @@ def kstep_model(out: Path, season: str, horizons: tuple[int, ...]) -> Path:
     return model
 
 
-def run(out: Path, season: str, fit: str, seed: int, days: int, model: Path, margin: float) -> dict:
+def run(
+    out: Path,
+    season: str,
+    fit: str | None,
+    seed: int,
+    days: int,
+    model: Path,
+    margin: float,
+    *,
+    weather: str = ecl.WEATHER,
+) -> dict:
     """One closed-loop run (``fit`` None: the baseline) with its wall and CPU time and the load."""
     folder = out / f"kstep_runs_{fit or 'baseline'}"
     folder.mkdir(parents=True, exist_ok=True)
     wall, cpu = time.perf_counter(), _cpu()
-    row = ecl._run(folder, season, "baseline" if fit is None else "mpc", seed, days, model, margin)
+    controller = "baseline" if fit is None else "mpc"
+    row = ecl._run(folder, season, controller, seed, days, model, margin, weather=weather)
     row["fit"] = fit
     row |= {**_prediction(out, row), "wall_s": time.perf_counter() - wall, "cpu_s": _cpu() - cpu}
     return row | {"load_1min": os.getloadavg()[0], "date": datetime.now(UTC).strftime("%Y-%m-%d")}

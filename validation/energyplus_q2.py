@@ -108,12 +108,14 @@ def reference(building: dict) -> dict:
     }
 
 
-def _fit(folder: Path, out: Path, starts: str) -> tuple[dict, Path, dict]:
+def _fit(
+    folder: Path, out: Path, starts: str, *, model_name: str = "second-order"
+) -> tuple[dict, Path, dict]:
     """``rczone fit`` of the zone on one trend: its JSON, the saved model and the times."""
     area = reference(tomllib.loads((folder / "building.toml").read_text()))["floor_area_m2"]
     model, report = out / "model.json", out / "fit.json"
     args = ["fit", str(folder / "trend.csv"), "--columns", str(folder / f"{ZONE}.columns.toml")]
-    args += ["--model", "second-order", "--starts", starts, "--floor-area", str(area), "--no-profiles"]
+    args += ["--model", model_name, "--starts", starts, "--floor-area", str(area), "--no-profiles"]
     t0 = _clock()
     code = rczone([*args, "--save-model", str(model), "--json", str(report)])
     if code not in (0, 3):
@@ -346,18 +348,19 @@ def compare(normal: dict, forced: dict) -> str:
     )
 
 
-def in_doc(text: str) -> str:
-    """The part of a page between :data:`BEGIN` and :data:`END` (what ``--doc`` wrote)."""
-    if text.count(BEGIN) != 1 or text.count(END) != 1:
-        raise ValueError(f"the page needs one line {BEGIN!r} and one line {END!r}")
-    return text.split(BEGIN + "\n", 1)[1].split(END, 1)[0]
+def in_doc(text: str, *, markers: tuple[str, str] = (BEGIN, END)) -> str:
+    """The part of a page between the ``markers`` lines (default :data:`BEGIN`, :data:`END`: what ``--doc`` wrote)."""
+    begin, end = markers
+    if text.count(begin) != 1 or text.count(end) != 1:
+        raise ValueError(f"the page needs one line {begin!r} and one line {end!r}")
+    return text.split(begin + "\n", 1)[1].split(end, 1)[0]
 
 
-def write_doc(page: Path, results: list[dict]) -> None:
-    """Replace the tables between the page's markers by :func:`table` of the runs."""
-    text = page.read_text()
-    old = in_doc(text)
-    page.write_text(text.replace(BEGIN + "\n" + old + END, BEGIN + "\n" + table(results) + END))
+def write_doc(page: Path, tables: str, *, markers: tuple[str, str] = (BEGIN, END)) -> None:
+    """Replace what lies between the page's ``markers`` lines by ``tables``."""
+    text, (begin, end) = page.read_text(), markers
+    old = in_doc(text, markers=markers)
+    page.write_text(text.replace(begin + "\n" + old + end, begin + "\n" + tables + end))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -370,7 +373,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--doc", type=Path, help="write the tables of <out>'s runs into this page and stop")
     a = ap.parse_args(argv)
     if a.doc:
-        write_doc(a.doc, json.loads((a.out / "energyplus_q2.json").read_text()))
+        write_doc(a.doc, table(json.loads((a.out / "energyplus_q2.json").read_text())))
         return 0
     a.out.mkdir(parents=True, exist_ok=True)
     store, times = a.out / "energyplus_q2.json", a.out / "energyplus_q2_emulate.json"
