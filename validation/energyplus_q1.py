@@ -50,6 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from rczone.control.comparison import verdict
+from rczone.files.atomic import write_text_atomic
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
@@ -242,8 +243,8 @@ def table(store: dict) -> str:
 
 
 def _save(out: Path, store: dict) -> None:
-    (out / "energyplus_q1.json").write_text(json.dumps(store, indent=1))
-    (out / "energyplus_q1.md").write_text(table(store))
+    write_text_atomic(out / "energyplus_q1.json", json.dumps(store, indent=1))
+    write_text_atomic(out / "energyplus_q1.md", table(store))
 
 
 def run_case(out: Path, store: dict, case: tuple[str, str], a: argparse.Namespace) -> None:

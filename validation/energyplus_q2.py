@@ -41,6 +41,7 @@ import tomllib
 from pathlib import Path
 
 from rczone.cli.main import main as rczone
+from rczone.files.atomic import write_text_atomic
 
 BUILDING, ZONE = "office_medium", "Perimeter_mid_ZN_1"
 CLIMATES = ("usa_il_chicago", "usa_az_phoenix")
@@ -360,7 +361,7 @@ def write_doc(page: Path, tables: str, *, markers: tuple[str, str] = (BEGIN, END
     """Replace what lies between the page's ``markers`` lines by ``tables``."""
     text, (begin, end) = page.read_text(), markers
     old = in_doc(text, markers=markers)
-    page.write_text(text.replace(begin + "\n" + old + end, begin + "\n" + tables + end))
+    write_text_atomic(page, text.replace(begin + "\n" + old + end, begin + "\n" + tables + end))
 
 
 def main(argv: list[str] | None = None) -> int:
