@@ -19,9 +19,10 @@ Offline: EnergyPlus, its prototypes and weather files come with ``pyenergyplus-l
     The trend: the small office, Chicago, 17-18 January, 15-minute steps, its own control,
     sensor seed 1 (``rczone emulate``); the joint model of its floor generated from the
     ``building.toml`` the run wrote (``rczone models generate --floor 1``: 5 zones, 10 states,
-    32 R and C, 42 free with the noise levels), fitted by ML with ``n_starts=1`` (one L-BFGS search
-    from the model's values and the search's confirming restarts) and standard errors
-    (``rczone.fit``, what ``rczone fit --starts 1`` runs before its checks). After a warm-up fit of a few evaluations (numba compiles then), ``--fit-repeat`` fits,
+    32 R and C, 42 free with the noise levels), fitted by ML with rczone's default search (L-BFGS
+    with exact gradients from the model's values and from sampled points, until the best optimum is
+    reached twice or confirmed) and standard errors (``rczone.fit``, what ``rczone fit`` runs
+    before its checks). After a warm-up fit of a few evaluations (numba compiles then), ``--fit-repeat`` fits,
     wall and CPU time (``time.process_time``); target 60 s.
 ``mpc``
     The supervisory MPC (``rczone control-test --emulator energyplus --controller mpc``) on the
@@ -126,7 +127,7 @@ def floor_fit(folder: Path, repeat: int) -> dict:
     wall, cpu = [], []
     for _ in range(repeat):
         t0, c0 = time.perf_counter(), time.process_time()
-        res = fit(net, data, method="ml", n_starts=1)
+        res = fit(net, data, method="ml")  # rczone's default search, as `rczone fit` runs it
         wall.append(time.perf_counter() - t0)
         cpu.append(time.process_time() - c0)
     n_free = len(res.parameters)
@@ -144,12 +145,13 @@ def floor_fit(folder: Path, repeat: int) -> dict:
         "converged": res.converged,
         "local_searches": len(res.starts),
         "llf": res.llf,
+        "search": res.search.reason if res.search is not None else None,
         "target_s": FLOOR_TARGET_S,
         "load_1min": load(),
         "description": f"joint ML fit of {BUILDING}'s floor 1 ({len(net.state_names)} states,"
-        f" {len(net.outputs)} outputs, {n_free} free, {data.n_samples} samples of 15 min), n_starts=1 (L-BFGS"
-        " with exact gradients from the model's values, then the search's confirming restarts), standard"
-        f" errors; median of {repeat} after a warm-up",
+        f" {len(net.outputs)} outputs, {n_free} free, {data.n_samples} samples of 15 min), the default"
+        " search (L-BFGS with exact gradients from the model's values and sampled starts, until the best"
+        f" optimum is confirmed), standard errors; median of {repeat} after a warm-up",
     }
 
 

@@ -340,6 +340,13 @@ class Objective:
         return self._adjoint
 
     @property
+    def backward_gradient(self) -> bool:
+        """Whether :meth:`value_and_gradient` is a backward pass (the fused 2-state adjoint or the general
+        filter's reverse pass): a gradient then costs a few likelihoods whatever the number of
+        parameters, so a Hessian from ``2 d`` gradients costs less than one from ``2 d^2`` values."""
+        return self._adjoint or self._reverse
+
+    @property
     def gradient_engine(self) -> str:
         """The engine of :meth:`value_and_gradient`."""
         return gradient_engine(self.engine)

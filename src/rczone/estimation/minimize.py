@@ -120,7 +120,8 @@ def _uncertainty(problem: FitProblem, objective: Objective, meth: Method, win: S
     spec, data, theta = problem.spec, problem.data, win.end
     if win.hessian is not None:  # the search computed it at this end (search.global_search)
         H = win.hessian
-    elif objective.adjoint_gradient:
+    elif objective.backward_gradient:
+        # 2 d gradients of a few likelihoods each, not 2 d^2 values, and one differentiation fewer
         H = hessian_from_gradient(objective.value_and_gradient, spec.to_eta(theta))
     else:
         H = hessian(objective, spec.to_eta(theta))

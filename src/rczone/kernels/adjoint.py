@@ -55,11 +55,13 @@ from rczone.kernels.arrays import (
     Dynamics,
     FilterOptions,
     FilterStart,
+    ModelAdjoints,
     Moments2,
     Observation,
     Series,
 )
-from rczone.kernels.discretize import rc2_interval_derivatives, rc_interval_derivatives
+from rczone.kernels.discretize import rc2_interval_derivatives, rc_interval_derivatives, rc_interval_matrices
+from rczone.kernels.discretize_adjoint import discretization_adjoints
 from rczone.kernels.problem import LS, MAP, assembled, bound_kernel, with_prior
 from rczone.kernels.rc2 import correct_rc2, predict_rc2
 from rczone.kernels.reverse import Adjoints, contract, nll_reverse, zero_adjoints
@@ -232,10 +234,49 @@ def _total(
     if n_obs < 0:
         return math.inf, grad
     contract(bars, dmats, der, prob.consts.foh, grad)
+    return _with_prior(nll, n_obs, theta, prob, grad)
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def _with_prior(
+    nll: float, n_obs: int, theta: np.ndarray, prob, grad: np.ndarray
+) -> tuple[float, np.ndarray]:
+    """``J_ML`` from ``nll``, and for MAP the prior added to it and to ``grad``."""
     j = nll + 0.5 * n_obs * _LOG_2PI
     if prob.kind == MAP:
         j = with_prior(j, theta, prob.penalty, grad, np.zeros(theta.shape[0]), True)
     return j, grad
+
+
+@njit(cache=True, error_model="numpy")
+def contract_assembled(
+    bars: Adjoints, model: ModelAdjoints, der: AssembledDerivatives, grad: np.ndarray
+) -> None:
+    """Add to ``grad`` the adjoints of the continuous model contracted with its derivatives.
+
+    ``grad[i] += <A0_bar, dA0_i> + sum_f <N_f_bar, dN_f,i> + <B0_bar, dB0_i> + sum_f <M_f_bar, dM_f,i>
+    + qc_bar'dqc_i + sum_o r_bar_o dr_o,i + x0_bar'dx0_i + <P0_bar, dP0_i>``, ``model`` from
+    :func:`rczone.kernels.discretize_adjoint.discretization_adjoints`.
+    """
+    Asum, Bsum, qcbar = model.A, model.B, model.qc
+    q, n = der.dqc.shape
+    nf, p = der.dN.shape[1], der.dB0.shape[2]
+    ny = bars.r.shape[0]
+    for i in range(q):
+        acc = 0.0
+        for o in range(ny):
+            acc += bars.r[o] * der.dr[o, i]
+        for a in range(n):
+            acc += bars.x0[a] * der.dx0[i, a] + qcbar[a] * der.dqc[i, a]
+            for c in range(n):
+                acc += bars.P0[a, c] * der.dP0[i, a, c] + Asum[0, a, c] * der.dA0[i, a, c]
+                for f in range(nf):
+                    acc += Asum[1 + f, a, c] * der.dN[i, f, a, c]
+            for j in range(p):
+                acc += Bsum[0, a, j] * der.dB0[i, a, j]
+                for f in range(nf):
+                    acc += Bsum[1 + f, a, j] * der.dM[i, f, a, j]
+        grad[i] += acc
 
 
 @njit(cache=True, error_model="numpy")
@@ -282,15 +323,25 @@ def gradient_general(theta: np.ndarray, prob) -> tuple[float, np.ndarray]:
     n = mod.A0.shape[0]
     p = mod.B0.shape[1]
     ny = mod.C.shape[0]
-    mats, dmats = _discretized(mod, der, prob.data.keys, foh)
-    bars = zero_adjoints(prob.data.keys.shape[0], n, p, ny)
+    keys = prob.data.keys
+    bars = zero_adjoints(keys.shape[0], n, p, ny)
     obs = Observation(
         mod.C, np.zeros((ny, p)), mod.r, np.zeros((ny, 0, n)), np.zeros((ny, 0, p)), np.zeros((ny, 0))
     )
     prior = FilterStart(mod.x0, mod.P0, np.zeros((0, n)), np.zeros((0, n, n)))
     series = Series(prob.data.u, prob.data.y, prob.data.which)
-    nll, n_obs, _ = nll_reverse(mats, obs, prior, series, FilterOptions(foh, False, steady_rtol), bars)
-    return _total(nll, n_obs, theta, prob, bars, dmats, der, grad)
+    options = FilterOptions(foh, False, steady_rtol)
+    if foh:  # the forward derivatives of the discrete matrices, G1's included
+        mats, dmats = _discretized(mod, der, keys, foh)
+        nll, n_obs, _ = nll_reverse(mats, obs, prior, series, options, bars)
+        return _total(nll, n_obs, theta, prob, bars, dmats, der, grad)
+    # zero-order hold: the adjoints carried back through the discretization, once per interval
+    mats = rc_interval_matrices(mod, Discretization(keys, np.sqrt(mod.cap), False, True))
+    nll, n_obs, _ = nll_reverse(mats, obs, prior, series, options, bars)
+    if n_obs < 0:
+        return math.inf, grad
+    contract_assembled(bars, discretization_adjoints(mod, keys, bars), der, grad)
+    return _with_prior(nll, n_obs, theta, prob, grad)
 
 
 def gradient_kernel(prob, *, fused: bool):

@@ -359,6 +359,29 @@ class AssembledDerivatives(NamedTuple):
     dr: np.ndarray  #: (ny, q)
 
 
+class SpectralWeights(NamedTuple):
+    """An interval's spectral quantities (:mod:`rczone.kernels.discretize_adjoint`): ``x = lam h``, ``e^x``,
+    the hold's weights ``h phi1(x)`` and the divided differences of ``Phi`` (``F0``) and ``G0`` (``Fg``)."""
+
+    x: np.ndarray  #: (n,)
+    e: np.ndarray  #: (n,)
+    wg: np.ndarray  #: (n,)
+    F0: np.ndarray  #: (n, n)
+    Fg: np.ndarray  #: (n, n)
+
+
+class ModelAdjoints(NamedTuple):
+    """Adjoints of a continuous model: of ``A`` and ``B`` and of the process noise ``qc``.
+
+    Of one interval's ``A``, ``B`` (shapes (n, n), (n, p)); summed over the intervals, of ``A0``
+    and each flow's ``N_f`` (shape (1 + nf, n, n)) and of ``B0`` and each ``M_f`` ((1 + nf, n, p)).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    qc: np.ndarray  #: (n,)
+
+
 class Start(NamedTuple):
     """What the initial state is derived from (:func:`rczone.kernels.problem.initial_state`)."""
 

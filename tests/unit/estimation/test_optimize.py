@@ -130,3 +130,70 @@ def test_the_lbfgsb_loop_takes_scipys_steps(start, maxfun: int, ftol: float, mon
     )
     if ftol == 1e-15:  # from there it goes to the bound, not to the local minimum near x0 = -0.78
         assert got.success and got.x[0] == 0.8
+
+
+def test_the_decrement_is_what_a_diagonal_quadratic_has_left_to_fall() -> None:
+    from rczone.estimation.optimize import decrement
+
+    c = np.array([2.0, 6.0, 0.5])  # the curvature of J = 5 + sum(c (eta - t)^2 / 2)
+    t = np.array([0.3, -1.0, 2.0])
+    eta = np.array([1.0, 0.5, -0.5])
+    size = 7.0  # J at the search's start
+    g = c * (eta - t)  # dJ/deta
+    left = float(np.sum(c * (eta - t) ** 2) / 2)  # J(eta) - min J
+    # the phase's variables xi = eta sqrt(c) and cost J / size, as _lbfgs scales them
+    g_xi = g / np.sqrt(c) / size
+    lo, hi = np.full(3, -10.0), np.full(3, 10.0)
+    assert decrement(g_xi, eta * np.sqrt(c), lo, hi, size) * size == pytest.approx(left, rel=1e-12)
+    # a component pushing out of the box at its bound cannot be followed: it is not counted
+    at = eta * np.sqrt(c)
+    lo_at = lo.copy()
+    lo_at[1] = at[1]  # g_xi[1] > 0: the cost falls towards the lower bound the point sits on
+    assert g_xi[1] > 0
+    want = (left - c[1] * (eta[1] - t[1]) ** 2 / 2) / size
+    assert decrement(g_xi, at, lo_at, hi, size) == pytest.approx(want, rel=1e-12)
+    # pulling inside from a bound, it is
+    assert decrement(-g_xi, at, lo_at, hi, size) * size == pytest.approx(left, rel=1e-12)
+
+
+class _Curved(_Quadratic):
+    """The quadratic with the diagonal curvature an Objective offers, to scale L-BFGS's phases."""
+
+    def curvature(self, eta: np.ndarray) -> np.ndarray:
+        return np.array([2.0, 6.0])
+
+
+def test_a_false_convergence_of_lbfgsb_is_not_taken(monkeypatch) -> None:
+    """L-BFGS-B can stop on its relative-reduction test with the gradient far from zero (seen on
+    the five-zone floor: a restart 900 in -log L above its optimum); such an end starts a new phase."""
+    import rczone.estimation.optimize as optimize
+
+    real = optimize.lbfgsb
+    calls: list[str] = []
+
+    def lazy_then_real(fun, x0, lower, upper, **kw):
+        if not calls:  # the first phase stops at once, claiming convergence
+            calls.append("false")
+            return optimize.LbfgsbResult(x0, fun(x0)[0], 1, True, "CONVERGENCE: REL_REDUCTION_OF_F")
+        calls.append("real")
+        return real(fun, x0, lower, upper, **kw)
+
+    monkeypatch.setattr(optimize, "lbfgsb", lazy_then_real)
+    spec = make_spec(NET2, ["Cr", "Rw"], bounds={"Cr": (1e5, 1e7), "Rw": (1e-3, 1.0)})
+    out = minimize_from(_Curved(), spec, spec.start, "lbfgs")
+    assert calls[0] == "false" and "real" in calls
+    assert out.converged
+    np.testing.assert_allclose(out.end, [2.5e6, 0.02], rtol=1e-6)
+
+    # claims that never reach a minimum end as not converged, and say why
+    monkeypatch.setattr(
+        optimize,
+        "lbfgsb",
+        lambda fun, x0, lower, upper, **kw: optimize.LbfgsbResult(x0, fun(x0)[0], 1, True, "CONVERGENCE: X"),
+    )
+    out = minimize_from(_Curved(), spec, spec.start, "lbfgs")
+    assert not out.converged
+    assert "far from zero" in out.message
+    # at a true minimum the same claim is taken
+    out = minimize_from(_Curved(), spec, np.array([2.5e6, 0.02]), "lbfgs")
+    assert out.converged

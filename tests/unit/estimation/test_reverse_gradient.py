@@ -153,7 +153,10 @@ def test_reverse_gradient_through_steady_states_that_end_both_ways(hold: str) ->
     grad = np.zeros(theta.size)
     contract(bars, dmats, der, hold == "foh", grad)
     _, g = obj.value_and_gradient(eta)
-    np.testing.assert_allclose(g, grad * spec.jacobian(eta), rtol=1e-12, atol=0)
+    # FOH: the same contraction; ZOH: the adjoints carried back through the discretization
+    # (kernels/discretize_adjoint.py), another order of the same sums: equal to rounding
+    rtol = 1e-12 if hold == "foh" else 1e-10
+    np.testing.assert_allclose(g, grad * spec.jacobian(eta), rtol=rtol, atol=0)
     agree(obj, eta)
 
 
