@@ -34,8 +34,9 @@ Every run is appended to ``<out>/energyplus_q2_closed_loop.json`` as it finishes
 References
 ----------
 .. [1] Y. Lin, T. Middelkoop, P. Barooah, "Issues in identification of control-oriented thermal
-   models of zones in multi-zone buildings", IEEE CDC 2012, section IV (data of normal operation
-   against a forced-response test, judged by the model's use).
+   models of zones in multi-zone buildings", IEEE CDC 2012, sections IV (Q2: calibration on
+   closed-loop data of normal operation against a forced-response test) and V (such a model "is
+   unlikely to be useful in predictive control").
 .. [2] L. Ljung, *System Identification: Theory for the User*, 2nd ed., Prentice Hall 1999,
    sections 13.4 (identification in closed loop) and 16.6 (model validation).
 """
