@@ -4,7 +4,7 @@ Usage::
 
     python validation/energyplus_q2_closed_loop.py [--out validation-output] [--q2-out DIR]
         [--climates usa_il_chicago,usa_az_phoenix] [--seasons winter,summer] [--seeds 5] [--days 2]
-        [--margins 0] [--doc PAGE]
+        [--margins 0] [--doc PAGE] [--trace CLIMATE,SEASON,SEED,MARGIN]
 
 For each climate and season of ``validation/energyplus_q2.py`` the two second-order models of
 :data:`ZONE` that script fits, on its first sensor replicate (replicate 0): the one fitted on the
@@ -30,6 +30,8 @@ Every run is appended to ``<out>/energyplus_q2_closed_loop.json`` as it finishes
 ``<out>/energyplus_q2_closed_loop.md``, and ``--doc PAGE`` writes them between the page's markers
 (:data:`BEGIN`, :data:`END`). The runs of docs/energyplus.md are
 ``validation/energyplus_q2_closed_loop.json``; a test keeps the page's tables equal to :func:`table`.
+``--trace`` runs one seed of a case again (baseline and both MPCs) and prints :func:`outside_band`
+of each: which side of the band the room left, and the cooling set point the controller held.
 
 References
 ----------
@@ -139,6 +141,44 @@ def models_table(fits: list[dict]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def outside_band(frame, step_h: float) -> dict:
+    """Where a run's room left the band over the occupied steps, from its series (``to_frame()`` of
+    :func:`rczone.emulators.control.energyplus_test`): K h above and below, and the hours the cooling
+    set point in effect lay above the band's top, with its mean and largest value then, degC."""
+    occ = frame["occupied"].astype(bool)
+    ti, up, lo, cool = frame["Ti"][occ], frame["upper"][occ], frame["lower"][occ], frame["cooling_sp"][occ]
+    raised = cool > up + 1e-6
+    return {
+        "above_Kh": float((ti - up).clip(lower=0).sum() * step_h),
+        "below_Kh": float((lo - ti).clip(lower=0).sum() * step_h),
+        "cooling_sp_above_band_h": float(raised.sum() * step_h),
+        "cooling_sp_mean_degC": float(cool.mean()),
+        "cooling_sp_max_degC": float(cool.max()),
+    }
+
+
+def trace(q2_out: Path, case: tuple[str, str], seed: int, margin: float) -> dict[str, dict]:
+    """The baseline and both fits' MPCs of ``case`` run again through the API: :func:`outside_band` of each."""
+    from rczone.emulators.control import energyplus_test
+    from rczone.emulators.plant import EnergyPlusPlant
+
+    weather, season = case
+    found = {None: model_path(q2_out, weather, season, FITS[1])} | {
+        f: model_path(q2_out, weather, season, f) for f in FITS
+    }
+    rows = {}
+    for fit, path in found.items():
+        plant = EnergyPlusPlant(
+            eq2.BUILDING, weather, zones=[ZONE], start=eq1.ecl.SEASONS[season][1], days=2,
+            step_minutes=eq1.ecl.STEP_MIN, seed=seed, price="tou", forecast="medium",
+        )  # fmt: skip
+        res = energyplus_test(
+            plant, "mpc" if fit else "baseline", model=ZoneModel.load(path), margin_K=margin
+        )
+        rows[fit or "baseline"] = outside_band(res.to_frame(), eq1.ecl.STEP_MIN / 60)
+    return rows
+
+
 def table(store: dict) -> str:
     """The page's tables: the two models, then the closed loop paired by seed."""
     loop = eq1.loop_table(store["runs"], fits=FITS, short=SHORT, names=NAMES)
@@ -170,8 +210,16 @@ def main(argv: list[str] | None = None) -> int:
         "--q2-out", type=Path, help="energyplus_q2.py's --out, where its models are (default: --out)"
     )
     ap.add_argument("--q2-json", type=Path, default=HERE / "energyplus_q2.json", help="Q2's recorded fits")
+    ap.add_argument(
+        "--trace", help="CLIMATE,SEASON,SEED,MARGIN: where the room left the band, per controller"
+    )
     a = ap.parse_args(argv)
     a.q2_out = a.q2_out or a.out
+    if a.trace:
+        weather, season, seed, margin = a.trace.split(",")
+        rows = trace(a.q2_out, (weather, season), int(seed), float(margin))
+        print(json.dumps(rows, indent=1))
+        return 0
     store = eq1.open_store(a, "energyplus_q2_closed_loop.json", table, (BEGIN, END))
     if store is None:
         return 0

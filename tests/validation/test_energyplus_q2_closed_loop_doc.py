@@ -123,3 +123,27 @@ def test_the_loop_runs_the_baseline_once_then_both_fits_per_seed_and_skips_what_
     ]  # fmt: skip
     assert ("forced", 1, 0.25, "f.json") not in calls and len(calls) == 8 == len(saves)
     assert all(r["climate"] == "c" for r in store["runs"]) and len(store["runs"]) == 9
+
+
+def test_outside_band_counts_the_occupied_kelvin_hours_on_each_side_and_the_raised_cooling_set_point() -> (
+    None
+):
+    import pandas as pd
+
+    mod = load_script("energyplus_q2_closed_loop")
+    frame = pd.DataFrame(
+        {
+            "Ti": [25.0, 20.0, 26.0, 22.0],
+            "lower": [21.0] * 4,
+            "upper": [24.0] * 4,
+            "occupied": [1, 1, 0, 1],
+            "cooling_sp": [25.0, 24.0, 30.0, 24.5],
+        }
+    )
+    # occupied steps 0, 1, 3 of a quarter hour: 1 K above, 1 K below; step 2 (26 degC) is unoccupied
+    got = mod.outside_band(frame, 0.25)
+    assert got["above_Kh"] == pytest.approx(0.25) and got["below_Kh"] == pytest.approx(0.25)
+    assert got["cooling_sp_above_band_h"] == pytest.approx(
+        0.5
+    )  # 25 and 24.5 degC, not 24 or the unoccupied 30
+    assert got["cooling_sp_mean_degC"] == pytest.approx(73.5 / 3) and got["cooling_sp_max_degC"] == 25.0
