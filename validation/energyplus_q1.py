@@ -29,6 +29,8 @@ is stopped; a second start skips what is there); the tables go to ``<out>/energy
 docs/energyplus.md are ``validation/energyplus_q1.json``; a test keeps the page's tables equal to
 :func:`table` of them. The paper's third candidate, the joint model of the floor in closed loop,
 needs a centralized MPC of the floor, which rczone does not have yet; it is not measured here.
+The pairing (:func:`paired`), the closed-loop table, the run loop (:func:`run_loop`) and the options
+(:func:`loop_parser`) take the two fits to compare, and serve ``energyplus_q2_closed_loop.py`` too.
 
 References
 ----------

@@ -68,8 +68,9 @@ MARGINS = (0.0,)
 #: The lines of docs/energyplus.md between which ``--doc`` writes :func:`table`.
 BEGIN = "<!-- energyplus_q2_closed_loop.py: begin -->"
 END = "<!-- energyplus_q2_closed_loop.py: end -->"
-#: Relative difference within which a saved model's estimate is the one of Q2's JSON.
-SAME = 1e-9
+#: Relative difference within which a saved model's estimate is the one of Q2's JSON (a refit on
+#: another machine may differ in the last digits; the tables give three).
+SAME = 1e-3
 
 
 def model_path(q2_out: Path, weather: str, season: str, training: str) -> Path:
