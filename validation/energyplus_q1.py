@@ -29,6 +29,8 @@ is stopped; a second start skips what is there); the tables go to ``<out>/energy
 docs/energyplus.md are ``validation/energyplus_q1.json``; a test keeps the page's tables equal to
 :func:`table` of them. The paper's third candidate, the joint model of the floor in closed loop,
 needs a centralized MPC of the floor, which rczone does not have yet; it is not measured here.
+The pairing (:func:`paired`), the closed-loop table, the run loop (:func:`run_loop`) and the options
+(:func:`loop_parser`) take the two fits to compare, and serve ``energyplus_q2_closed_loop.py`` too.
 
 References
 ----------
@@ -45,6 +47,7 @@ import argparse
 import json
 import math
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -106,22 +109,35 @@ def model_path(out: Path, weather: str, season: str, model: str) -> Path:
     return _case(out, weather) / f"fit_{season}_{model}" / "model.json"
 
 
-def paired(runs: list[dict], case: tuple[str, str], margin: float, kpi: str, per_day: bool) -> dict | None:
-    """Per seed the 1-state MPC's ``kpi`` minus the 2-state one's in ``case`` (climate, season) at ``margin``."""
+def paired(
+    runs: list[dict],
+    case: tuple[str, str],
+    margin: float,
+    kpi: str,
+    per_day: bool,
+    *,
+    fits: tuple[str, str] = MODELS,
+) -> dict | None:
+    """Per seed the MPC of ``fits[0]``'s ``kpi`` minus that of ``fits[1]`` in ``case`` (climate, season) at ``margin``.
+
+    By default the 1-state MPC minus the 2-state one; ``one`` and ``two`` are the means of ``fits[0]``
+    and ``fits[1]``, the verdict is for ``fits[0]`` against 1 % of ``fits[1]``'s mean.
+    """
+    first, second = fits
     by = {
         (r["fit"], r["seed"]): r
         for r in runs
         if (r["climate"], r["season"]) == case and r["fit"] and r["margin"] == margin
     }
-    seeds = sorted(s for f, s in by if f == ONE and (TWO, s) in by)
+    seeds = sorted(s for f, s in by if f == first and (second, s) in by)
     if not seeds:
         return None
 
     def value(r: dict) -> float:
         return r[kpi] / r["days"] if per_day else r[kpi]
 
-    two = np.array([value(by[TWO, s]) for s in seeds])
-    d = np.array([value(by[ONE, s]) for s in seeds]) - two
+    two = np.array([value(by[second, s]) for s in seeds])
+    d = np.array([value(by[first, s]) for s in seeds]) - two
     se = float(d.std(ddof=1)) / math.sqrt(d.size) if d.size > 1 else math.nan
     return {
         "seeds": seeds,
@@ -175,26 +191,37 @@ def _cases(runs: list[dict]) -> list[tuple[str, str]]:
     return sorted(cases, key=lambda c: _order({"climate": c[0], "season": c[1]}))
 
 
-def loop_table(runs: list[dict]) -> str:
-    """Markdown: per case, margin and KPI the baseline, both MPCs' means, the paired difference and its verdict."""
+def loop_table(
+    runs: list[dict],
+    *,
+    fits: tuple[str, str] = MODELS,
+    short: tuple[str, str] = ("1-state", "2-state"),
+    names: dict[str, str] | None = None,
+) -> str:
+    """Markdown: per case, margin and KPI the baseline, both MPCs' means, the paired difference and its verdict.
+
+    ``fits`` are the two values of the runs' ``fit`` paired (the first minus the second), ``short``
+    their names in the table's head, ``names`` theirs in :func:`against_baseline`'s lines.
+    """
+    a, b = short
     lines = [
-        "| climate | season | margin K | KPI | baseline | MPC, 1-state | MPC, 2-state | 1-state − 2-state "
-        "(mean ± s.e.) | verdict for the 1-state MPC | seeds |",
+        f"| climate | season | margin K | KPI | baseline | MPC, {a} | MPC, {b} | {a} − {b} "
+        f"(mean ± s.e.) | verdict for the {a} MPC | seeds |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for case in _cases(runs):
         base = [r for r in runs if (r["climate"], r["season"]) == case and r["fit"] is None]
         margins = sorted({r["margin"] for r in runs if (r["climate"], r["season"]) == case and r["fit"]})
         for margin, (kpi, label, per_day) in ((m, k) for m in margins for k in eks.KPIS):
-            p = paired(runs, case, margin, kpi, per_day)
+            p = paired(runs, case, margin, kpi, per_day, fits=fits)
             if p is None:
                 continue
-            b = (
+            base_cell = (
                 ""
                 if not base or "rmse" in kpi
                 else f"{base[0][kpi] / (base[0]['days'] if per_day else 1):.3f}"
             )
-            cells = [*case, f"{margin:g}", label, b, f"{p['one']:.3f}", f"{p['two']:.3f}"]
+            cells = [*case, f"{margin:g}", label, base_cell, f"{p['one']:.3f}", f"{p['two']:.3f}"]
             cells += [f"{p['mean']:+.3f} ± {p['se']:.3f}", p["verdict"], str(len(p["seeds"]))]
             lines.append("| " + " | ".join(cells) + " |")
     mpc = [r for r in runs if r["fit"]]
@@ -208,19 +235,22 @@ def loop_table(runs: list[dict]) -> str:
         f"load average (1 min) {min(load):.1f} to {max(load):.1f} at the runs' ends on a 2-core machine shared "
         "with other jobs."
     )
-    return "\n".join(lines) + "\n\n" + "\n".join(against_baseline(runs)) + "\n\n" + note + "\n"
+    checks = against_baseline(runs, fits=fits, names=names)
+    return "\n".join(lines) + "\n\n" + "\n".join(checks) + "\n\n" + note + "\n"
 
 
-def against_baseline(runs: list[dict]) -> list[str]:
-    """A line per case, margin and model: its MPC's cost and comfort against the building's own control,
-    and whether it cost less with at most :data:`COMFORT_SLACK` more discomfort on every seed."""
+def against_baseline(
+    runs: list[dict], *, fits: tuple[str, ...] = MODELS, names: dict[str, str] | None = None
+) -> list[str]:
+    """A line per case, margin and fit: its MPC's cost and comfort against the building's own control,
+    and whether it cost less with at most :data:`COMFORT_SLACK` more discomfort on every seed.
+
+    ``names`` maps a fit to what the line calls its MPC (by default "<fit> MPC")."""
     lines = []
     for case in _cases(runs):
         here = [r for r in runs if (r["climate"], r["season"]) == case]
         base = [r for r in here if r["fit"] is None]
-        for margin, model in (
-            (m, f) for m in sorted({r["margin"] for r in here if r["fit"]}) for f in MODELS
-        ):
+        for margin, model in ((m, f) for m in sorted({r["margin"] for r in here if r["fit"]}) for f in fits):
             mpc = [r for r in here if r["fit"] == model and r["margin"] == margin]
             if not base or not mpc:
                 continue
@@ -229,7 +259,7 @@ def against_baseline(runs: list[dict]) -> list[str]:
             dcomfort = np.array([(r["comfort_Kh"] - b["comfort_Kh"]) / r["days"] for r in mpc])
             holds = bool(np.all(cost < b["cost"]) and np.all(dcomfort <= COMFORT_SLACK))
             lines.append(
-                f"- {case[0]}, {case[1]}, margin {margin:g} K, {model} MPC: cost {cost.mean():.2f} against the "
+                f"- {case[0]}, {case[1]}, margin {margin:g} K, {(names or {}).get(model, f'{model} MPC')}: cost {cost.mean():.2f} against the "
                 f"baseline's {b['cost']:.2f} ({100 * (cost.mean() / b['cost'] - 1):+.1f} %), comfort "
                 f"{dcomfort.mean():+.2f} K h per zone-day against the baseline; lower cost with at most "
                 f"+{COMFORT_SLACK:g} K h per zone-day on every seed: {'yes' if holds else 'no'}"
@@ -258,25 +288,42 @@ def run_case(out: Path, store: dict, case: tuple[str, str], a: argparse.Namespac
                 json.dumps({k: store["fits"][-1][k] for k in ("climate", "season", "model", "exit_code")}),
                 flush=True,
             )
+    models = {m: model_path(out, weather, season, m) for m in MODELS}
+    run_loop(_case(out, weather), store, case, a, models, lambda: _save(out, store))
+
+
+def run_loop(
+    folder: Path,
+    store: dict,
+    case: tuple[str, str],
+    a: argparse.Namespace,
+    models: dict[str, Path],
+    save: Callable[[], None],
+) -> None:
+    """Run one (climate, season): the baseline once, then per margin and seed the MPC of each fit in
+    ``models`` (fit -> saved model, in the order given); what ``store`` holds is skipped, ``save``
+    is called after each run. The runs' files go under ``folder``."""
+    weather, season = case
     done = {(r["climate"], r["season"], r["fit"], r["seed"], r["days"], r["margin"]) for r in store["runs"]}
     margins = [float(m) for m in a.margins.split(",")]
-    plan = [(None, 0, None)] + [(f, s, m) for m in margins for s in range(a.seeds) for f in MODELS]
+    plan = [(None, 0, None)] + [(f, s, m) for m in margins for s in range(a.seeds) for f in models]
     for fit, seed, margin in plan:
         if (weather, season, fit, seed, a.days, margin) in done:
             continue
-        model = model_path(out, weather, season, fit or TWO)  # the baseline reads no model
-        row = eks.run(_case(out, weather), season, fit, seed, a.days, model, margin or 0.0, weather=weather)
+        model = models[fit] if fit else list(models.values())[-1]  # the baseline reads no model
+        row = eks.run(folder, season, fit, seed, a.days, model, margin or 0.0, weather=weather)
         store["runs"].append({"climate": weather, **row})
-        _save(out, store)
+        save()
         print(json.dumps(store["runs"][-1]), flush=True)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def loop_parser(description: str, *, seeds: int) -> argparse.ArgumentParser:
+    """The options of a closed-loop comparison script: cases, seeds, days, margins, fit starts, ``--doc``."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--out", type=Path, default=Path("validation-output"))
     ap.add_argument("--climates", default=",".join(CLIMATES))
     ap.add_argument("--seasons", default=",".join(SEASONS))
-    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--seeds", type=int, default=seeds)
     ap.add_argument("--days", type=int, default=2)
     ap.add_argument(
         "--margins",
@@ -285,13 +332,28 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("--starts", default="auto", help="rczone fit --starts")
     ap.add_argument("--doc", type=Path, help="write the tables of <out>'s runs into this page and stop")
-    a = ap.parse_args(argv)
-    path = a.out / "energyplus_q1.json"
+    return ap
+
+
+def open_store(
+    a: argparse.Namespace, name: str, tables: Callable[[dict], str], markers: tuple[str, str]
+) -> dict | None:
+    """The runs recorded in ``<a.out>/name`` (none yet: empty); None once ``a.doc`` is given and its
+    page's part between ``markers`` is written from them by ``tables``."""
+    path = a.out / name
     store = json.loads(path.read_text()) if path.exists() else {"fits": [], "runs": []}
     if a.doc:
-        eq2.write_doc(a.doc, table(store), markers=(BEGIN, END))
-        return 0
+        eq2.write_doc(a.doc, tables(store), markers=markers)
+        return None
     a.out.mkdir(parents=True, exist_ok=True)
+    return store
+
+
+def main(argv: list[str] | None = None) -> int:
+    a = loop_parser(__doc__.splitlines()[0], seeds=3).parse_args(argv)
+    store = open_store(a, "energyplus_q1.json", table, (BEGIN, END))
+    if store is None:
+        return 0
     for weather in a.climates.split(","):
         for season in a.seasons.split(","):
             run_case(a.out, store, (weather, season), a)
