@@ -277,8 +277,8 @@ class ZoneMPCs:
     horizon), so the plans are made independently, one linear program per zone and step; the
     set points of all zones are given at once. This is the multi-zone arrangement of a supervisory
     MPC written zone by zone (distributed MPC without coordination; Scattolini [1]_, section 3,
-    "decentralized"): it neglects what a neighbour will do, which a joint model of the floor
-    would plan for.
+    "decentralized"): it neglects what a neighbour will do, which the centralized
+    :class:`~rczone.emulators.floormpc.FloorMPC` plans for with a joint model of the floor.
 
     Parameters
     ----------
