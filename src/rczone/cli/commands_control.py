@@ -16,7 +16,14 @@ from rczone.errors import ParameterError
 
 @app.command("control-test")
 def control_test(
-    model_spec: Annotated[str, typer.Option("--model", help=MODEL_HELP)] = "second-order",
+    model_spec: Annotated[
+        str | None,
+        typer.Option(
+            "--model",
+            help=MODEL_HELP + " Default second-order. energyplus with --zones ZONE,ZONE: one joint model of"
+            " those zones (rczone models generate --from DIR/building.toml --floor N, fitted): the floor MPC.",
+        ),
+    ] = None,
     scenario: Annotated[str, typer.Option("--scenario", help="summer or winter.")] = "summer",
     days: Annotated[float, typer.Option("--days", help="Days to run (from 6 pm).")] = 1.0,
     seed: Annotated[int, typer.Option("--seed", help="Weather, settings and noise.")] = 0,
@@ -80,7 +87,8 @@ def control_test(
         typer.Option(
             "--zones",
             help="energyplus: several zones, each with its model, ZONE=MODEL,ZONE=MODEL (mpc: one"
-            " supervisory MPC per zone, neighbours as measured inputs); ZONE,ZONE for baseline.",
+            " supervisory MPC per zone, neighbours as measured inputs); ZONE,ZONE for baseline, or"
+            " ZONE,ZONE with --model of their joint floor model (mpc: one floor MPC).",
         ),
     ] = None,
     step: Annotated[int, typer.Option("--step", help="energyplus: the plant's step, minutes.")] = 15,
@@ -149,7 +157,7 @@ def control_test(
         raise ParameterError(
             f"--heat-limit is for a heated zone (--emulator house); the {emulator} building has VAV boxes"
         )
-    zm = model(model_spec)
+    zm = model(model_spec or "second-order")
     out = out_console(json_out)
     if emulator == "energyplus":
         from rczone.emulators.control import energyplus_test
@@ -159,7 +167,7 @@ def control_test(
                 "--compare, --study and --report are for the virtual building; run each controller alone"
             )
         options = dict(weather=weather, start=start, step_minutes=step, seed=seed, price=price)
-        names, models = _zones_and_models(zone, zones, zm)
+        names, models = _zones_and_models(zone, zones, zm, joint=model_spec is not None)
         plant = _energyplus_plant(building, names, days, forecast or "none", options)
         res = energyplus_test(plant, controller, model=models, margin_K=margin, noise_floor=noise_floor)
         out.print(esc(res.summary()))
@@ -256,12 +264,17 @@ def _refuse_unread(emulator: str, given: dict[str, object]) -> None:
                     )
 
 
-def _zones_and_models(zone: str | None, zones: str | None, zm):
-    """The controlled zones and their models: ``--zone`` with ``--model``, or ``--zones ZONE=MODEL,...``."""
+def _zones_and_models(zone: str | None, zones: str | None, zm, *, joint: bool = False):
+    """The controlled zones and their models: ``--zone`` with ``--model``, ``--zones ZONE=MODEL,...``, or
+    ``--zones ZONE,ZONE --model floor.json`` (one joint model of them all)."""
     if zones is None:
         return ([zone] if zone is not None else []), zm
     if zone is not None:
         raise ParameterError("give --zone or --zones, not both")
+    if joint and "=" in zones:
+        raise ParameterError(
+            "give each zone its model (--zones ZONE=MODEL,...) or one joint model (--zones ZONE,ZONE --model), not both"
+        )
     names, models = [], {}
     for item in zones.split(","):
         name, sep, spec = (part.strip() for part in item.partition("="))
@@ -272,6 +285,8 @@ def _zones_and_models(zone: str | None, zones: str | None, zm):
         names.append(name)
         if spec:
             models[name] = model(spec)
+    if joint:
+        return names, zm  # a joint model of the zones (the floor MPC checks it names them)
     from rczone.emulators.control import models_by_zone
 
     return names, (models_by_zone(models, names) if models else None)  # a model for every zone

@@ -5,7 +5,9 @@
 ``mpc``: :class:`~rczone.emulators.supervisory.SupervisoryMPC` with the given model, its heating
 and cooling capacity :data:`CAPACITY_W_PER_M2` times the zone's floor area unless set, and for
 several zones one per zone with that zone's model,
-:class:`~rczone.emulators.supervisory.ZoneMPCs`; any other name from
+:class:`~rczone.emulators.supervisory.ZoneMPCs`, or with one joint model of them all the
+centralized :class:`~rczone.emulators.floormpc.FloorMPC`, each zone's capacity its own floor
+area's; any other name from
 :mod:`rczone.control.registry`, e.g. a plug-in), runs
 :func:`~rczone.control.closedloop.closed_loop_test` and closes EnergyPlus whatever happens.
 """
@@ -18,6 +20,7 @@ from dataclasses import replace
 from rczone.control.closedloop import ClosedLoopResult, closed_loop_test
 from rczone.control.prediction import SENSOR_RESOLUTION_K
 from rczone.control.registry import ControllerOptions, make_controller
+from rczone.emulators.floormpc import FloorMPC
 from rczone.emulators.plant import EnergyPlusPlant
 from rczone.emulators.supervisory import BuildingControl, SupervisoryMPC, SupervisorySettings, ZoneMPCs
 from rczone.errors import ParameterError
@@ -57,6 +60,19 @@ def _settings_for(plant: EnergyPlusPlant, zone: str, settings: SupervisorySettin
     return settings if margin_K is None else replace(settings, margin_K=margin_K)
 
 
+def joint(model: ZoneModel | Mapping[str, ZoneModel] | None, zones: Sequence[str]) -> bool:
+    """Whether ``model`` is one joint model of several zones (``--zones A,B --model floor.json``)."""
+    return isinstance(model, ZoneModel) and len(zones) > 1
+
+
+def _floor_mpc(plant: EnergyPlusPlant, model: ZoneModel, settings, margin_K) -> FloorMPC:
+    """The floor MPC of the plant's zones, each zone's settings as its own supervisory MPC's."""
+    # the model checked before the zones' floor areas start EnergyPlus: a bad one is refused at once
+    FloorMPC(model, zones=plant.zones, dt=plant.dt, measured=plant.zone_names)
+    per_zone = {z: _settings_for(plant, z, settings, margin_K) for z in plant.zones}
+    return FloorMPC(model, zones=plant.zones, dt=plant.dt, settings=per_zone, measured=plant.zone_names)
+
+
 def make_controller_for(
     name: str,
     plant: EnergyPlusPlant,
@@ -67,6 +83,12 @@ def make_controller_for(
     """The controller ``name`` for an EnergyPlus plant (see the module notes)."""
     if name == "baseline":
         return BuildingControl(plant.dt)
+    if joint(model, plant.zones):
+        if name != "mpc":
+            raise ParameterError(
+                f"a joint model of {len(plant.zones)} zones runs under --controller mpc or baseline, not {name!r}"
+            )
+        return _floor_mpc(plant, model, settings, margin_K)
     models = models_by_zone(model, plant.zones)
     if name == "mpc":
         if models is None:
@@ -100,8 +122,9 @@ def energyplus_test(
     controller : str
         ``baseline``, ``mpc`` or a registered controller's name.
     model : ZoneModel or mapping of zone to ZoneModel, optional
-        The MPC's model (one per zone when the plant has several); also the model whose prediction
-        error is scored, per zone.
+        The MPC's model (one per zone when the plant has several, or one joint model of them all:
+        the floor MPC); also the model whose prediction error is scored, per zone (not a joint
+        model's: its prediction keys are None).
     settings : SupervisorySettings, optional
         The MPC's (every zone's); default :class:`SupervisorySettings` with the capacity of each
         zone's floor area (:data:`CAPACITY_W_PER_M2`).
@@ -114,11 +137,12 @@ def energyplus_test(
     -------
     ClosedLoopResult
     """
-    models = models_by_zone(model, plant.zones)
+    shared = joint(model, plant.zones)
+    models = model if shared else models_by_zone(model, plant.zones)
     try:
         ctl = make_controller_for(controller, plant, models, settings, margin_K)
-        res = closed_loop_test(plant, ctl, model=models, noise_floor=noise_floor)
+        res = closed_loop_test(plant, ctl, model=None if shared else models, noise_floor=noise_floor)
     finally:
         plant.close()
-    setup = {**res.setup, "controller": controller}
+    setup = {**res.setup, "controller": controller} | ({"model": model.label} if shared else {})
     return ClosedLoopResult(res.scores, setup, res.t, res.series)

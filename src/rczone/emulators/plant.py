@@ -27,7 +27,8 @@ time), ``To``, ``T_ahu`` (NaN: the prototypes' AHUs are not read), and per contr
 (the first inlet node's discharge temperature, the summed flow), ``Q_<zone>`` (the sub-metered
 lighting and plug power, 1 % noise) and ``Tsd_<zone>`` (the neighbours' sensed air temperatures
 weighted by the conductance each shares with the zone, from EnergyPlus's ``eplusout.eio``, as the
-column map of ``rczone emulate`` defines it).
+column map of ``rczone emulate`` defines it); and ``Ti_<zone>`` of every neighbour not controlled
+(plenum, attic, the next floor: the boundaries of a joint floor model).
 
 **Forecasts**: the weather file's outdoor temperature plus BOPTEST's forecast error of the chosen
 scenario (:mod:`rczone.emulators.forecasts`: none, low, medium, high), the price (``flat``,
@@ -173,6 +174,7 @@ class EnergyPlusPlant:
         self._t0 = (self._em.start.timetuple().tm_yday - 1) * 86400.0
         self._rng = np.random.default_rng(seed)
         self._forecast_rng = np.random.default_rng([seed, 1])
+        self._boundary_rng = np.random.default_rng([seed, 2])
         self._to_ep: queue.Queue = queue.Queue(maxsize=1)
         self._from_ep: queue.Queue = queue.Queue(maxsize=1)
         self._rows: list[dict[str, float]] = []
@@ -185,6 +187,11 @@ class EnergyPlusPlant:
         self._dst = daylight_saving(self._em._objects, self._em.start.year)
         #: The controlled zones' floor areas, m2 (known once EnergyPlus has started).
         self.floor_area: dict[str, float] = {}
+
+    @property
+    def zone_names(self) -> tuple[str, ...]:
+        """Every zone of the building (a neighbour's sensed temperature is a joint model's boundary)."""
+        return self._em.zone_names
 
     # --- the EnergyPlus side (worker thread) ---------------------------------------------------
 
@@ -300,6 +307,10 @@ class EnergyPlusPlant:
                 out[f"Tsd_{z}"] = float(np.dot(list(weights.values()), sensed))
             else:
                 out[f"Tsd_{z}"] = out["To"]
+        others = sorted({n for w in self.neighbours.values() for n in w} - set(self.zones))
+        if others:  # a joint model's boundaries: own noise stream, the zones' readings unchanged
+            sensed = sense_temperature(np.array([row[f"Ti:{n}"] for n in others]), self._boundary_rng)
+            out |= {f"Ti_{n}": float(v) for n, v in zip(others, sensed, strict=True)}
         return out
 
     def _limits(self, t: float) -> tuple[float, float, float, float]:

@@ -111,6 +111,29 @@ class HeatPlan(NamedTuple):
     solve_time: float
 
 
+class PlanStep(NamedTuple):
+    """A plan's first step for one zone: room temperature at its end (degC), heating and cooling
+    (W), and the band's edges at its end (degC)."""
+
+    y1: float
+    heating: float
+    cooling: float
+    lower: float
+    upper: float
+
+
+def set_points(
+    zone: str, settings: SupervisorySettings, step: PlanStep, forecast: Mapping[str, np.ndarray]
+) -> dict[str, float]:
+    """The thermostat's set points from a plan's first step (module notes, 3), within the plant's limits."""
+    z, s = zone, settings
+    heat = step.y1 if step.heating > 0.02 * s.heating_capacity else float(step.lower)
+    cool = step.y1 if step.cooling > 0.02 * s.cooling_capacity else float(step.upper)
+    cool = min(max(cool, forecast[f"cooling_min_{z}"][0]), forecast[f"cooling_max_{z}"][0])
+    heat = min(max(heat, forecast[f"heating_min_{z}"][0]), forecast[f"heating_max_{z}"][0], cool - 0.5)
+    return {f"heating_{z}": heat, f"cooling_{z}": cool}
+
+
 class SupervisoryMPC:
     """The supervisory MPC of one zone as a :class:`~rczone.control.plant.Controller` (module notes).
 
@@ -242,12 +265,8 @@ class SupervisoryMPC:
         plan = self.solve(self._est.x, u, lower, upper, forecast["price"])
         self.plan = plan
         self.solve_times.append(plan.solve_time)
-        y1 = float(plan.y[1])
-        heat = y1 if plan.heating[0] > 0.02 * s.heating_capacity else float(lower[1])
-        cool = y1 if plan.cooling[0] > 0.02 * s.cooling_capacity else float(upper[1])
-        cool = min(max(cool, forecast[f"cooling_min_{z}"][0]), forecast[f"cooling_max_{z}"][0])
-        heat = min(max(heat, forecast[f"heating_min_{z}"][0]), forecast[f"heating_max_{z}"][0], cool - 0.5)
-        return {f"heating_{z}": heat, f"cooling_{z}": cool}
+        step = PlanStep(float(plan.y[1]), plan.heating[0], plan.cooling[0], lower[1], upper[1])
+        return set_points(z, s, step, forecast)
 
 
 class ZoneMPCs:
@@ -258,8 +277,8 @@ class ZoneMPCs:
     horizon), so the plans are made independently, one linear program per zone and step; the
     set points of all zones are given at once. This is the multi-zone arrangement of a supervisory
     MPC written zone by zone (distributed MPC without coordination; Scattolini [1]_, section 3,
-    "decentralized"): it neglects what a neighbour will do, which a joint model of the floor
-    would plan for.
+    "decentralized"): it neglects what a neighbour will do, which the centralized
+    :class:`~rczone.emulators.floormpc.FloorMPC` plans for with a joint model of the floor.
 
     Parameters
     ----------

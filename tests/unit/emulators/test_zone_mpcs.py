@@ -149,3 +149,18 @@ def test_bad_zones_are_one_line_and_exit_2_before_energyplus_starts(zones, extra
 def test_zones_are_refused_off_energyplus(capsys):
     assert main(["control-test", "--zones", "a=second-order,b=second-order"]) == 2
     assert "--zones is read by --emulator energyplus only" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("extra", "match"),
+    [
+        (["--zones", "Core_ZN,Perimeter_ZN_1", "--model", "second-order"], "no output for zone 'Core_ZN'"),
+        (["--zones", "Core_ZN=second-order,Perimeter_ZN_1", "--model", "first-order"], "or one joint model"),
+    ],
+)
+def test_a_joint_model_that_does_not_name_the_zones_is_one_line(extra, match, capsys):
+    pytest.importorskip("pyenergyplus")
+    args = ["control-test", "--emulator", "energyplus", "--building", "office_small", "--days", "1"]
+    assert main([*args, "--controller", "mpc", *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and err.startswith("error:") and re.search(match, err), err
