@@ -150,7 +150,6 @@ def cases() -> list[Case]:
 
 def jml_cases(rng: np.random.Generator) -> list[Case]:
     from rczone.estimation import Dataset, fit
-    from rczone.estimation.costs import ml_cost
     from rczone.estimation.kalman import kalman_nll_rc2
     from rczone.simulation.intervals import interval_groups
 
@@ -184,7 +183,6 @@ def jml_cases(rng: np.random.Generator) -> list[Case]:
         theta, _ = plain.fit_ml(net, free, noise_free, noise_fixed, t, m, u, y)
         return theta[: len(free)]
 
-    values = {**net.values(), **noise_free, **noise_fixed}
     # flows as a building logs them: to 1 g/s (a few dozen levels in a night)
     mq = np.round(m, 3)
     groups = interval_groups(t, mq)
@@ -212,7 +210,6 @@ def jml_cases(rng: np.random.Generator) -> list[Case]:
             ours_fit,
             plain_fit,
             rel,
-            warmup=lambda: ml_cost(net, values, data),
             slow=True,
         ),
     ]
