@@ -74,22 +74,24 @@ SHOWN = ("1 h", "6 h", "open")
 BEGIN, END = "<!-- energyplus_multizone.py: begin -->", "<!-- energyplus_multizone.py: end -->"
 
 
-def _emulate(folder: Path, weather: str, season: str, period: str) -> dict | None:
+def _emulate(folder: Path, building: str, weather: str, season: str, period: str) -> dict | None:
     """Run one period in EnergyPlus unless its trend exists; its times, or None when reused."""
     if (folder / "trend.csv").exists():
         return None
     days, seed = PERIODS[period]
-    args = ["emulate", "--building", BUILDING, "--weather", weather, "--start", SEASONS[season][period]]
+    args = ["emulate", "--building", building, "--weather", weather, "--start", SEASONS[season][period]]
     args += ["--days", str(days), "--step", str(STEP_MIN), "--test", "normal", "--seed", str(seed), "-q"]
     t0 = Q2._clock()
     if rczone([*args, "-o", str(folder)]) != 0:
         raise SystemExit(f"rczone emulate failed: {weather} {season} {period}")
-    return {"climate": weather, "season": season, "period": period, "days": days, **Q2._since(t0)}
+    return {
+        "building": building, "climate": weather, "season": season, "period": period, "days": days, **Q2._since(t0)
+    }  # fmt: skip
 
 
-def floor_zones(building: dict) -> list[dict]:
-    """The conditioned zones of :data:`FLOOR` in the building file, in its order."""
-    return [z for z in building["zones"] if z.get("floor") == FLOOR and z.get("conditioned")]
+def floor_zones(building: dict, floor: int = FLOOR) -> list[dict]:
+    """The conditioned zones of ``floor`` in the building file, in its order."""
+    return [z for z in building["zones"] if z.get("floor") == floor and z.get("conditioned")]
 
 
 def _fit(trend: Path, columns: Path, model: str, out: Path, extra: list[str]) -> tuple[dict, Path, dict]:
@@ -142,32 +144,34 @@ def _record(
     }  # fmt: skip
 
 
-def run_case(out: Path, weather: str, season: str) -> tuple[list[dict], list[dict]]:
+def run_case(
+    out: Path, weather: str, season: str, building: str = BUILDING, floor: int = FLOOR
+) -> tuple[list[dict], list[dict]]:
     """Emulate one climate and season; fit the joint floor model and each zone's; score all on heldout."""
-    case = out / f"{weather}_{season}"
-    runs = [_emulate(case / p, weather, season, p) for p in PERIODS]
+    name = f"{weather}_{season}" if building == BUILDING else f"{building}_floor{floor}_{weather}_{season}"
+    case = out / name
+    runs = [_emulate(case / p, building, weather, season, p) for p in PERIODS]
     cal, held = case / "calibration", case / "heldout"
-    zones = [z["name"] for z in floor_zones(tomllib.loads((cal / "building.toml").read_text()))]
+    rooms = floor_zones(tomllib.loads((cal / "building.toml").read_text()), floor)
     from rczone.emulators.floor import alias
 
-    floor_file = case / "joint" / f"floor{FLOOR}.toml"
+    floor_file = case / "joint" / f"floor{floor}.toml"
     if not floor_file.exists():
         floor_file.parent.mkdir(parents=True, exist_ok=True)
-        gen = ["models", "generate", "--from", str(cal / "building.toml"), "--floor", str(FLOOR)]
+        gen = ["models", "generate", "--from", str(cal / "building.toml"), "--floor", str(floor)]
         if rczone([*gen, "-o", str(floor_file)]) != 0:
             raise SystemExit(f"rczone models generate failed on {cal}")
-    columns = f"floor{FLOOR}.columns.toml"
+    columns = f"floor{floor}.columns.toml"
     fit, model, time = _fit(cal / "trend.csv", cal / columns, str(floor_file), case / "joint", [])
-    joint = scores(model, held, columns, {f"T{alias(z)}": z for z in zones})
+    joint = scores(model, held, columns, {f"T{alias(z['name'])}": z["name"] for z in rooms})
     rows = [_record(fit, weather, season, "joint", None, joint, time)]
-    for z in zones:
-        area = next(
-            x for x in floor_zones(tomllib.loads((cal / "building.toml").read_text())) if x["name"] == z
-        )
-        extra = ["--floor-area", str(area["floor_area"])]
-        fit, model, time = _fit(cal / "trend.csv", cal / f"{z}.columns.toml", "second-order", case / z, extra)
-        one = scores(model, held, f"{z}.columns.toml", {"Ti": z})
-        rows.append(_record(fit, weather, season, "single", z, one, time))
+    for z in rooms:
+        extra = ["--floor-area", str(z["floor_area"])]
+        cols = f"{z['name']}.columns.toml"
+        fit, model, time = _fit(cal / "trend.csv", cal / cols, "second-order", case / z["name"], extra)
+        one = scores(model, held, cols, {"Ti": z["name"]})
+        rows.append(_record(fit, weather, season, "single", z["name"], one, time))
+    rows = [{"building": building, "floor": floor, **r} for r in rows]
     return rows, [r for r in runs if r is not None]
 
 
@@ -188,14 +192,21 @@ def _rmse(x: float | dict) -> str:
 
 
 def _cases(results: list[dict]) -> dict[tuple, dict]:
-    """(climate, season) -> {"joint": record, "single": {zone: record}}, in the order of CLIMATES and SEASONS."""
-    order = lambda k: (  # noqa: E731
-        CLIMATES.index(k[0]) if k[0] in CLIMATES else len(CLIMATES),
-        list(SEASONS).index(k[1]) if k[1] in SEASONS else len(SEASONS),
-    )
+    """(building, floor, climate, season) -> {"joint": record, "single": {zone: record}}, in the order of CLIMATES and SEASONS."""
+
+    def order(k: tuple) -> tuple:
+        climate = CLIMATES.index(k[2]) if k[2] in CLIMATES else len(CLIMATES)
+        return (
+            k[0] != BUILDING,
+            k[:2],
+            climate,
+            list(SEASONS).index(k[3]) if k[3] in SEASONS else len(SEASONS),
+        )
+
     cases: dict[tuple, dict] = {}
     for r in results:
-        c = cases.setdefault((r["climate"], r["season"]), {"joint": None, "single": {}})
+        key = (r.get("building", BUILDING), r.get("floor", FLOOR), r["climate"], r["season"])
+        c = cases.setdefault(key, {"joint": None, "single": {}})
         if r["model"] == "joint":
             c["joint"] = r
         else:
@@ -214,7 +225,7 @@ def table(results: list[dict]) -> str:
         "one step / open loop | fit CPU s (wall) |\n|---|---|---|---|---|---|---|\n"
     )
     lines = []
-    for (climate, season), c in _cases(results).items():
+    for (building, floor, climate, season), c in _cases(results).items():
         joint = c["joint"]
         for zone, single in c["single"].items():
             j = joint["heldout"][zone] if joint else None
@@ -230,18 +241,20 @@ def table(results: list[dict]) -> str:
                 f"| {climate} | {season} | {zone} | {' | '.join(cells)} | {cover} | {_verdict(single)} |\n"
             )
         for r in ([joint] if joint else []) + list(c["single"].values()):
-            who = "joint floor model" if r["model"] == "joint" else f"{r['zone']}, second-order"
+            who = (
+                f"{building} floor {floor}, joint" if r["model"] == "joint" else f"{r['zone']}, second-order"
+            )
             t = r["fit_time"]
             fits += (
                 f"| {climate} | {season} | {who} | {_verdict(r)} | {r['n_free']} ({r['at_bound']}) | "
                 f"{_rmse(r['one_step_rmse_K'])} / {_rmse(r['open_loop_rmse_K'])} | {t['cpu_s']:.0f} ({t['wall_s']:.0f}) |\n"
             )
         if joint and c["single"]:
-            lines.append(compare(climate, season, joint, c["single"]))
+            lines.append(compare(f"{building} floor {floor}, {climate}", season, joint, c["single"]))
     return pred + "\n" + fits + ("\n" + "\n".join(lines) + "\n" if lines else "")
 
 
-def compare(climate: str, season: str, joint: dict, single: dict[str, dict]) -> str:
+def compare(where: str, season: str, joint: dict, single: dict[str, dict]) -> str:
     """One line per case: the zones' mean held-out RMSE of each predictor, and where the joint model wins."""
     zones = list(single)
 
@@ -264,7 +277,7 @@ def compare(climate: str, season: str, joint: dict, single: dict[str, dict]) -> 
         wins.append(f"{better} at {h}")
     trusted = sum(r["exit_code"] == 0 for r in single.values())
     return (
-        f"- {climate}, {season}: mean held-out RMSE over the {len(zones)} zones, joint / single / persistence (K): "
+        f"- {where}, {season}: mean held-out RMSE over the {len(zones)} zones, joint / single / persistence (K): "
         f"{'; '.join(parts)}; the joint model better than the single zone in {', '.join(wins)} of {len(zones)} zones; "
         f"fits trustworthy: joint {'yes' if joint['exit_code'] == 0 else 'no'}, single {trusted} of {len(zones)}"
     )
@@ -289,6 +302,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=Path("validation-output"))
     ap.add_argument("--climates", default=",".join(CLIMATES))
     ap.add_argument("--seasons", default=",".join(SEASONS))
+    ap.add_argument("--building", default=BUILDING, help="an office prototype of rczone emulate")
+    ap.add_argument("--floor", type=int, default=FLOOR, help="its floor (1 the lowest)")
     ap.add_argument("--doc", type=Path, help="write the tables of <out>'s runs into this page and stop")
     a = ap.parse_args(argv)
     store, times = a.out / "energyplus_multizone.json", a.out / "energyplus_multizone_emulate.json"
@@ -299,9 +314,13 @@ def main(argv: list[str] | None = None) -> int:
     for season in a.seasons.split(","):
         for weather in a.climates.split(","):
             done = json.loads(store.read_text()) if store.exists() else []
-            if any((r["climate"], r["season"]) == (weather, season) for r in done):
+            key = (a.building, a.floor, weather, season)
+            if any(
+                (r.get("building", BUILDING), r.get("floor", FLOOR), r["climate"], r["season"]) == key
+                for r in done
+            ):
                 continue
-            rows, runs = run_case(a.out, weather, season)
+            rows, runs = run_case(a.out, weather, season, a.building, a.floor)
             results = (
                 json.loads(store.read_text()) if store.exists() else []
             ) + rows  # another process may add

@@ -53,7 +53,7 @@ def test_the_comparison_line_follows_the_numbers() -> None:
         "| c | winter | A | 1.00 / 2.00 / 2.00 |" in text
         and "| c | winter | B | 3.00 / 1.00 / 4.00 |" in text
     )
-    assert "| c | winter | joint floor model | flagged (3), 1 reasons |" in text
+    assert "| c | winter | office_small floor 1, joint | flagged (3), 1 reasons |" in text
     assert "| c | winter | A, second-order | trustworthy (0) |" in text
 
 
