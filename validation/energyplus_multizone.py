@@ -328,7 +328,8 @@ def main(argv: list[str] | None = None) -> int:
             write_json_atomic(store, results)
             write_json_atomic(times, emulations)
             write_text_atomic(a.out / "energyplus_multizone.md", table(results))
-            print(table(results).rsplit("\n- ", 1)[-1], flush=True)
+            done_now = f"- {a.building} floor {a.floor}, {weather}, {season}:"
+            print(next(x for x in table(results).splitlines() if x.startswith(done_now)), flush=True)
     return 0
 
 
