@@ -337,13 +337,15 @@ class ZoneModel:
         """Plausibility role (:data:`rczone.data.units.PLAUSIBLE`) of every signal the model reads.
 
         Outputs are room temperatures, supply temperatures supply-air temperatures, the channels
-        rczone knows by name (:data:`rczone.data.columnmap.KNOWN_CHANNELS`) their own role, other
-        boundaries outdoor or adjacent-space temperatures (the outdoor range, -60 to 60 degC).
+        rczone knows by name (:data:`rczone.data.columnmap.KNOWN_CHANNELS`) their own role (``To``
+        outdoor, -60 to 60 degC), other boundaries any temperature (-60 to 100 degC): they are
+        adjacent spaces as often as outdoor air, and an unconditioned attic under a desert sun
+        reaches 61 degC (the EnergyPlus small office in Phoenix's July).
         """
         from rczone.data.columnmap import KNOWN_CHANNELS
 
         net = self.network
-        roles = {b: KNOWN_CHANNELS.get(b, ("temperature", "outdoor"))[1] for b in net.boundaries}
+        roles = {b: KNOWN_CHANNELS.get(b, ("temperature", "temperature"))[1] for b in net.boundaries}
         roles.update({s.temperature: "supply" for s in net.supply_air})
         roles.update({o: "room" for o in net.outputs})
         roles.update({f: "flow" for f in net.flow_names})

@@ -118,3 +118,27 @@ def test_the_warning_points_at_the_users_call_not_into_rczone(fahrenheit, entry)
         call()
     ours = [w for w in caught if issubclass(w.category, RczoneWarning)]
     assert ours and {w.filename for w in ours} == {__file__}
+
+
+def test_a_hot_attic_is_a_boundary_not_outdoor_air(tmp_path):
+    """A joint floor model's boundaries are adjacent spaces (attic, plenum) as often as outdoor air:
+    an attic at 61 degC (EnergyPlus's small office in Phoenix's July) is plausible, the outdoor air
+    ``To`` at 61 is not, and a room in degF is found whatever the boundaries."""
+    from rczone.models import load_model
+
+    path = tmp_path / "roof.toml"
+    path.write_text(
+        'name = "under the roof"\nboundaries = ["To", "TAttic"]\noutputs = ["Ti"]\n'
+        'resistors = [["Ti", "To", "Rw"], ["Ti", "TAttic", "Rr"]]\n[nodes]\nTi = "Ci"\n[parameters]\n'
+        'Ci = { value = 1e6, unit = "J/K" }\nRw = { value = 0.01, unit = "K/W" }\n'
+        'Rr = { value = 0.02, unit = "K/W" }\n'
+    )
+    roles = load_model(path).signal_roles()
+    assert roles["To"] == "outdoor" and roles["TAttic"] == "temperature"
+    hot = np.array([35.0, 61.0, 48.0])
+    signals = {"Ti": np.array([22.0, 24.0, 23.0]), "To": np.array([30.0, 40.0, 35.0]), "TAttic": hot}
+    assert signal_warnings(signals, roles) == ()
+    (line,) = signal_warnings({**signals, "To": hot}, roles)
+    assert line.startswith("column 'To'")
+    found = signal_warnings({**signals, "Ti": to_degF(signals["Ti"])}, roles)
+    assert len(found) == 1 and "'degF'" in found[0]
