@@ -64,3 +64,7 @@ def test_one_floor_mpc_runs_the_small_offices_five_zones(tmp_path):
     for z in ZONES:  # every zone near its band (0.5 K h a zone-day more than the building's own control)
         assert mpc[f"comfort_Kh_{z}"] <= base[f"comfort_Kh_{z}"] + 0.5, z
     assert mpc["cost"] != base["cost"]  # the MPC's set points, not the schedules, ran the building
+    # the joint model's prediction in the loop, all zones together, scored per zone
+    for z in ZONES:
+        assert 0 < mpc[f"prediction_rmse_K_{z}"] < 2.0 and 0 < mpc[f"open_loop_rmse_K_{z}"] < 10.0, z
+    assert mpc["prediction_rmse_K"] > 0

@@ -123,8 +123,8 @@ def energyplus_test(
         ``baseline``, ``mpc`` or a registered controller's name.
     model : ZoneModel or mapping of zone to ZoneModel, optional
         The MPC's model (one per zone when the plant has several, or one joint model of them all:
-        the floor MPC); also the model whose prediction error is scored, per zone (not a joint
-        model's: its prediction keys are None).
+        the floor MPC); also the model whose prediction error is scored, per zone (a joint model
+        predicting all its zones together, :func:`rczone.emulators.prediction.joint_prediction_scores`).
     settings : SupervisorySettings, optional
         The MPC's (every zone's); default :class:`SupervisorySettings` with the capacity of each
         zone's floor area (:data:`CAPACITY_W_PER_M2`).
@@ -141,7 +141,9 @@ def energyplus_test(
     models = model if shared else models_by_zone(model, plant.zones)
     try:
         ctl = make_controller_for(controller, plant, models, settings, margin_K)
-        res = closed_loop_test(plant, ctl, model=None if shared else models, noise_floor=noise_floor)
+        # a joint model is scored as it predicts, all its zones together, each zone on its output
+        scored = dict.fromkeys(plant.zones, model) if shared else models
+        res = closed_loop_test(plant, ctl, model=scored, noise_floor=noise_floor)
     finally:
         plant.close()
     setup = {**res.setup, "controller": controller} | ({"model": model.label} if shared else {})

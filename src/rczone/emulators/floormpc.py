@@ -78,7 +78,7 @@ class _Joint(NamedTuple):
         return self.matrices
 
 
-def _zone_outputs(model: ZoneModel, zones: Sequence[str]) -> list[str]:
+def zone_outputs(model: ZoneModel, zones: Sequence[str]) -> list[str]:
     """Each zone's output of the joint model: ``T<letters and digits of the zone>`` or the zone's name."""
     outputs = list(model.network.outputs)
     found = []
@@ -99,7 +99,7 @@ def _zone_outputs(model: ZoneModel, zones: Sequence[str]) -> list[str]:
     return found
 
 
-def _supply_columns(model: ZoneModel, outputs: Sequence[str]) -> np.ndarray:
+def supply_columns(model: ZoneModel, outputs: Sequence[str]) -> np.ndarray:
     """Heat input (per W) at each zone's supply-air node, (n, nz); one supply-air flow per zone."""
     net, ss = model.network, model.state_space()
     by_node = {s.node: s for s in net.supply_air}
@@ -118,7 +118,7 @@ def _supply_columns(model: ZoneModel, outputs: Sequence[str]) -> np.ndarray:
     return np.column_stack(cols)
 
 
-def _owners(model: ZoneModel, outputs: Sequence[str]) -> list[int | None]:
+def owners(model: ZoneModel, outputs: Sequence[str]) -> list[int | None]:
     """For each state, the zone whose room node reaches it through the network without crossing
     another zone's room node (None if no zone or several do): where the filter starts it."""
     net = model.network
@@ -139,6 +139,39 @@ def _owners(model: ZoneModel, outputs: Sequence[str]) -> list[int | None]:
                     seen.add(t)
                     todo.append(t)
     return [next(iter(reach[s])) if len(reach[s]) == 1 else None for s in states]
+
+
+def input_sources(
+    model: ZoneModel, zones: Sequence[str], outputs: Sequence[str], measured: Sequence[str]
+) -> list[tuple[str, object]]:
+    """Where each input of the joint model comes from: ``("forecast", "To")``, ``("measured", (key,
+    default))`` (a zone's supply temperature as its room's ``Ti_<zone>``, without effect at zero flow;
+    its metered ``Q_<zone>``; a measured zone off the floor's ``Ti_<zone>``) or ``("default", value)``.
+
+    Raises
+    ------
+    ParameterError
+        For an input that is none of these and has no default.
+    """
+    net = model.network
+    keys = {s.temperature: f"Ti_{z}" for z, o in zip(zones, outputs) for s in net.supply_air if s.node == o}
+    keys |= {f"Q{alias(z)}": f"Q_{z}" for z in zones}
+    keys |= {f"T{alias(n)}": f"Ti_{n}" for n in measured if n not in zones}
+    defaults = dict(model.inputs.defaults)
+    sources: list[tuple[str, object]] = []
+    for name in model.state_space().input_names:
+        if name == "To":
+            sources.append(("forecast", "To"))
+        elif name in keys:
+            sources.append(("measured", (keys[name], defaults.get(name))))
+        elif name in defaults:
+            sources.append(("default", float(defaults[name])))
+        else:
+            raise ParameterError(
+                f"the floor MPC cannot forecast the model input {name!r}: it is no zone's supply air,"
+                " metered heat or measured temperature, and the model gives no default"
+            )
+    return sources
 
 
 class FloorMPC:
@@ -176,15 +209,15 @@ class FloorMPC:
         if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
             raise ParameterError(f"the floor MPC's step must be finite and > 0 s, got {dt!r}")
         self.model = model
-        self.outputs = _zone_outputs(model, self.zones)
+        self.outputs = zone_outputs(model, self.zones)
         self.settings = self._per_zone(settings)
         self.dt = self.interval = float(dt)
         self.steps = self.settings[self.zones[0]].horizon
         self.horizon = self.steps * self.dt
-        self._sources = self._input_sources(measured)
-        self._d, noise = self._discretize(_supply_columns(model, self.outputs))
+        self._sources = input_sources(model, self.zones, self.outputs, measured)
+        self._d, noise = self._discretize(supply_columns(model, self.outputs))
         self.observer = KalmanObserver(_Joint(self._d, noise))
-        self._owner = _owners(model, self.outputs)
+        self._owner = owners(model, self.outputs)
         self.solve_times: list[float] = []
         self.innovations: list[np.ndarray] = []
         self._est: StateMoments | None = None
@@ -203,33 +236,6 @@ class FloorMPC:
                 "the floor MPC plans every zone over one horizon; the zones' settings differ"
             )
         return out
-
-    def _input_sources(self, measured: Sequence[str]) -> list[tuple[str, object]]:
-        """Where each model input comes from over the horizon: the forecast, a measurement, a default."""
-        net = self.model.network
-        keys = {
-            s.temperature: f"Ti_{z}"
-            for z, o in zip(self.zones, self.outputs)
-            for s in net.supply_air
-            if s.node == o
-        }
-        keys |= {f"Q{alias(z)}": f"Q_{z}" for z in self.zones}
-        keys |= {f"T{alias(n)}": f"Ti_{n}" for n in measured if n not in self.zones}
-        defaults = dict(self.model.inputs.defaults)
-        sources: list[tuple[str, object]] = []
-        for name in self.model.state_space().input_names:
-            if name == "To":
-                sources.append(("forecast", "To"))
-            elif name in keys:
-                sources.append(("measured", (keys[name], defaults.get(name))))
-            elif name in defaults:
-                sources.append(("default", float(defaults[name])))
-            else:
-                raise ParameterError(
-                    f"the floor MPC cannot forecast the model input {name!r}: it is no zone's supply air,"
-                    " metered heat or measured temperature, and the model gives no default"
-                )
-        return sources
 
     def _discretize(self, E: np.ndarray) -> tuple[DiscreteMatrices, NoiseModel]:
         """The joint model with a heat disturbance at each zone's room node, at zero flow, exact ZOH."""

@@ -47,6 +47,9 @@ def _series(values: Mapping[str, np.ndarray], zone: str, model: ZoneModel, cm: C
     return np.column_stack(cols), heat, ti
 
 
+KEYS = ("prediction_rmse_K", "prediction_1h_rmse_K", "open_loop_rmse_K")
+
+
 def prediction_scores(
     values: Mapping[str, np.ndarray],
     t: np.ndarray,
@@ -55,9 +58,18 @@ def prediction_scores(
     zone: str,
     noise_floor: float = SENSOR_RESOLUTION_K,
 ) -> dict[str, float | None]:
-    """``prediction_rmse_K``, ``prediction_1h_rmse_K``, ``open_loop_rmse_K`` (None if too short)."""
+    """``prediction_rmse_K``, ``prediction_1h_rmse_K``, ``open_loop_rmse_K`` (None if too short).
+
+    A joint model of several zones (outputs ``T<zone's letters and digits>``, the floor model) is
+    scored as it predicts: all its zones together (:func:`joint_prediction_scores`); ``zone``'s
+    output is scored.
+    """
     t = np.asarray(t, float)
-    keys = ("prediction_rmse_K", "prediction_1h_rmse_K", "open_loop_rmse_K")
+    keys = KEYS
+    if len(model.network.outputs) > 1:
+        return joint_prediction_scores(values, t, model, noise_floor=noise_floor).get(
+            zone, dict.fromkeys(keys)
+        )
     if len(t) < 3:
         return dict.fromkeys(keys)
     dt = float(t[1] - t[0])
@@ -98,3 +110,127 @@ def prediction_scores(
         return float(np.sqrt(np.mean(np.square(e))))
 
     return {keys[0]: rms(innov[settle:]), keys[1]: rms(ahead), keys[2]: rms(free)}
+
+
+def _joint_zones(values: Mapping[str, np.ndarray], model: ZoneModel) -> tuple[list[str], list[str]] | None:
+    """The measured zones that are the joint model's outputs (in output order), and the others."""
+    from rczone.emulators.floor import alias
+
+    measured = [k[3:] for k in values if k.startswith("Ti_")]
+    zones = []
+    for o in model.network.outputs:
+        hits = [z for z in measured if o in (f"T{alias(z)}", z)]
+        if not hits:
+            return None
+        zones.append(hits[0])
+    return zones, [z for z in measured if z not in zones]
+
+
+def joint_prediction_scores(
+    values: Mapping[str, np.ndarray],
+    t: np.ndarray,
+    model: ZoneModel,
+    *,
+    noise_floor: float = SENSOR_RESOLUTION_K,
+) -> dict[str, dict[str, float | None]]:
+    """Each zone's three figures of a joint model of several zones, predicting them all together.
+
+    As :func:`prediction_scores` for one zone, on the joint model (:mod:`rczone.emulators.floormpc`):
+    one Kalman filter, every zone's supply air as the heat it brought, the boundaries off the
+    floor (measured ``Ti_<zone>`` of the building's other zones) and the metered ``Q`` as measured
+    at each step, the outdoor temperature as measured; one hour ahead and open loop from the filtered
+    state, every zone's prediction feeding its neighbours'. Zones the model does not name, or a
+    model it cannot read (no supply air into a zone), give None.
+
+    Returns
+    -------
+    dict of zone to dict
+        ``{zone: {"prediction_rmse_K": ..., "prediction_1h_rmse_K": ..., "open_loop_rmse_K": ...}}``.
+    """
+    from rczone.control.noise import NoiseModel
+    from rczone.control.observer import NODE_PRIOR_SD
+    from rczone.emulators.floormpc import input_sources, owners, supply_columns
+    from rczone.errors import ParameterError
+    from rczone.simulation.discretize import process_noise_covariance, zoh
+
+    found = _joint_zones(values, model)
+    t = np.asarray(t, float)
+    if found is None or len(t) < 3:
+        return {}
+    zones, others = found
+    outputs = list(model.network.outputs)
+    try:
+        E = supply_columns(model, outputs)
+        sources = input_sources(model, zones, outputs, others)
+    except ParameterError:
+        return {}
+    dt = float(t[1] - t[0])
+    settle, k_ahead = max(1, round(SETTLE_S / dt)), max(1, round(AHEAD_S / dt))
+    n_t = len(t)
+    if n_t < settle + k_ahead + 2:
+        return {z: dict.fromkeys(KEYS) for z in zones}
+    cols = []
+    for kind, what in sources:
+        if kind == "forecast":
+            cols.append(np.asarray(values["To"], float))
+        elif kind == "measured":
+            key, default = what
+            v = np.asarray(values.get(key, np.full(n_t, np.nan)), float)
+            cols.append(np.where(np.isfinite(v), v, np.nan if default is None else float(default)))
+        else:
+            cols.append(np.full(n_t, float(what)))
+    u = np.column_stack(cols)
+    y = np.column_stack([np.asarray(values[f"Ti_{z}"], float) for z in zones])
+    heat = np.zeros((n_t, len(zones)))
+    for j, z in enumerate(zones):
+        m = np.nan_to_num(np.asarray(values[f"m_{z}"], float))
+        ts = np.asarray(values[f"Ts_{z}"], float)
+        heat[:-1, j] = np.nan_to_num(m[1:] * CP_AIR * (ts[1:] - y[1:, j]))  # step k's, metered at k + 1
+    ss = model.state_space()
+    noise = floored(NoiseModel.from_model(model), noise_floor)
+    Ad, Bd = zoh(ss.A, np.hstack([ss.B, E]), dt)
+    Qd = process_noise_covariance(ss.A, noise.Qc, dt)
+    C, D, R = ss.C, ss.D, noise.R
+    ue = np.hstack([u, heat])
+
+    def advance(x: np.ndarray, i: int) -> np.ndarray:
+        return Ad @ x + Bd @ ue[i]
+
+    first = y[0]
+    x = np.array(
+        [
+            np.nanmean(first) if j is None or not np.isfinite(first[j]) else first[j]
+            for j in owners(model, outputs)
+        ]
+    )
+    P = np.eye(len(x)) * NODE_PRIOR_SD**2
+    innov, filtered = [], []
+    for i in range(n_t):
+        if i:
+            x, P = advance(x, i - 1), Ad @ P @ Ad.T + Qd
+        e = y[i] - C @ x - D @ u[i]
+        ok = np.flatnonzero(np.isfinite(e))
+        if ok.size:
+            Co, Ro = C[ok], R[np.ix_(ok, ok)]
+            K = np.linalg.solve(Co @ P @ Co.T + Ro, Co @ P).T
+            x = x + K @ e[ok]
+            ImKC = np.eye(len(x)) - K @ Co
+            P = ImKC @ P @ ImKC.T + K @ Ro @ K.T
+        innov.append(e)
+        filtered.append(x)
+    ahead = []
+    for i in range(settle, n_t - k_ahead):
+        xa = filtered[i]
+        for j in range(k_ahead):
+            xa = advance(xa, i + j)
+        ahead.append(C @ xa + D @ u[i + k_ahead] - y[i + k_ahead])
+    xf, free = filtered[settle], []
+    for i in range(settle, n_t - 1):
+        xf = advance(xf, i)
+        free.append(C @ xf + D @ u[i + 1] - y[i + 1])
+
+    def rms(e: list) -> np.ndarray:
+        return np.sqrt(np.nanmean(np.square(np.array(e)), axis=0))
+
+    one, hour, loop = rms(innov[settle:]), rms(ahead), rms(free)
+    return {z: dict(zip(KEYS, (float(one[j]), float(hour[j]), float(loop[j])))) for j, z in enumerate(zones)}
