@@ -67,7 +67,7 @@ class FloorPlan(NamedTuple):
     solve_time: float
 
 
-class _Joint(NamedTuple):
+class JointMatrices(NamedTuple):
     """The joint model as :class:`~rczone.control.observer.KalmanObserver` reads it: the zones'
     heats appended to the inputs (``B = [B | E]``, ``D = [D | 0]``), one disturbance per zone."""
 
@@ -216,7 +216,7 @@ class FloorMPC:
         self.horizon = self.steps * self.dt
         self._sources = input_sources(model, self.zones, self.outputs, measured)
         self._d, noise = self._discretize(supply_columns(model, self.outputs))
-        self.observer = KalmanObserver(_Joint(self._d, noise))
+        self.observer = KalmanObserver(JointMatrices(self._d, noise))
         self._owner = owners(model, self.outputs)
         self.solve_times: list[float] = []
         self.innovations: list[np.ndarray] = []

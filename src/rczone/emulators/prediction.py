@@ -22,6 +22,7 @@ import numpy as np
 from rczone.control.model import ControlModel
 from rczone.control.observer import KalmanObserver
 from rczone.control.prediction import SENSOR_RESOLUTION_K, floored
+from rczone.kernels.arrays import StateMoments
 from rczone.models.zone import ZoneModel
 from rczone.network import CP_AIR
 
@@ -81,35 +82,52 @@ def prediction_scores(
     if n < settle + k_ahead + 2:
         return dict.fromkeys(keys)
     obs = KalmanObserver(cm)
-    d = cm.discrete(dt, 0.0)
-    c = cm.matrices
+    errors = _errors(obs, cm.discrete(dt, 0.0), obs.prior(np.array([y[0]])), u, heat, y[:, None], dt)
+    return dict(zip(keys, (float(e[0]) for e in errors)))
+
+
+def _errors(
+    obs: KalmanObserver,
+    d,
+    est: StateMoments,
+    u: np.ndarray,
+    heat: np.ndarray,
+    y: np.ndarray,
+    dt: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each output's RMS one-step, one-hour-ahead and open-loop error (after :data:`SETTLE_S`).
+
+    ``obs`` filters with inputs ``u`` (n, p) and supply-node heat ``heat`` (n,) held over each step,
+    from ``est``; ``d`` are its discrete matrices at zero flow, ``y`` (n, ny) the measurements.
+    """
+    n = len(y)
+    settle, k_ahead = max(1, round(SETTLE_S / dt)), max(1, round(AHEAD_S / dt))
 
     def advance(x: np.ndarray, i: int) -> np.ndarray:
         return d.Ad @ x + d.Bd @ u[i] + d.Ed[:, 0] * heat[i]
 
-    est = obs.prior(np.array([y[0]]))
     innov, filtered = [], []
     for i in range(n):
         if i:
             est = obs.predict(est, u[i - 1], 0.0, dt, heat=heat[i - 1])
-        est, e = obs.update(est, np.array([y[i]]), u[i])
-        innov.append(e[0])
+        est, e = obs.update(est, y[i], u[i])
+        innov.append(e)
         filtered.append(est.x)
     ahead = []
     for i in range(settle, n - k_ahead):
         x = filtered[i]
         for j in range(k_ahead):
             x = advance(x, i + j)
-        ahead.append(c.C[0] @ x + c.D[0] @ u[i + k_ahead] - y[i + k_ahead])
+        ahead.append(d.C @ x + d.D @ u[i + k_ahead] - y[i + k_ahead])
     x, free = filtered[settle], []
     for i in range(settle, n - 1):
         x = advance(x, i)
-        free.append(c.C[0] @ x + c.D[0] @ u[i + 1] - y[i + 1])
+        free.append(d.C @ x + d.D @ u[i + 1] - y[i + 1])
 
-    def rms(e) -> float:
-        return float(np.sqrt(np.mean(np.square(e))))
+    def rms(e: list) -> np.ndarray:
+        return np.sqrt(np.nanmean(np.square(np.array(e)), axis=0))
 
-    return {keys[0]: rms(innov[settle:]), keys[1]: rms(ahead), keys[2]: rms(free)}
+    return rms(innov[settle:]), rms(ahead), rms(free)
 
 
 def _joint_zones(values: Mapping[str, np.ndarray], model: ZoneModel) -> tuple[list[str], list[str]] | None:
@@ -147,9 +165,10 @@ def joint_prediction_scores(
     dict of zone to dict
         ``{zone: {"prediction_rmse_K": ..., "prediction_1h_rmse_K": ..., "open_loop_rmse_K": ...}}``.
     """
+    from rczone.control.model import DiscreteMatrices
     from rczone.control.noise import NoiseModel
     from rczone.control.observer import NODE_PRIOR_SD
-    from rczone.emulators.floormpc import input_sources, owners, supply_columns
+    from rczone.emulators.floormpc import JointMatrices, input_sources, owners, supply_columns
     from rczone.errors import ParameterError
     from rczone.simulation.discretize import process_noise_covariance, zoh
 
@@ -189,48 +208,23 @@ def joint_prediction_scores(
     ss = model.state_space()
     noise = floored(NoiseModel.from_model(model), noise_floor)
     Ad, Bd = zoh(ss.A, np.hstack([ss.B, E]), dt)
-    Qd = process_noise_covariance(ss.A, noise.Qc, dt)
-    C, D, R = ss.C, ss.D, noise.R
-    ue = np.hstack([u, heat])
-
-    def advance(x: np.ndarray, i: int) -> np.ndarray:
-        return Ad @ x + Bd @ ue[i]
-
-    first = y[0]
-    x = np.array(
-        [
-            np.nanmean(first) if j is None or not np.isfinite(first[j]) else first[j]
-            for j in owners(model, outputs)
-        ]
+    nz, n_x = len(zones), ss.n_states
+    d = DiscreteMatrices(
+        Ad,
+        Bd,
+        np.zeros((n_x, 1)),
+        ss.C,
+        np.hstack([ss.D, np.zeros((nz, nz))]),
+        process_noise_covariance(ss.A, noise.Qc, dt),
+        noise.R,
     )
-    P = np.eye(len(x)) * NODE_PRIOR_SD**2
-    innov, filtered = [], []
-    for i in range(n_t):
-        if i:
-            x, P = advance(x, i - 1), Ad @ P @ Ad.T + Qd
-        e = y[i] - C @ x - D @ u[i]
-        ok = np.flatnonzero(np.isfinite(e))
-        if ok.size:
-            Co, Ro = C[ok], R[np.ix_(ok, ok)]
-            K = np.linalg.solve(Co @ P @ Co.T + Ro, Co @ P).T
-            x = x + K @ e[ok]
-            ImKC = np.eye(len(x)) - K @ Co
-            P = ImKC @ P @ ImKC.T + K @ Ro @ K.T
-        innov.append(e)
-        filtered.append(x)
-    ahead = []
-    for i in range(settle, n_t - k_ahead):
-        xa = filtered[i]
-        for j in range(k_ahead):
-            xa = advance(xa, i + j)
-        ahead.append(C @ xa + D @ u[i + k_ahead] - y[i + k_ahead])
-    xf, free = filtered[settle], []
-    for i in range(settle, n_t - 1):
-        xf = advance(xf, i)
-        free.append(C @ xf + D @ u[i + 1] - y[i + 1])
-
-    def rms(e: list) -> np.ndarray:
-        return np.sqrt(np.nanmean(np.square(np.array(e)), axis=0))
-
-    one, hour, loop = rms(innov[settle:]), rms(ahead), rms(free)
+    first = y[0]
+    x0 = [
+        np.nanmean(first) if j is None or not np.isfinite(first[j]) else first[j]
+        for j in owners(model, outputs)
+    ]
+    est = StateMoments(np.array(x0), np.eye(n_x) * NODE_PRIOR_SD**2)
+    # every zone's supply-air heat enters as an input of its own (B = [B | E])
+    obs = KalmanObserver(JointMatrices(d, noise))
+    one, hour, loop = _errors(obs, d, est, np.hstack([u, heat]), np.zeros(n_t), y, dt)
     return {z: dict(zip(KEYS, (float(one[j]), float(hour[j]), float(loop[j])))) for j, z in enumerate(zones)}
