@@ -47,24 +47,12 @@ from rczone.control.model import DiscreteMatrices
 from rczone.control.noise import NoiseModel
 from rczone.control.observer import DISTURBANCE_PRIOR_SD, NODE_PRIOR_SD, KalmanObserver
 from rczone.emulators.floor import alias
-from rczone.emulators.supervisory import PlanStep, SupervisorySettings, set_points
+from rczone.emulators.supervisory import HeatPlan, PlanStep, SupervisorySettings, set_points
 from rczone.errors import ParameterError, RczoneError
 from rczone.kernels.arrays import StateMoments
 from rczone.models.zone import ZoneModel
 from rczone.network import CP_AIR
 from rczone.simulation.discretize import process_noise_covariance, zoh
-
-
-class FloorPlan(NamedTuple):
-    """A plan of every zone: heating and cooling (nz, H) W, predicted room temperatures
-    (nz, H + 1) degC, slack (nz, H) K, solver status and solve time (s)."""
-
-    heating: np.ndarray
-    cooling: np.ndarray
-    y: np.ndarray
-    slack: np.ndarray
-    status: str
-    solve_time: float
 
 
 class JointMatrices(NamedTuple):
@@ -222,7 +210,7 @@ class FloorMPC:
         self.innovations: list[np.ndarray] = []
         self._est: StateMoments | None = None
         self._u: np.ndarray | None = None
-        self.plan: FloorPlan | None = None
+        self.plan: HeatPlan | None = None
 
     def _per_zone(self, settings) -> dict[str, SupervisorySettings]:
         if settings is None or isinstance(settings, SupervisorySettings):
@@ -312,7 +300,7 @@ class FloorMPC:
 
     def solve(
         self, x0: np.ndarray, u: np.ndarray, lower: np.ndarray, upper: np.ndarray, price: np.ndarray
-    ) -> FloorPlan:
+    ) -> HeatPlan:
         """The plan from state ``x0`` with inputs ``u`` (H + 1, p), bands (nz, H + 1), price (H + 1,)."""
         d, H, nz = self._d, self.steps, len(self.zones)
         p = u.shape[1]
@@ -361,7 +349,7 @@ class FloorMPC:
             raise RczoneError(f"the floor MPC's linear program could not be solved ({res.message})")
         h, c, s1, s2 = (np.clip(res.x[i * nz * H : (i + 1) * nz * H], 0.0, None) for i in range(4))
         y = np.column_stack([C @ x0 + D @ u[0], free + (G @ (h - c)).reshape(nz, H)])
-        return FloorPlan(
+        return HeatPlan(
             h.reshape(nz, H) * 1e3, c.reshape(nz, H) * 1e3, y, (s1 + s2).reshape(nz, H), "optimal", elapsed
         )
 

@@ -101,7 +101,8 @@ class SupervisorySettings:
 
 class HeatPlan(NamedTuple):
     """A plan: heating and cooling (H,) W, predicted room temperature (H + 1,) degC, slack (H,) K,
-    solver status and solve time (s)."""
+    solver status and solve time (s); of several zones (the floor MPC's), one row per zone:
+    (nz, H) and (nz, H + 1)."""
 
     heating: np.ndarray
     cooling: np.ndarray
